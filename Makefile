@@ -1,0 +1,52 @@
+# Embody: the two commands a new user needs are `make demo` and `make test`.
+# Every target installs what is missing (scripts/install-deps.sh) and builds first.
+BUILD      ?= build
+BUILD_TYPE ?= Release
+JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
+CMAKE_ARGS ?=
+CTEST_ARGS ?=
+WERROR     := $(if $(CI),-DEMBODY_WERROR=ON,)
+
+.PHONY: all deps build demo test bench sanitize tsan format clean
+
+all: build
+
+deps:
+	@bash scripts/install-deps.sh
+
+$(BUILD)/CMakeCache.txt:
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(WERROR) $(CMAKE_ARGS)
+
+build: deps $(BUILD)/CMakeCache.txt
+	cmake --build $(BUILD) -j $(JOBS)
+
+demo: build
+	@bash scripts/demo.sh $(BUILD)
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) $(CTEST_ARGS)
+
+bench: build
+	@bash scripts/bench.sh $(BUILD)
+
+# ASan + UBSan build of the whole suite; Mesa/LLVM leaks are suppressed (scripts/lsan.supp).
+sanitize: deps
+	cmake -S . -B build-sanitize -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMBODY_SANITIZE=ON -DEMBODY_BUILD_BENCH=OFF $(WERROR)
+	cmake --build build-sanitize -j $(JOBS)
+	cd build-sanitize && \
+	  LSAN_OPTIONS=suppressions=$(CURDIR)/scripts/lsan.supp:print_suppressions=0 \
+	  ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 \
+	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  ctest --output-on-failure -j $(JOBS) $(CTEST_ARGS)
+
+# ThreadSanitizer on the CPU-only tests (IK, tracking, runtime hand-off): Mesa is not instrumented.
+tsan: deps
+	cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMBODY_TSAN=ON -DEMBODY_BUILD_BENCH=OFF $(WERROR)
+	cmake --build build-tsan -j $(JOBS)
+	cd build-tsan && TSAN_OPTIONS=halt_on_error=1 ctest --output-on-failure -j $(JOBS) -L unit $(CTEST_ARGS)
+
+format:
+	git ls-files '*.cpp' '*.h' '*.vert' '*.frag' '*.comp' | xargs clang-format -i
+
+clean:
+	rm -rf $(BUILD) build-sanitize build-tsan out

@@ -1,0 +1,57 @@
+#include "support/vulkan_test_instance.h"
+
+#include <catch2/catch.hpp>
+
+namespace embody::test {
+
+gfx::InstanceOptions TestInstance::options(std::vector<std::string> extensions) {
+  gfx::InstanceOptions o;
+  o.appName = "embody-tests";
+  o.validation = gfx::Validation::Required;
+  o.extensions = std::move(extensions);
+  return o;
+}
+
+TestInstance::TestInstance(std::vector<std::string> extensions) {
+  auto o = options(std::move(extensions));
+  o.onMessage = [this](const gfx::ValidationMessage& m) {
+    std::lock_guard lock(mutex_);
+    messages_.push_back(m.idName + ": " + m.text);
+  };
+  auto r = gfx::Instance::create(o);
+  if (!r) FAIL("could not create a validated Vulkan instance: " << r.error());
+  instance_ = std::move(r).value();
+  REQUIRE(instance_.validationEnabled());
+}
+
+TestInstance::~TestInstance() {
+  // Destroying the instance can itself report leaks of child objects; check after it is gone.
+  instance_ = gfx::Instance();
+  expectNoValidationMessages();
+}
+
+VkPhysicalDevice TestInstance::lavapipe() const {
+  for (const auto& d : instance_.physicalDevices())
+    if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU || d.name.find("llvmpipe") != std::string::npos) return d.handle;
+  FAIL("no lavapipe (llvmpipe) device found; install mesa-vulkan-drivers");
+  return VK_NULL_HANDLE;
+}
+
+std::vector<std::string> TestInstance::messages() const {
+  std::lock_guard lock(mutex_);
+  return messages_;
+}
+
+void TestInstance::expectNoValidationMessages() {
+  std::lock_guard lock(mutex_);
+  for (; reported_ < messages_.size(); ++reported_)
+    FAIL_CHECK("Vulkan validation message: " << messages_[reported_]);
+}
+
+void TestInstance::clearMessages() {
+  std::lock_guard lock(mutex_);
+  messages_.clear();
+  reported_ = 0;
+}
+
+}  // namespace embody::test

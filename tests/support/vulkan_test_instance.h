@@ -1,0 +1,42 @@
+#pragma once
+// Every Vulkan instance a test creates comes from here: lavapipe (CTest pins the loader to it),
+// the Khronos validation layer required (the test fails if it cannot load), and a messenger
+// that records every validation warning or error. Call expectNoValidationMessages() at the end
+// of a test; TestInstance's destructor also fails the test on any message not yet reported.
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "engine/instance.h"
+
+namespace embody::test {
+
+class TestInstance {
+ public:
+  // Creates the instance; REQUIREs success (so a missing layer fails the test).
+  explicit TestInstance(std::vector<std::string> extensions = {});
+  ~TestInstance();
+  TestInstance(const TestInstance&) = delete;
+  TestInstance& operator=(const TestInstance&) = delete;
+
+  gfx::Instance& instance() { return instance_; }
+  VkInstance handle() const { return instance_.handle(); }
+  // The lavapipe physical device (REQUIREs that there is one).
+  VkPhysicalDevice lavapipe() const;
+
+  std::vector<std::string> messages() const;
+  // Fails the current test (with the messages) if validation reported anything.
+  void expectNoValidationMessages();
+  // For the one test that proves the messenger works: forget recorded messages.
+  void clearMessages();
+
+  static gfx::InstanceOptions options(std::vector<std::string> extensions = {});
+
+ private:
+  mutable std::mutex mutex_;
+  std::vector<std::string> messages_;
+  gfx::Instance instance_;
+  size_t reported_ = 0;  // messages already turned into failures
+};
+
+}  // namespace embody::test
