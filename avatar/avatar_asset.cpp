@@ -1,0 +1,30 @@
+#include "avatar/avatar_asset.h"
+
+namespace embody::avatar {
+
+void computeSkinningPalette(const AvatarAsset& asset, const std::vector<glm::mat4>& globals,
+                            std::vector<glm::mat4>& palette) {
+  palette.resize(globals.size());
+  for (size_t j = 0; j < globals.size(); ++j)
+    palette[j] = j < asset.mesh.inverseBind.size() ? globals[j] * asset.mesh.inverseBind[j] : globals[j];
+}
+
+void skinOnCpu(const SkinnedMesh& mesh, const std::vector<glm::mat4>& palette, std::vector<glm::vec3>& positions,
+               std::vector<glm::vec3>& normals) {
+  positions.resize(mesh.vertices.size());
+  normals.resize(mesh.vertices.size());
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const SkinnedVertex& v = mesh.vertices[i];
+    glm::mat4 m(0.0f);
+    for (int k = 0; k < 4; ++k) {
+      if (v.weights0[k] != 0.0f) m += v.weights0[k] * palette[v.joints0[k]];
+      if (v.weights1[k] != 0.0f) m += v.weights1[k] * palette[v.joints1[k]];
+    }
+    positions[i] = glm::vec3(m * glm::vec4(v.position, 1.0f));
+    const glm::vec3 n = glm::mat3(m) * v.normal;
+    const float len = glm::length(n);
+    normals[i] = len > 0.0f ? n / len : v.normal;
+  }
+}
+
+}  // namespace embody::avatar

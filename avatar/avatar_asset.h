@@ -1,0 +1,85 @@
+#pragma once
+// AvatarAsset: what a loader (glTF/VRM, or the procedural default avatar) produces and what the
+// renderer and the body model consume. Immutable runtime data; import code lives in avatar/gltf.
+//
+// Skinning contract (same on CPU and GPU):
+//   palette[j]  = global[j] * mesh.inverseBind[j]          for every skeleton joint j
+//   skinned(v)  = sum_k weight_k(v) * palette[joint_k(v)] * vec4(position(v), 1)
+//   normals use the same blend of palette matrices (upper 3x3), then renormalise.
+// Joint indices in vertices refer to Skeleton joints directly (loaders remap glTF skin joint
+// indices). A mesh attached rigidly to a node is expressed as weight 1 on that node with an
+// identity inverse bind, so one formula draws everything. Weights are normalised to sum to 1.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "avatar/skeleton.h"
+
+namespace embody::avatar {
+
+constexpr int kMaxInfluences = 8;  // JOINTS_0/1 + WEIGHTS_0/1
+
+struct SkinnedVertex {
+  glm::vec3 position{0.0f};
+  glm::vec3 normal{0.0f, 1.0f, 0.0f};
+  glm::vec2 uv{0.0f};
+  glm::uvec4 joints0{0}, joints1{0};
+  glm::vec4 weights0{1.0f, 0.0f, 0.0f, 0.0f}, weights1{0.0f};
+};
+
+enum class AlphaMode { Opaque, Mask, Blend };
+
+struct Image {
+  int width = 0, height = 0;
+  std::vector<uint8_t> rgba;  // 8-bit RGBA, row-major, top row first
+};
+
+struct Material {
+  std::string name;
+  glm::vec4 baseColorFactor{1.0f};
+  int baseColorImage = -1;  // index into AvatarAsset::images, -1 for none
+  AlphaMode alphaMode = AlphaMode::Opaque;
+  float alphaCutoff = 0.5f;
+  bool doubleSided = false;
+};
+
+struct Primitive {
+  uint32_t firstIndex = 0;
+  uint32_t indexCount = 0;
+  int material = -1;  // index into AvatarAsset::materials, -1 for the default material
+};
+
+struct SkinnedMesh {
+  std::vector<SkinnedVertex> vertices;
+  std::vector<uint32_t> indices;       // triangle list, all primitives back to back
+  std::vector<Primitive> primitives;   // third-person draw list
+  // First-person draw list: the same vertices, with triangles that belong to the user's own head
+  // removed (VRM firstPerson annotations, or weights to the head and its descendants).
+  std::vector<uint32_t> firstPersonIndices;
+  std::vector<Primitive> firstPersonPrimitives;
+  std::vector<glm::mat4> inverseBind;  // one per skeleton joint (identity where unused)
+  size_t triangleCount() const { return indices.size() / 3; }
+};
+
+enum class AvatarFormat { Gltf, Vrm0, Vrm1, Procedural };
+
+struct AvatarAsset {
+  std::string sourcePath;  // "" for the procedural default
+  AvatarFormat format = AvatarFormat::Gltf;
+  Skeleton skeleton;
+  SkinnedMesh mesh;
+  std::vector<Material> materials;
+  std::vector<Image> images;
+  int skinJointCount = 0;  // joints of the glTF skin(s); 0 when the file has no skin
+  std::string rawJson;     // the glTF JSON document, for extensions read later (VRM humanoid, firstPerson)
+};
+
+// Palette for a pose: palette[j] = global[j] * inverseBind[j].
+void computeSkinningPalette(const AvatarAsset& asset, const std::vector<glm::mat4>& globals,
+                            std::vector<glm::mat4>& palette);
+
+// Reference CPU skinner with the contract above: positions and normals for every vertex.
+void skinOnCpu(const SkinnedMesh& mesh, const std::vector<glm::mat4>& palette,
+               std::vector<glm::vec3>& positions, std::vector<glm::vec3>& normals);
+
+}  // namespace embody::avatar

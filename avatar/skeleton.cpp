@@ -1,0 +1,61 @@
+#include "avatar/skeleton.h"
+
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace embody::avatar {
+
+glm::mat4 Transform::matrix() const {
+  glm::mat4 m = glm::mat4_cast(rotation);
+  m[0] *= scale.x;
+  m[1] *= scale.y;
+  m[2] *= scale.z;
+  m[3] = glm::vec4(translation, 1.0f);
+  return m;
+}
+
+int Skeleton::find(std::string_view name) const {
+  for (size_t i = 0; i < joints.size(); ++i)
+    if (joints[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+std::vector<int> Skeleton::children(int joint) const {
+  std::vector<int> out;
+  for (size_t i = 0; i < joints.size(); ++i)
+    if (joints[i].parent == joint) out.push_back(static_cast<int>(i));
+  return out;
+}
+
+bool Skeleton::isAncestor(int ancestor, int joint) const {
+  for (int j = joint; j >= 0; j = joints[j].parent)
+    if (j == ancestor) return true;
+  return false;
+}
+
+std::string Skeleton::validate() const {
+  for (size_t i = 0; i < joints.size(); ++i) {
+    const int p = joints[i].parent;
+    if (p < -1 || p >= static_cast<int>(i))
+      return "joint " + std::to_string(i) + " ('" + joints[i].name + "') has parent " + std::to_string(p) +
+             ", which does not come before it";
+  }
+  return {};
+}
+
+SkeletonPose SkeletonPose::rest(const Skeleton& s) {
+  SkeletonPose p;
+  p.local.reserve(s.joints.size());
+  for (const auto& j : s.joints) p.local.push_back(j.rest);
+  return p;
+}
+
+void computeGlobals(const Skeleton& skeleton, const SkeletonPose& pose, std::vector<glm::mat4>& globals) {
+  globals.resize(skeleton.joints.size());
+  for (size_t i = 0; i < skeleton.joints.size(); ++i) {
+    const glm::mat4 local = pose.local[i].matrix();
+    const int p = skeleton.joints[i].parent;
+    globals[i] = p < 0 ? local : globals[p] * local;
+  }
+}
+
+}  // namespace embody::avatar
