@@ -72,6 +72,7 @@ struct AvatarAsset {
   std::vector<Image> images;
   int skinJointCount = 0;  // joints of the glTF skin(s); 0 when the file has no skin
   std::string rawJson;     // the glTF JSON document, for extensions read later (VRM humanoid, firstPerson)
+  std::vector<int> gltfNodeToJoint;  // glTF node index -> Skeleton joint index (empty for procedural)
 };
 
 // Palette for a pose: palette[j] = global[j] * inverseBind[j].
