@@ -571,6 +571,8 @@ struct MeshBuilder {
     prim.firstIndex = static_cast<uint32_t>(asset.mesh.indices.size());
     prim.indexCount = static_cast<uint32_t>(tris.size());
     prim.material = p.material >= 0 && static_cast<size_t>(p.material) < m.materials.size() ? p.material : -1;
+    prim.sourceNode = node;
+    prim.sourceMesh = m.nodes[node].mesh;
     if (p.material >= 0 && prim.material < 0)
       warnings.push_back(where + ": material " + std::to_string(p.material) + " out of range; default material used");
     for (uint32_t i : tris) asset.mesh.indices.push_back(static_cast<uint32_t>(first) + i);
