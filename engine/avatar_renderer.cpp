@@ -44,8 +44,17 @@ glm::mat3 rotationOf(const glm::mat4& m) {
 
 }  // namespace
 
-AvatarAnchors findAnchors(const avatar::Skeleton& skeleton) {
+AvatarAnchors findAnchors(const avatar::AvatarAsset& asset) {
   AvatarAnchors a;
+  const auto& h = asset.humanoid;
+  if (h.method != avatar::MappingMethod::None) {
+    a.head = h.joint(avatar::HumanBone::head);
+    a.leftHand = h.joint(avatar::HumanBone::leftHand);
+    a.rightHand = h.joint(avatar::HumanBone::rightHand);
+    if (glm::length(h.forward) > 0.5f) a.forward = glm::normalize(h.forward);
+    if (a.head >= 0) return a;
+  }
+  const auto& skeleton = asset.skeleton;
   a.head = findByName(skeleton, "head", 0);
   a.leftHand = findByName(skeleton, "hand", -1);
   a.rightHand = findByName(skeleton, "hand", +1);
@@ -72,26 +81,31 @@ Result<std::unique_ptr<AvatarRenderer>> AvatarRenderer::create(const Device& dev
   auto target = OffscreenTarget::create(device, desc);
   if (!target) return Error{target.error()};
   r->target_ = std::move(target).value();
-  r->anchors_ = findAnchors(asset.skeleton);
+  r->anchors_ = findAnchors(asset);
 
   // Eye position from the rest pose: inside the head's geometry (vertices mostly on the head joint
   // or its descendants), a little above its middle and towards the front (+Z).
+  // Vertex positions are in bind space, which need not be the rest pose's world space (CesiumMan's
+  // mesh is Z-up under a rotated node): measure on the rest pose skinned on the CPU.
   avatar::computeGlobals(asset.skeleton, avatar::SkeletonPose::rest(asset.skeleton), r->restGlobals_);
+  avatar::computeSkinningPalette(asset, r->restGlobals_, r->palette_);
+  avatar::skinOnCpu(asset.mesh, r->palette_, r->skinnedPositions_, r->skinnedNormals_);
   const int head = r->anchors_.head;
   Bounds headBounds;
   if (head >= 0) {
-    for (const auto& v : asset.mesh.vertices) {
+    for (size_t i = 0; i < asset.mesh.vertices.size(); ++i) {
+      const auto& v = asset.mesh.vertices[i];
       int dominant = int(v.joints0[0]);
       float w = v.weights0[0];
       for (int k = 1; k < 4; ++k)
         if (v.weights0[k] > w) w = v.weights0[k], dominant = int(v.joints0[k]);
-      if (asset.skeleton.isAncestor(head, dominant)) headBounds.add(v.position);
+      if (asset.skeleton.isAncestor(head, dominant)) headBounds.add(r->skinnedPositions_[i]);
     }
     const glm::vec3 headPos(r->restGlobals_[head][3]);
-    glm::vec3 eye = headPos + glm::vec3(0.0f, 0.08f, 0.06f);
+    glm::vec3 eye = headPos + glm::vec3(0.0f, 0.08f, 0.0f) + r->anchors_.forward * 0.06f;
     if (!headBounds.empty()) {
       const glm::vec3 c = headBounds.center(), e = headBounds.max - headBounds.min;
-      eye = glm::vec3(c.x, headBounds.min.y + 0.6f * e.y, c.z + 0.25f * e.z);
+      eye = glm::vec3(c.x, headBounds.min.y + 0.6f * e.y, c.z) + r->anchors_.forward * (0.25f * glm::dot(glm::abs(r->anchors_.forward), e));
     }
     r->eyeOffsetInHead_ = glm::vec3(glm::inverse(r->restGlobals_[head]) * glm::vec4(eye, 1.0f));
   }
@@ -129,7 +143,12 @@ Camera AvatarRenderer::orbitAround(const avatar::SkeletonPose& pose, float yaw, 
 }
 
 glm::mat4 AvatarRenderer::eyePose(const avatar::SkeletonPose& pose) {
-  const glm::mat4 faceFront = glm::rotate(glm::mat4(1.0f), glm::radians(180.0f), glm::vec3(0.0f, 1.0f, 0.0f));
+  // Camera axes for looking along the avatar's forward: -Z = forward, +Y = up, +X = right.
+  const glm::vec3 f = anchors_.forward, up(0.0f, 1.0f, 0.0f);
+  glm::mat4 faceFront(1.0f);
+  faceFront[0] = glm::vec4(glm::normalize(glm::cross(f, up)), 0.0f);
+  faceFront[1] = glm::vec4(up, 0.0f);
+  faceFront[2] = glm::vec4(-f, 0.0f);
   if (!computePose(pose)) return faceFront;
   const int head = anchors_.head;
   if (head < 0) {

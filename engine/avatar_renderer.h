@@ -38,12 +38,13 @@ struct AvatarRendererOptions {
   StereoMode stereoMode = kDefaultStereoMode;
 };
 
-// Joints the views and gizmos anchor to, found by name (humanoid mapping from the avatar library
-// replaces this once it exists). -1 when not found.
+// Joints the views and gizmos anchor to: from the asset's humanoid map when it has one, else by
+// joint name ("head", "leftHand"/"hand_L", ...). -1 when not found.
 struct AvatarAnchors {
   int head = -1, leftHand = -1, rightHand = -1;
+  glm::vec3 forward{0.0f, 0.0f, 1.0f};  // the way the rest pose faces (glTF: +Z, VRM 0.x: -Z)
 };
-AvatarAnchors findAnchors(const avatar::Skeleton& skeleton);
+AvatarAnchors findAnchors(const avatar::AvatarAsset& asset);
 
 // `asset` must outlive the AvatarRenderer (it is read for the skeleton and mesh every frame).
 class AvatarRenderer {
@@ -69,7 +70,7 @@ class AvatarRenderer {
 
   // An orbit camera that frames the avatar in `pose` (yaw/pitch in radians; yaw 0 = from the front).
   Camera orbitAround(const avatar::SkeletonPose& pose, float yaw = 0.5f, float pitch = 0.15f);
-  // The eye pose for first-person views: between the eyes, facing the avatar's front (+Z), turned
+  // The eye pose for first-person views: between the eyes, facing the avatar's front, turned
   // with the head. Falls back to the top of the mesh when no head joint is found.
   glm::mat4 eyePose(const avatar::SkeletonPose& pose);
   // Gizmos at the head and hands (the tracking targets), from the posed skeleton.
