@@ -1,5 +1,7 @@
 #include "avatar/ik/model.h"
 
+#include "avatar/ik/projector.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -209,21 +211,15 @@ Result<Model> ModelBuilder::build() const {
   const int g = static_cast<int>(equalities_.size());
   m.equality_matrix.setZero(g, m.dofs);
   m.equality_rhs.setZero(g);
-  Eigen::MatrixXd projector = Eigen::MatrixXd::Identity(m.dofs, m.dofs);
   for (int i = 0; i < g; ++i) {
     const EqualityRow& row = equalities_[i];
     const std::string who = "equality " + std::to_string(i) + " '" + row.name + "'";
     if (Status s = checkTerms(row.terms, who, m.equality_matrix.row(i)); !s) return Error{s.error()};
     if (!std::isfinite(row.rhs)) return fail(who + ": rhs is not finite");
     m.equality_rhs(i) = row.rhs;
-    const Eigen::VectorXd c = m.equality_matrix.row(i).transpose();
-    const Eigen::VectorXd u = projector * c;
-    if (u.norm() > 1e-9 * c.norm())
-      projector -= u * u.transpose() / u.squaredNorm();
-    else
-      m.dependent_equalities.push_back(i);
     m.equalities.push_back(row);
   }
+  (void)incrementalNullspaceProjector(m.equality_matrix, 1e-9, &m.dependent_equalities);
 
   // Inequalities: user couplings, then joint-limit rows (given, then generated from limits).
   Eigen::RowVectorXd scratch(m.dofs);

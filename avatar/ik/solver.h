@@ -132,8 +132,8 @@ void kinematics(const Model& model, Data& data, bool jacobians = true);
 const Eigen::MatrixXd& taskJacobian(const Data& data);
 const Eigen::VectorXd& taskError(const Data& data);
 
-// One pass of the priority loop from the current Jacobians and the current active set (no FK, no
-// clamping re-evaluation). Writes Δq; returns it.
+// One pass of the priority loop from the current Jacobians with the equality rows as the active
+// set (no FK, no clamping). Does not change q. Returns Δq.
 const Eigen::VectorXd& priorityPass(const Model& model, Data& data, const SolveOptions& options);
 
 // One full iteration: kinematics, active set reset, every clamping pass, q += Δq.
