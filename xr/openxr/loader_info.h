@@ -3,6 +3,7 @@
 // binary links (the 1.0.20 loader has no version call, so: header version + library file) and
 // the active runtime the loader would pick.
 #include <string>
+#include <vector>
 
 namespace embody::xr {
 
@@ -14,6 +15,10 @@ struct OpenXRLoaderInfo {
   std::string runtimeName;       // from xrGetInstanceProperties, "none" when no runtime
   std::string runtimeVersion;
   std::string runtimeError;      // why creating an instance failed, if it did
+  std::vector<std::string> apiLayers;          // API layers the loader can enable (name + version)
+  std::vector<std::string> runtimeExtensions;  // instance extensions the runtime offers
+  std::string systemName;        // the HMD (xrGetSystem), "" when none is connected
+  bool vulkanEnable2 = false;    // the runtime offers XR_KHR_vulkan_enable2 (what embody xr needs)
 };
 
 // Probes the loader; with a runtime manifest present it creates (and destroys) an XrInstance to
