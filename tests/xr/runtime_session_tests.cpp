@@ -7,6 +7,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "headless_session.h"
+#include "test_paths.h"
 
 using namespace embody::test;
 
@@ -231,4 +232,89 @@ TEST_CASE("XR_EXT_hand_tracking gives 26 joints of a plausible hand at the contr
   REQUIRE(locate(trackers[0], &li, &locs) == XR_SUCCESS);
   CHECK(locs.isActive == XR_FALSE);
   for (const auto& j : joints) CHECK(j.locationFlags == 0);
+}
+
+namespace {
+// Head (VIEW space) and the two palms (hand tracking) in STAGE at `time`.
+struct BodyProbe {
+  glm::vec3 head{0.0f}, left{0.0f}, right{0.0f};
+  glm::quat headQ{1, 0, 0, 0};
+  bool handsActive = false;
+};
+BodyProbe probeBody(HeadlessSession& h, XrTime time) {
+  BodyProbe b;
+  XrReferenceSpaceCreateInfo rci{XR_TYPE_REFERENCE_SPACE_CREATE_INFO};
+  rci.referenceSpaceType = XR_REFERENCE_SPACE_TYPE_VIEW;
+  rci.poseInReferenceSpace.orientation.w = 1.0f;
+  XrSpace view = XR_NULL_HANDLE;
+  REQUIRE(xrCreateReferenceSpace(h.session, &rci, &view) == XR_SUCCESS);
+  XrSpaceLocation loc{XR_TYPE_SPACE_LOCATION};
+  REQUIRE(xrLocateSpace(view, h.stage, time, &loc) == XR_SUCCESS);
+  b.head = vec(loc.pose.position);
+  b.headQ = glm::quat(loc.pose.orientation.w, loc.pose.orientation.x, loc.pose.orientation.y, loc.pose.orientation.z);
+  xrDestroySpace(view);
+  auto create = h.proc<PFN_xrCreateHandTrackerEXT>("xrCreateHandTrackerEXT");
+  auto locate = h.proc<PFN_xrLocateHandJointsEXT>("xrLocateHandJointsEXT");
+  auto destroy = h.proc<PFN_xrDestroyHandTrackerEXT>("xrDestroyHandTrackerEXT");
+  b.handsActive = true;
+  for (int i = 0; i < 2; ++i) {
+    XrHandTrackerCreateInfoEXT ci{XR_TYPE_HAND_TRACKER_CREATE_INFO_EXT};
+    ci.hand = i == 0 ? XR_HAND_LEFT_EXT : XR_HAND_RIGHT_EXT;
+    XrHandTrackerEXT t = XR_NULL_HANDLE;
+    REQUIRE(create(h.session, &ci, &t) == XR_SUCCESS);
+    XrHandJointLocationEXT joints[XR_HAND_JOINT_COUNT_EXT];
+    XrHandJointLocationsEXT locs{XR_TYPE_HAND_JOINT_LOCATIONS_EXT};
+    locs.jointCount = XR_HAND_JOINT_COUNT_EXT;
+    locs.jointLocations = joints;
+    XrHandJointsLocateInfoEXT li{XR_TYPE_HAND_JOINTS_LOCATE_INFO_EXT};
+    li.baseSpace = h.stage;
+    li.time = time;
+    REQUIRE(locate(t, &li, &locs) == XR_SUCCESS);
+    b.handsActive = b.handsActive && locs.isActive;
+    (i == 0 ? b.left : b.right) = vec(joints[XR_HAND_JOINT_PALM_EXT].pose.position);
+    destroy(t);
+  }
+  return b;
+}
+}  // namespace
+
+TEST_CASE("a BVH file drives the head and hands: metres, +Y up, the performer facing -Z", "[xr]") {
+  const std::string bvh = embody::test::sharedAsset("cmu_12_01_walk.bvh");
+  if (bvh.empty()) {
+    WARN("SKIPPED: shared asset cmu_12_01_walk.bvh not found");
+    return;
+  }
+  HeadlessSession h({{"EMBODY_XR_POSES", bvh}});
+  h.runUntilFocused();
+  const XrTime start = h.lastDisplayTime - 4 * 11111111;
+  // (The capture's first frame is a T-pose; the walk starts right after.)
+  const BodyProbe a = probeBody(h, start + 1000000000), b = probeBody(h, start + 2500000000);
+  REQUIRE(a.handsActive);
+  CHECK(a.head.y == Approx(1.6f).margin(0.15f));  // scaled so the rest head stands 1.6 m high
+  for (const auto& p : {a, b}) {
+    INFO("head " << p.head.x << "," << p.head.y << "," << p.head.z << " left " << p.left.x << "," << p.left.y << ","
+                 << p.left.z << " right " << p.right.x << "," << p.right.y << "," << p.right.z);
+    // Hands hang well below the head, at either side of it (left on the user's left).
+    const glm::vec3 l = glm::conjugate(p.headQ) * (p.left - p.head), r = glm::conjugate(p.headQ) * (p.right - p.head);
+    CHECK(l.y < -0.3f);
+    CHECK(r.y < -0.3f);
+    CHECK(l.x < r.x);
+    CHECK(glm::distance(p.left, p.right) > 0.2f);
+    CHECK(glm::distance(p.left, p.right) < 1.2f);
+  }
+  // The performer walks: the head moves forward (-Z in the head's own frame).
+  const glm::vec3 moved = glm::conjugate(a.headQ) * (b.head - a.head);
+  CHECK(moved.z < -0.5f);
+}
+
+TEST_CASE("a broken pose file falls back to the synthetic motion without failing", "[xr]") {
+  const std::string broken = writeTraceFile("broken_trace", {R"({"t":0,"head":)", "not json"});
+  for (const std::string& file : {broken, std::string("/nonexistent/poses.bvh")}) {
+    INFO(file);
+    HeadlessSession h(std::map<std::string, std::string>{{"EMBODY_XR_POSES", file}});
+    h.runUntilFocused();
+    const BodyProbe p = probeBody(h, h.lastDisplayTime);
+    CHECK(p.handsActive);
+    CHECK(p.head.y == Approx(1.62f).margin(0.05f));
+  }
 }

@@ -68,6 +68,16 @@ glm::quat yawPitch(float yaw, float pitch) {
 void PoseProvider::loadFromEnvironment() {
   const char* path = std::getenv("EMBODY_XR_POSES");
   if (!path || !*path) return;
+  const std::string p = path;
+  if (p.size() > 4 && (p.substr(p.size() - 4) == ".bvh" || p.substr(p.size() - 4) == ".BVH")) {
+    std::vector<BodySample> samples;
+    error_ = loadBvhSamples(p, samples);
+    if (error_.empty()) {
+      samples_ = std::move(samples);
+      source_ = p;
+    }
+    return;
+  }
   std::ifstream in(path);
   if (!in) {
     error_ = std::string("cannot open EMBODY_XR_POSES file ") + path;

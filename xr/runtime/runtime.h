@@ -70,6 +70,9 @@ class PoseProvider {
   std::string error_, source_ = "synthetic";
 };
 
+// BVH motion capture (head, hands) as samples in OpenXR conventions; "" or why it failed.
+std::string loadBvhSamples(const std::string& path, std::vector<BodySample>& out);
+
 // The 26 XR_EXT_hand_tracking joints of a relaxed hand, given its grip pose; poses in the same
 // space as the grip. radius in metres.
 struct HandJoint {
