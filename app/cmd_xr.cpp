@@ -25,7 +25,7 @@ int runXr(cli::Argv argv) {
   args.option("stats", "FILE", "write a JSON report of the run (states, frames, tracking, validation)");
   args.flag("seated", "seated mode: the avatar follows your head down instead of standing on the floor");
   args.flag("recenter", "recenter at start (your position and heading become the origin)");
-  args.flag("mirror", "show the left eye in a desktop window (not available yet: prints a notice)");
+  args.flag("mirror", "show the left eye in a desktop window (V: third-person view, R: recenter, Esc: quit)");
   args.flag("validate", "enable the Khronos validation layer on the Vulkan device and count its messages");
   args.flag("verbose", "print every session state change");
   if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
@@ -48,8 +48,7 @@ int runXr(cli::Argv argv) {
   lo.recenterAtStart = args.has("recenter");
   lo.vulkanValidation = args.has("validate");
   lo.verbose = args.has("verbose");
-  if (args.has("mirror"))
-    std::fprintf(stderr, "notice: --mirror is not available yet; the headset view is not mirrored\n");
+  lo.mirror = args.has("mirror");
 
   avatar::AvatarAsset asset;
   const std::string avatarArg = args.get("avatar");
@@ -80,6 +79,7 @@ int runXr(cli::Argv argv) {
               static_cast<unsigned long long>(r.handValidFrames[0]), static_cast<unsigned long long>(r.handValidFrames[1]),
               static_cast<unsigned long long>(r.handLostFrames[0]), static_cast<unsigned long long>(r.handLostFrames[1]));
   std::printf("calibration: %s, avatar scale %.3f\n", r.calibrated ? "done" : "not done", r.calibratedScale);
+  if (lo.mirror) std::printf("mirror: %llu frames shown\n", static_cast<unsigned long long>(r.mirrorFrames));
   if (lo.vulkanValidation) std::printf("validation messages: %u\n", r.vulkanValidationMessages);
 
   if (args.has("stats")) {
@@ -102,6 +102,7 @@ int runXr(cli::Argv argv) {
                         {"avatar_scale", r.calibratedScale},
                         {"vulkan_validation_messages", r.vulkanValidationMessages},
                         {"mean_frame_ms", r.meanFrameMs},
+                        {"mirror_frames", r.mirrorFrames},
                         {"error", r.error}};
     std::ofstream out(args.get("stats"));
     out << j.dump(2) << "\n";

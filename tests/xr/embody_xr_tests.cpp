@@ -3,6 +3,7 @@
 // and in the captured left-eye image the hand gizmos are where the replayed controllers project.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <glm/glm.hpp>
@@ -207,4 +208,40 @@ TEST_CASE("embody xr without a runtime fails with a clear message", "[xr]") {
   CHECK(r.output.find("error:") != std::string::npos);
   const auto usage = runProcess({embodyBin(), "xr", "--frames", "-3"}, {}, 30);
   CHECK(usage.exitCode == 2);
+}
+
+TEST_CASE("embody xr --mirror shows every frame in a desktop window without validation messages", "[xr]") {
+  // Runs under its own Xvfb (xvfb-run) unless a display is already there.
+  const bool haveDisplay = std::getenv("DISPLAY") && *std::getenv("DISPLAY");
+  if (!haveDisplay && !fs::exists("/usr/bin/xvfb-run")) {
+    WARN("SKIPPED: no display and no xvfb-run (Debian package xvfb)");
+    return;
+  }
+  const std::string dir = freshTestDir("mirror");
+  auto env = headlessRuntimeEnv();
+  env["EMBODY_XR_VIEW_SIZE"] = "256x280";
+  std::vector<std::string> argv = {embodyBin(), "xr", "--mirror", "--frames", "30", "--validate", "--stats", dir + "/stats.json"};
+  if (!haveDisplay) argv.insert(argv.begin(), {"xvfb-run", "-a"});
+  const auto p = runProcess(argv, env, 90);
+  INFO(p.output.substr(p.output.size() > 4000 ? p.output.size() - 4000 : 0));
+  REQUIRE_FALSE(p.timedOut);
+  REQUIRE(p.exitCode == 0);
+  std::ifstream in(dir + "/stats.json");
+  const auto stats = nlohmann::json::parse(in, nullptr, false);
+  REQUIRE(stats.is_object());
+  CHECK(stats["ended_cleanly"] == true);
+  CHECK(stats["frames_submitted"] == 30);
+  CHECK(stats["mirror_frames"].get<int>() >= 25);  // a frame may skip the mirror, never the headset
+  CHECK(stats["vulkan_validation_messages"] == 0);
+  CHECK(countOccurrences(p.output, "VALID_ERROR") == 0);
+}
+
+TEST_CASE("embody xr --mirror without a display fails with a clear message", "[xr]") {
+  auto env = headlessRuntimeEnv();
+  env["DISPLAY"] = "";
+  env["WAYLAND_DISPLAY"] = "";
+  const auto p = runProcess({embodyBin(), "xr", "--mirror", "--frames", "5"}, env, 60);
+  INFO(p.output);
+  CHECK(p.exitCode == 1);
+  CHECK(p.output.find("needs a display") != std::string::npos);
 }

@@ -21,6 +21,7 @@ struct XrLoopOptions {
   PlacementOptions placement;
   bool recenterAtStart = false;
   bool verbose = false;         // print every session state change
+  bool mirror = false;          // a desktop window showing the left eye (V: third person)
 };
 
 struct XrLoopReport {
@@ -37,6 +38,7 @@ struct XrLoopReport {
   float calibratedScale = 1.0f;
   bool calibrated = false;
   uint32_t vulkanValidationMessages = 0;
+  uint64_t mirrorFrames = 0;           // frames the mirror window presented
   double meanFrameMs = 0.0;            // wall time per loop iteration while rendering
   std::string error;                   // "" when the run ended normally
 };

@@ -168,8 +168,12 @@ Status XrSystem::createVulkan(const XrSystemOptions& o) {
   qci.queueCount = 1;
   qci.pQueuePriorities = &priority;
   gfx::RequiredDeviceFeatures features;
+  std::vector<const char*> deviceExts;
+  for (const auto& e : o.vulkanDeviceExtensions) deviceExts.push_back(e.c_str());
   VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
   dci.pNext = &features.features2;
+  dci.enabledExtensionCount = static_cast<uint32_t>(deviceExts.size());
+  dci.ppEnabledExtensionNames = deviceExts.data();
   dci.queueCreateInfoCount = 1;
   dci.pQueueCreateInfos = &qci;
   XrVulkanDeviceCreateInfoKHR xdi{XR_TYPE_VULKAN_DEVICE_CREATE_INFO_KHR};
