@@ -1,5 +1,6 @@
 // The headless runtime's session-level behaviour, in-process: state machine and call-order
 // errors, frame timing, views, actions and action spaces, hand tracking, tracking loss.
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstring>
@@ -23,6 +24,32 @@ std::string staticTrace(const std::string& name) {
 }
 
 glm::vec3 vec(const XrVector3f& v) { return {v.x, v.y, v.z}; }
+
+using HandJoints = std::array<XrHandJointLocationEXT, XR_HAND_JOINT_COUNT_EXT>;
+
+// One hand's joints in STAGE at `time`, through a hand tracker created for the call; isActive.
+bool locateHand(HeadlessSession& h, XrHandEXT hand, XrTime time, HandJoints& joints) {
+  auto create = h.proc<PFN_xrCreateHandTrackerEXT>("xrCreateHandTrackerEXT");
+  auto locate = h.proc<PFN_xrLocateHandJointsEXT>("xrLocateHandJointsEXT");
+  auto destroy = h.proc<PFN_xrDestroyHandTrackerEXT>("xrDestroyHandTrackerEXT");
+  REQUIRE(create);
+  REQUIRE(locate);
+  REQUIRE(destroy);
+  XrHandTrackerCreateInfoEXT ci{XR_TYPE_HAND_TRACKER_CREATE_INFO_EXT};
+  ci.hand = hand;
+  ci.handJointSet = XR_HAND_JOINT_SET_DEFAULT_EXT;
+  XrHandTrackerEXT tracker = XR_NULL_HANDLE;
+  REQUIRE(create(h.session, &ci, &tracker) == XR_SUCCESS);
+  XrHandJointLocationsEXT locs{XR_TYPE_HAND_JOINT_LOCATIONS_EXT};
+  locs.jointCount = XR_HAND_JOINT_COUNT_EXT;
+  locs.jointLocations = joints.data();
+  XrHandJointsLocateInfoEXT li{XR_TYPE_HAND_JOINTS_LOCATE_INFO_EXT};
+  li.baseSpace = h.stage;
+  li.time = time;
+  REQUIRE(locate(tracker, &li, &locs) == XR_SUCCESS);
+  REQUIRE(destroy(tracker) == XR_SUCCESS);
+  return locs.isActive == XR_TRUE;
+}
 
 }  // namespace
 
@@ -186,27 +213,9 @@ TEST_CASE("grip and aim action spaces follow the trace, and a lost hand clears i
 TEST_CASE("XR_EXT_hand_tracking gives 26 joints of a plausible hand at the controller, none when lost", "[xr]") {
   HeadlessSession h({{"EMBODY_XR_POSES", staticTrace("hands")}});
   h.runUntilFocused();
-  auto create = h.proc<PFN_xrCreateHandTrackerEXT>("xrCreateHandTrackerEXT");
-  auto locate = h.proc<PFN_xrLocateHandJointsEXT>("xrLocateHandJointsEXT");
-  REQUIRE(create);
-  REQUIRE(locate);
-  XrHandTrackerEXT trackers[2];
-  for (int i = 0; i < 2; ++i) {
-    XrHandTrackerCreateInfoEXT ci{XR_TYPE_HAND_TRACKER_CREATE_INFO_EXT};
-    ci.hand = i == 0 ? XR_HAND_LEFT_EXT : XR_HAND_RIGHT_EXT;
-    ci.handJointSet = XR_HAND_JOINT_SET_DEFAULT_EXT;
-    REQUIRE(create(h.session, &ci, &trackers[i]) == XR_SUCCESS);
-  }
-  XrHandJointLocationEXT joints[XR_HAND_JOINT_COUNT_EXT];
-  XrHandJointLocationsEXT locs{XR_TYPE_HAND_JOINT_LOCATIONS_EXT};
-  locs.jointCount = XR_HAND_JOINT_COUNT_EXT;
-  locs.jointLocations = joints;
-  XrHandJointsLocateInfoEXT li{XR_TYPE_HAND_JOINTS_LOCATE_INFO_EXT};
-  li.baseSpace = h.stage;
-  li.time = h.lastDisplayTime;
+  HandJoints joints;
   // The left hand (trigger released: a relaxed open hand).
-  REQUIRE(locate(trackers[0], &li, &locs) == XR_SUCCESS);
-  REQUIRE(locs.isActive == XR_TRUE);
+  REQUIRE(locateHand(h, XR_HAND_LEFT_EXT, h.lastDisplayTime, joints));
   const glm::vec3 palm = vec(joints[XR_HAND_JOINT_PALM_EXT].pose.position);
   CHECK(glm::distance(palm, glm::vec3(-0.2f, 1.1f, -0.3f)) < 1e-3f);  // palm at the grip
   for (const auto& j : joints) {
@@ -222,15 +231,12 @@ TEST_CASE("XR_EXT_hand_tracking gives 26 joints of a plausible hand at the contr
   // Holding a controller with the index finger forward: the thumb is on top (+Y).
   CHECK(joints[XR_HAND_JOINT_THUMB_TIP_EXT].pose.position.y > joints[XR_HAND_JOINT_LITTLE_TIP_EXT].pose.position.y);
   // The right hand pulls its trigger (0.75): the fingers curl, so they reach less far forward.
-  REQUIRE(locate(trackers[1], &li, &locs) == XR_SUCCESS);
-  REQUIRE(locs.isActive == XR_TRUE);
+  REQUIRE(locateHand(h, XR_HAND_RIGHT_EXT, h.lastDisplayTime, joints));
   CHECK(joints[XR_HAND_JOINT_THUMB_TIP_EXT].pose.position.y > joints[XR_HAND_JOINT_LITTLE_TIP_EXT].pose.position.y);
   const float curledReach = joints[XR_HAND_JOINT_WRIST_EXT].pose.position.z - joints[XR_HAND_JOINT_MIDDLE_TIP_EXT].pose.position.z;
   CHECK(curledReach < openReach - 0.03f);
   // The left hand is lost after 1 s of trace time.
-  li.time = h.lastDisplayTime + 2000000000;
-  REQUIRE(locate(trackers[0], &li, &locs) == XR_SUCCESS);
-  CHECK(locs.isActive == XR_FALSE);
+  CHECK_FALSE(locateHand(h, XR_HAND_LEFT_EXT, h.lastDisplayTime + 2000000000, joints));
   for (const auto& j : joints) CHECK(j.locationFlags == 0);
 }
 
@@ -253,27 +259,11 @@ BodyProbe probeBody(HeadlessSession& h, XrTime time) {
   b.head = vec(loc.pose.position);
   b.headQ = glm::quat(loc.pose.orientation.w, loc.pose.orientation.x, loc.pose.orientation.y, loc.pose.orientation.z);
   xrDestroySpace(view);
-  auto create = h.proc<PFN_xrCreateHandTrackerEXT>("xrCreateHandTrackerEXT");
-  auto locate = h.proc<PFN_xrLocateHandJointsEXT>("xrLocateHandJointsEXT");
-  auto destroy = h.proc<PFN_xrDestroyHandTrackerEXT>("xrDestroyHandTrackerEXT");
-  b.handsActive = true;
-  for (int i = 0; i < 2; ++i) {
-    XrHandTrackerCreateInfoEXT ci{XR_TYPE_HAND_TRACKER_CREATE_INFO_EXT};
-    ci.hand = i == 0 ? XR_HAND_LEFT_EXT : XR_HAND_RIGHT_EXT;
-    XrHandTrackerEXT t = XR_NULL_HANDLE;
-    REQUIRE(create(h.session, &ci, &t) == XR_SUCCESS);
-    XrHandJointLocationEXT joints[XR_HAND_JOINT_COUNT_EXT];
-    XrHandJointLocationsEXT locs{XR_TYPE_HAND_JOINT_LOCATIONS_EXT};
-    locs.jointCount = XR_HAND_JOINT_COUNT_EXT;
-    locs.jointLocations = joints;
-    XrHandJointsLocateInfoEXT li{XR_TYPE_HAND_JOINTS_LOCATE_INFO_EXT};
-    li.baseSpace = h.stage;
-    li.time = time;
-    REQUIRE(locate(t, &li, &locs) == XR_SUCCESS);
-    b.handsActive = b.handsActive && locs.isActive;
-    (i == 0 ? b.left : b.right) = vec(joints[XR_HAND_JOINT_PALM_EXT].pose.position);
-    destroy(t);
-  }
+  HandJoints joints;
+  b.handsActive = locateHand(h, XR_HAND_LEFT_EXT, time, joints);
+  b.left = vec(joints[XR_HAND_JOINT_PALM_EXT].pose.position);
+  b.handsActive = locateHand(h, XR_HAND_RIGHT_EXT, time, joints) && b.handsActive;
+  b.right = vec(joints[XR_HAND_JOINT_PALM_EXT].pose.position);
   return b;
 }
 }  // namespace
