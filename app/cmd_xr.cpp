@@ -14,12 +14,13 @@ namespace {
 using namespace embody;
 
 int runXr(cli::Argv argv) {
-  cli::Args args("embody xr",
-                 "Puts you in the avatar through the active OpenXR runtime (a headset, or the headless runtime "
-                 "selected by XR_RUNTIME_JSON). Until the body solver is connected the avatar stands in its rest "
-                 "pose under your head and gizmos follow your hands.");
-  args.option("avatar", "FILE|default", "a .gltf/.glb/.vrm file, or 'default' (the built-in procedural avatar)",
-              "default");
+  cli::Args args(
+      "embody xr",
+      "Puts you in the avatar through the active OpenXR runtime (a headset, or the headless runtime "
+      "selected by XR_RUNTIME_JSON). Until the body solver is connected the avatar stands in its rest "
+      "pose under your head and gizmos follow your hands.");
+  args.option("avatar", "FILE|default",
+              "a .gltf/.glb/.vrm file, or 'default' (the built-in procedural avatar)", "default");
   args.option("frames", "N", "end the session after N submitted frames (0: until the runtime ends it)", "0");
   args.option("height", "METRES", "your standing eye height (skips the calibration from the HMD height)");
   args.option("stats", "FILE", "write a JSON report of the run (states, frames, tracking, validation)");
@@ -73,11 +74,14 @@ int runXr(cli::Argv argv) {
               r.interactionProfile.empty() ? "(none)" : r.interactionProfile.c_str());
   std::printf("session states: %s\n", states.c_str());
   std::printf("frames: %llu submitted of %llu, %.2f ms each; head tracked in %llu\n",
-              static_cast<unsigned long long>(r.framesSubmitted), static_cast<unsigned long long>(r.framesWaited),
-              r.meanFrameMs, static_cast<unsigned long long>(r.headTrackedFrames));
+              static_cast<unsigned long long>(r.framesSubmitted),
+              static_cast<unsigned long long>(r.framesWaited), r.meanFrameMs,
+              static_cast<unsigned long long>(r.headTrackedFrames));
   std::printf("hands valid: left %llu, right %llu; lost: left %llu, right %llu\n",
-              static_cast<unsigned long long>(r.handValidFrames[0]), static_cast<unsigned long long>(r.handValidFrames[1]),
-              static_cast<unsigned long long>(r.handLostFrames[0]), static_cast<unsigned long long>(r.handLostFrames[1]));
+              static_cast<unsigned long long>(r.handValidFrames[0]),
+              static_cast<unsigned long long>(r.handValidFrames[1]),
+              static_cast<unsigned long long>(r.handLostFrames[0]),
+              static_cast<unsigned long long>(r.handLostFrames[1]));
   std::printf("calibration: %s, avatar scale %.3f\n", r.calibrated ? "done" : "not done", r.calibratedScale);
   if (lo.mirror) std::printf("mirror: %llu frames shown\n", static_cast<unsigned long long>(r.mirrorFrames));
   if (lo.vulkanValidation) std::printf("validation messages: %u\n", r.vulkanValidationMessages);

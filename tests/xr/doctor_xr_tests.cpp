@@ -46,6 +46,7 @@ TEST_CASE("probeOpenXR lists the runtime's extensions, its HMD and the installed
   CHECK(std::find(info.runtimeExtensions.begin(), info.runtimeExtensions.end(), "XR_EXT_hand_tracking") !=
         info.runtimeExtensions.end());
   bool coreValidation = false;
-  for (const auto& l : info.apiLayers) coreValidation = coreValidation || l.rfind("XR_APILAYER_LUNARG_core_validation", 0) == 0;
+  for (const auto& l : info.apiLayers)
+    coreValidation = coreValidation || l.rfind("XR_APILAYER_LUNARG_core_validation", 0) == 0;
   CHECK(coreValidation);
 }

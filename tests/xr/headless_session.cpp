@@ -27,11 +27,11 @@ HeadlessSession::HeadlessSession(const std::map<std::string, std::string>& env) 
 
   vk_ = std::make_unique<TestInstance>();
   XrGraphicsRequirementsVulkanKHR req{XR_TYPE_GRAPHICS_REQUIREMENTS_VULKAN_KHR};
-  REQUIRE(proc<PFN_xrGetVulkanGraphicsRequirementsKHR>("xrGetVulkanGraphicsRequirementsKHR")(instance, system, &req) ==
-          XR_SUCCESS);
+  REQUIRE(proc<PFN_xrGetVulkanGraphicsRequirementsKHR>("xrGetVulkanGraphicsRequirementsKHR")(
+              instance, system, &req) == XR_SUCCESS);
   VkPhysicalDevice pd = VK_NULL_HANDLE;
-  REQUIRE(proc<PFN_xrGetVulkanGraphicsDeviceKHR>("xrGetVulkanGraphicsDeviceKHR")(instance, system, vk_->handle(), &pd) ==
-          XR_SUCCESS);
+  REQUIRE(proc<PFN_xrGetVulkanGraphicsDeviceKHR>("xrGetVulkanGraphicsDeviceKHR")(
+              instance, system, vk_->handle(), &pd) == XR_SUCCESS);
   const float prio = 1.0f;
   VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
   qci.queueFamilyIndex = 0;  // lavapipe: one graphics+compute+transfer family

@@ -13,15 +13,17 @@ Pose headAt(glm::vec3 p, float headingDeg, float pitchDeg = 0.0f) {
   return {p, glm::angleAxis(glm::radians(headingDeg), glm::vec3(0, 1, 0)) *
                  glm::angleAxis(glm::radians(pitchDeg), glm::vec3(1, 0, 0))};
 }
-glm::vec3 transformPoint(const glm::mat4& m, glm::vec3 p) { return glm::vec3(m * glm::vec4(p, 1.0f)); }
+glm::vec3 transformPoint(const glm::mat4& m, glm::vec3 p) {
+  return glm::vec3(m * glm::vec4(p, 1.0f));
+}
 }  // namespace
 
 TEST_CASE("calibration scales the avatar so its eyes are at the HMD, feet on the floor", "[xr]") {
   const glm::vec3 avatarEye{0.0f, 1.84f, 0.1f};  // glTF avatar facing +Z
   AvatarPlacement p(avatarEye, {0, 0, 1}, {});
   CHECK_FALSE(p.calibrated());
-  CHECK_FALSE(p.calibrate(headAt({0, 0.5f, 0}, 0)));   // too low to be standing
-  CHECK_FALSE(p.calibrate(headAt({0, NAN, 0}, 0)));    // broken tracking never calibrates
+  CHECK_FALSE(p.calibrate(headAt({0, 0.5f, 0}, 0)));  // too low to be standing
+  CHECK_FALSE(p.calibrate(headAt({0, NAN, 0}, 0)));   // broken tracking never calibrates
   const Pose head = headAt({0.3f, 1.6f, -0.2f}, 40.0f, -20.0f);
   REQUIRE(p.calibrate(head));
   CHECK(p.scale() == Approx(1.6f / 1.84f));
@@ -30,7 +32,8 @@ TEST_CASE("calibration scales the avatar so its eyes are at the HMD, feet on the
   CHECK(transformPoint(root, glm::vec3(0.0f)).y == Approx(0.0f).margin(1e-6));  // feet on the floor
   // The avatar's front (+Z) now points where the head looks (heading only, pitch ignored).
   const glm::vec3 front = glm::normalize(glm::mat3(root) * glm::vec3(0, 0, 1));
-  CHECK(headingOf({{}, glm::quatLookAtRH(front, glm::vec3(0, 1, 0))}) == Approx(glm::radians(40.0f)).margin(1e-4));
+  CHECK(headingOf({{}, glm::quatLookAtRH(front, glm::vec3(0, 1, 0))}) ==
+        Approx(glm::radians(40.0f)).margin(1e-4));
 }
 
 TEST_CASE("a fixed eye height skips calibration; seated mode keeps the eyes at the HMD", "[xr]") {
@@ -58,13 +61,15 @@ TEST_CASE("recentering puts the head over the origin facing -Z", "[xr]") {
   CHECK(headingOf(w) == Approx(0.0f).margin(1e-5));
   // A hand half a metre in front of the head stays half a metre in front after recentering.
   const Pose hand = head * Pose{{0.0f, 0.0f, -0.5f}, {1, 0, 0, 0}};
-  CHECK(glm::distance(p.toWorld(hand).position, (w * Pose{{0.0f, 0.0f, -0.5f}, {1, 0, 0, 0}}).position) < 1e-5f);
+  CHECK(glm::distance(p.toWorld(hand).position, (w * Pose{{0.0f, 0.0f, -0.5f}, {1, 0, 0, 0}}).position) <
+        1e-5f);
 }
 
 TEST_CASE("grip-to-wrist offsets: the wrist sits behind the grip, mirrored between hands", "[xr]") {
-  for (const char* profile : {"/interaction_profiles/khr/simple_controller", "/interaction_profiles/oculus/touch_controller",
-                              "/interaction_profiles/valve/index_controller", "/interaction_profiles/htc/vive_controller",
-                              "/interaction_profiles/microsoft/motion_controller", ""}) {
+  for (const char* profile :
+       {"/interaction_profiles/khr/simple_controller", "/interaction_profiles/oculus/touch_controller",
+        "/interaction_profiles/valve/index_controller", "/interaction_profiles/htc/vive_controller",
+        "/interaction_profiles/microsoft/motion_controller", ""}) {
     INFO(profile);
     const Pose r = gripToWrist(profile, false), l = gripToWrist(profile, true);
     CHECK(r.position.z > 0.05f);  // +Z: back towards the user's wrist

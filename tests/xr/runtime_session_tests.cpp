@@ -17,13 +17,16 @@ namespace {
 // Head at 1.7 m, right controller at (0.2, 1.1, -0.3), left one lost from t = 1 s on.
 std::string staticTrace(const std::string& name) {
   return writeTraceFile(
-      name, {R"({"t":0,"head":{"p":[0,1.7,0],"q":[0,0,0,1]},"left":{"p":[-0.2,1.1,-0.3],"q":[0,0,0,1]},"right":{"p":[0.2,1.1,-0.3],"q":[0,0,0,1],"trigger":0.75}})",
-             R"({"t":0.999,"head":{"p":[0,1.7,0],"q":[0,0,0,1]},"left":{"p":[-0.2,1.1,-0.3],"q":[0,0,0,1]},"right":{"p":[0.2,1.1,-0.3],"q":[0,0,0,1],"trigger":0.75}})",
-             R"({"t":1,"head":{"p":[0,1.7,0],"q":[0,0,0,1]},"left":{"p":[0,0,0],"q":[0,0,0,1],"valid":false},"right":{"p":[0.2,1.1,-0.3],"q":[0,0,0,1],"trigger":0.75}})",
-             R"({"t":100,"head":{"p":[0,1.7,0],"q":[0,0,0,1]},"left":{"p":[0,0,0],"q":[0,0,0,1],"valid":false},"right":{"p":[0.2,1.1,-0.3],"q":[0,0,0,1],"trigger":0.75}})"});
+      name,
+      {R"({"t":0,"head":{"p":[0,1.7,0],"q":[0,0,0,1]},"left":{"p":[-0.2,1.1,-0.3],"q":[0,0,0,1]},"right":{"p":[0.2,1.1,-0.3],"q":[0,0,0,1],"trigger":0.75}})",
+       R"({"t":0.999,"head":{"p":[0,1.7,0],"q":[0,0,0,1]},"left":{"p":[-0.2,1.1,-0.3],"q":[0,0,0,1]},"right":{"p":[0.2,1.1,-0.3],"q":[0,0,0,1],"trigger":0.75}})",
+       R"({"t":1,"head":{"p":[0,1.7,0],"q":[0,0,0,1]},"left":{"p":[0,0,0],"q":[0,0,0,1],"valid":false},"right":{"p":[0.2,1.1,-0.3],"q":[0,0,0,1],"trigger":0.75}})",
+       R"({"t":100,"head":{"p":[0,1.7,0],"q":[0,0,0,1]},"left":{"p":[0,0,0],"q":[0,0,0,1],"valid":false},"right":{"p":[0.2,1.1,-0.3],"q":[0,0,0,1],"trigger":0.75}})"});
 }
 
-glm::vec3 vec(const XrVector3f& v) { return {v.x, v.y, v.z}; }
+glm::vec3 vec(const XrVector3f& v) {
+  return {v.x, v.y, v.z};
+}
 
 using HandJoints = std::array<XrHandJointLocationEXT, XR_HAND_JOINT_COUNT_EXT>;
 
@@ -53,7 +56,8 @@ bool locateHand(HeadlessSession& h, XrHandEXT hand, XrTime time, HandJoints& joi
 
 }  // namespace
 
-TEST_CASE("the session walks IDLE, READY, SYNCHRONIZED, VISIBLE, FOCUSED and rejects calls out of order", "[xr]") {
+TEST_CASE("the session walks IDLE, READY, SYNCHRONIZED, VISIBLE, FOCUSED and rejects calls out of order",
+          "[xr]") {
   HeadlessSession h;
   CHECK(xrEndSession(h.session) == XR_ERROR_SESSION_NOT_RUNNING);
   XrFrameState fs{XR_TYPE_FRAME_STATE};
@@ -108,7 +112,8 @@ TEST_CASE("xrLocateViews gives two eyes an IPD apart with mirrored asymmetric fi
   REQUIRE(xrLocateViews(h.session, &li, &vs, 2, &n, views) == XR_SUCCESS);
   REQUIRE(n == 2);
   CHECK((vs.viewStateFlags & XR_VIEW_STATE_POSITION_TRACKED_BIT) != 0);
-  CHECK(glm::distance(vec(views[0].pose.position), vec(views[1].pose.position)) == Approx(0.064f).margin(1e-5));
+  CHECK(glm::distance(vec(views[0].pose.position), vec(views[1].pose.position)) ==
+        Approx(0.064f).margin(1e-5));
   CHECK(views[0].pose.position.x < views[1].pose.position.x);
   CHECK(views[0].pose.position.y == Approx(1.7f).margin(1e-5));
   CHECK(views[0].fov.angleLeft == Approx(-views[1].fov.angleRight));
@@ -136,7 +141,8 @@ TEST_CASE("grip and aim action spaces follow the trace, and a lost hand clears i
     REQUIRE(xrCreateAction(set, &ai, &a) == XR_SUCCESS);
     return a;
   };
-  const XrAction grip = action("grip", XR_ACTION_TYPE_POSE_INPUT), aim = action("aim", XR_ACTION_TYPE_POSE_INPUT),
+  const XrAction grip = action("grip", XR_ACTION_TYPE_POSE_INPUT),
+                 aim = action("aim", XR_ACTION_TYPE_POSE_INPUT),
                  trigger = action("trigger", XR_ACTION_TYPE_FLOAT_INPUT);
   std::vector<XrActionSuggestedBinding> b = {{grip, h.path("/user/hand/left/input/grip/pose")},
                                              {grip, h.path("/user/hand/right/input/grip/pose")},
@@ -210,7 +216,8 @@ TEST_CASE("grip and aim action spaces follow the trace, and a lost hand clears i
   CHECK(left.locationFlags == 0);
 }
 
-TEST_CASE("XR_EXT_hand_tracking gives 26 joints of a plausible hand at the controller, none when lost", "[xr]") {
+TEST_CASE("XR_EXT_hand_tracking gives 26 joints of a plausible hand at the controller, none when lost",
+          "[xr]") {
   HeadlessSession h({{"EMBODY_XR_POSES", staticTrace("hands")}});
   h.runUntilFocused();
   HandJoints joints;
@@ -219,21 +226,26 @@ TEST_CASE("XR_EXT_hand_tracking gives 26 joints of a plausible hand at the contr
   const glm::vec3 palm = vec(joints[XR_HAND_JOINT_PALM_EXT].pose.position);
   CHECK(glm::distance(palm, glm::vec3(-0.2f, 1.1f, -0.3f)) < 1e-3f);  // palm at the grip
   for (const auto& j : joints) {
-    CHECK(j.locationFlags == (XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT |
-                              XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT | XR_SPACE_LOCATION_POSITION_TRACKED_BIT));
+    CHECK(j.locationFlags ==
+          (XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT |
+           XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT | XR_SPACE_LOCATION_POSITION_TRACKED_BIT));
     CHECK(glm::distance(vec(j.pose.position), palm) < 0.2f);  // within a hand's reach of the palm
     CHECK(j.radius > 0.004f);
   }
   // Fingertips ahead (-Z of the identity grip) of the wrist, the wrist behind the palm.
-  const float openReach = joints[XR_HAND_JOINT_WRIST_EXT].pose.position.z - joints[XR_HAND_JOINT_MIDDLE_TIP_EXT].pose.position.z;
+  const float openReach =
+      joints[XR_HAND_JOINT_WRIST_EXT].pose.position.z - joints[XR_HAND_JOINT_MIDDLE_TIP_EXT].pose.position.z;
   CHECK(openReach > 0.15f);
   CHECK(joints[XR_HAND_JOINT_WRIST_EXT].pose.position.z > palm.z);
   // Holding a controller with the index finger forward: the thumb is on top (+Y).
-  CHECK(joints[XR_HAND_JOINT_THUMB_TIP_EXT].pose.position.y > joints[XR_HAND_JOINT_LITTLE_TIP_EXT].pose.position.y);
+  CHECK(joints[XR_HAND_JOINT_THUMB_TIP_EXT].pose.position.y >
+        joints[XR_HAND_JOINT_LITTLE_TIP_EXT].pose.position.y);
   // The right hand pulls its trigger (0.75): the fingers curl, so they reach less far forward.
   REQUIRE(locateHand(h, XR_HAND_RIGHT_EXT, h.lastDisplayTime, joints));
-  CHECK(joints[XR_HAND_JOINT_THUMB_TIP_EXT].pose.position.y > joints[XR_HAND_JOINT_LITTLE_TIP_EXT].pose.position.y);
-  const float curledReach = joints[XR_HAND_JOINT_WRIST_EXT].pose.position.z - joints[XR_HAND_JOINT_MIDDLE_TIP_EXT].pose.position.z;
+  CHECK(joints[XR_HAND_JOINT_THUMB_TIP_EXT].pose.position.y >
+        joints[XR_HAND_JOINT_LITTLE_TIP_EXT].pose.position.y);
+  const float curledReach =
+      joints[XR_HAND_JOINT_WRIST_EXT].pose.position.z - joints[XR_HAND_JOINT_MIDDLE_TIP_EXT].pose.position.z;
   CHECK(curledReach < openReach - 0.03f);
   // The left hand is lost after 1 s of trace time.
   CHECK_FALSE(locateHand(h, XR_HAND_LEFT_EXT, h.lastDisplayTime + 2000000000, joints));
@@ -257,7 +269,8 @@ BodyProbe probeBody(HeadlessSession& h, XrTime time) {
   XrSpaceLocation loc{XR_TYPE_SPACE_LOCATION};
   REQUIRE(xrLocateSpace(view, h.stage, time, &loc) == XR_SUCCESS);
   b.head = vec(loc.pose.position);
-  b.headQ = glm::quat(loc.pose.orientation.w, loc.pose.orientation.x, loc.pose.orientation.y, loc.pose.orientation.z);
+  b.headQ = glm::quat(loc.pose.orientation.w, loc.pose.orientation.x, loc.pose.orientation.y,
+                      loc.pose.orientation.z);
   xrDestroySpace(view);
   HandJoints joints;
   b.handsActive = locateHand(h, XR_HAND_LEFT_EXT, time, joints);
@@ -282,10 +295,11 @@ TEST_CASE("a BVH file drives the head and hands: metres, +Y up, the performer fa
   REQUIRE(a.handsActive);
   CHECK(a.head.y == Approx(1.6f).margin(0.15f));  // scaled so the rest head stands 1.6 m high
   for (const auto& p : {a, b}) {
-    INFO("head " << p.head.x << "," << p.head.y << "," << p.head.z << " left " << p.left.x << "," << p.left.y << ","
-                 << p.left.z << " right " << p.right.x << "," << p.right.y << "," << p.right.z);
+    INFO("head " << p.head.x << "," << p.head.y << "," << p.head.z << " left " << p.left.x << "," << p.left.y
+                 << "," << p.left.z << " right " << p.right.x << "," << p.right.y << "," << p.right.z);
     // Hands hang well below the head, at either side of it (left on the user's left).
-    const glm::vec3 l = glm::conjugate(p.headQ) * (p.left - p.head), r = glm::conjugate(p.headQ) * (p.right - p.head);
+    const glm::vec3 l = glm::conjugate(p.headQ) * (p.left - p.head),
+                    r = glm::conjugate(p.headQ) * (p.right - p.head);
     CHECK(l.y < -0.3f);
     CHECK(r.y < -0.3f);
     CHECK(l.x < r.x);

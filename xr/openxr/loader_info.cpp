@@ -65,7 +65,8 @@ OpenXRLoaderInfo probeOpenXR() {
   if (XR_SUCCEEDED(xrEnumerateApiLayerProperties(0, &n, nullptr)) && n > 0) {
     std::vector<XrApiLayerProperties> layers(n, {XR_TYPE_API_LAYER_PROPERTIES});
     if (XR_SUCCEEDED(xrEnumerateApiLayerProperties(n, &n, layers.data())))
-      for (const auto& l : layers) info.apiLayers.push_back(std::string(l.layerName) + " " + versionString(l.specVersion));
+      for (const auto& l : layers)
+        info.apiLayers.push_back(std::string(l.layerName) + " " + versionString(l.specVersion));
   }
   if (info.runtimeManifest.empty()) return info;
   if (XR_SUCCEEDED(xrEnumerateInstanceExtensionProperties(nullptr, 0, &n, nullptr)) && n > 0) {

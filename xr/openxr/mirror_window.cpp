@@ -18,7 +18,8 @@ void keyCallback(GLFWwindow* w, int key, int, int action, int) {
 
 Result<std::vector<std::string>> MirrorWindow::requiredInstanceExtensions() {
   glfwSetErrorCallback(nullptr);
-  if (glfwInit() != GLFW_TRUE) return Error{"--mirror needs a display (DISPLAY or WAYLAND_DISPLAY); none is usable"};
+  if (glfwInit() != GLFW_TRUE)
+    return Error{"--mirror needs a display (DISPLAY or WAYLAND_DISPLAY); none is usable"};
   if (glfwVulkanSupported() != GLFW_TRUE) return Error{"--mirror: GLFW finds no Vulkan loader"};
   uint32_t n = 0;
   const char** names = glfwGetRequiredInstanceExtensions(&n);
@@ -27,8 +28,9 @@ Result<std::vector<std::string>> MirrorWindow::requiredInstanceExtensions() {
   return out;
 }
 
-Result<std::unique_ptr<MirrorWindow>> MirrorWindow::create(VkInstance instance, VkPhysicalDevice physical, VkDevice device,
-                                                           uint32_t queueFamily, uint32_t width, uint32_t height) {
+Result<std::unique_ptr<MirrorWindow>> MirrorWindow::create(VkInstance instance, VkPhysicalDevice physical,
+                                                           VkDevice device, uint32_t queueFamily,
+                                                           uint32_t width, uint32_t height) {
   std::unique_ptr<MirrorWindow> m(new MirrorWindow());
   m->instance_ = instance;
   m->physical_ = physical;
@@ -47,7 +49,8 @@ Result<std::unique_ptr<MirrorWindow>> MirrorWindow::create(VkInstance instance, 
   m->acquired_.resize(gfx::kFramesInFlight + 2);
   m->acquiredUsedAt_.assign(m->acquired_.size(), 0);
   for (auto& s : m->acquired_)
-    if (vkCreateSemaphore(device, &si, nullptr, &s) != VK_SUCCESS) return Error{"--mirror: vkCreateSemaphore failed"};
+    if (vkCreateSemaphore(device, &si, nullptr, &s) != VK_SUCCESS)
+      return Error{"--mirror: vkCreateSemaphore failed"};
   if (auto s = m->createSwapchain(); !s) return Error{s.error()};
   return m;
 }
@@ -57,7 +60,8 @@ Status MirrorWindow::createSwapchain() {
   vkGetPhysicalDeviceSurfaceCapabilitiesKHR(physical_, surface_, &caps);
   int w = 0, h = 0;
   glfwGetFramebufferSize(window_, &w, &h);
-  extent_ = caps.currentExtent.width != UINT32_MAX ? caps.currentExtent : VkExtent2D{uint32_t(w), uint32_t(h)};
+  extent_ =
+      caps.currentExtent.width != UINT32_MAX ? caps.currentExtent : VkExtent2D{uint32_t(w), uint32_t(h)};
   if (extent_.width == 0 || extent_.height == 0) return {};  // minimised: try again later
   uint32_t n = 0;
   vkGetPhysicalDeviceSurfaceFormatsKHR(physical_, surface_, &n, nullptr);
@@ -135,8 +139,12 @@ MirrorWindow::~MirrorWindow() {
   glfwTerminate();
 }
 
-void MirrorWindow::pollEvents() { glfwPollEvents(); }
-bool MirrorWindow::closeRequested() const { return glfwWindowShouldClose(window_) == GLFW_TRUE; }
+void MirrorWindow::pollEvents() {
+  glfwPollEvents();
+}
+bool MirrorWindow::closeRequested() const {
+  return glfwWindowShouldClose(window_) == GLFW_TRUE;
+}
 
 Result<bool> MirrorWindow::draw(gfx::Renderer& renderer, uint64_t frameNumber, const gfx::Camera& camera,
                                 gfx::SubmitSync& sync) {
@@ -176,9 +184,16 @@ Result<bool> MirrorWindow::draw(gfx::Renderer& renderer, uint64_t frameNumber, c
   dep.pImageMemoryBarriers = &b;
   vkCmdPipelineBarrier2(renderer.commandBuffer(), &dep);
   gfx::PassTarget target;
-  target.color = {images_[imageIndex_], views_[imageIndex_], format_, extent_, 0, 1,
-                  VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR};
-  if (auto s = renderer.drawPass(std::span<const gfx::Camera>(&camera, 1), target); !s) return Error{s.error()};
+  target.color = {images_[imageIndex_],
+                  views_[imageIndex_],
+                  format_,
+                  extent_,
+                  0,
+                  1,
+                  VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                  VK_IMAGE_LAYOUT_PRESENT_SRC_KHR};
+  if (auto s = renderer.drawPass(std::span<const gfx::Camera>(&camera, 1), target); !s)
+    return Error{s.error()};
   VkSemaphoreSubmitInfo wait{VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO};
   wait.semaphore = acquired;
   wait.stageMask = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
@@ -201,8 +216,10 @@ Status MirrorWindow::present(VkQueue queue) {
   pi.pSwapchains = &swapchain_;
   pi.pImageIndices = &imageIndex_;
   const VkResult r = vkQueuePresentKHR(queue, &pi);
-  if (r == VK_ERROR_OUT_OF_DATE_KHR || r == VK_SUBOPTIMAL_KHR) needsRecreate_ = true;
-  else if (r != VK_SUCCESS) return Error{"--mirror: vkQueuePresentKHR failed"};
+  if (r == VK_ERROR_OUT_OF_DATE_KHR || r == VK_SUBOPTIMAL_KHR)
+    needsRecreate_ = true;
+  else if (r != VK_SUCCESS)
+    return Error{"--mirror: vkQueuePresentKHR failed"};
   return {};
 }
 

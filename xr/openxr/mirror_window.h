@@ -23,8 +23,9 @@ class MirrorWindow {
  public:
   // glfwInit and the instance extensions a surface needs; call before the VkInstance exists.
   static Result<std::vector<std::string>> requiredInstanceExtensions();
-  static Result<std::unique_ptr<MirrorWindow>> create(VkInstance instance, VkPhysicalDevice physical, VkDevice device,
-                                                      uint32_t queueFamily, uint32_t width, uint32_t height);
+  static Result<std::unique_ptr<MirrorWindow>> create(VkInstance instance, VkPhysicalDevice physical,
+                                                      VkDevice device, uint32_t queueFamily, uint32_t width,
+                                                      uint32_t height);
   ~MirrorWindow();
   MirrorWindow(const MirrorWindow&) = delete;
   MirrorWindow& operator=(const MirrorWindow&) = delete;
@@ -37,7 +38,8 @@ class MirrorWindow {
   // Inside an open renderer frame (`frameNumber`: renderer frames begun so far): acquires a
   // window image and draws `camera` into it. Returns false (no error) when the window cannot show
   // a frame now (minimised, resized, no image free): the headset never waits for the mirror.
-  Result<bool> draw(gfx::Renderer& renderer, uint64_t frameNumber, const gfx::Camera& camera, gfx::SubmitSync& sync);
+  Result<bool> draw(gfx::Renderer& renderer, uint64_t frameNumber, const gfx::Camera& camera,
+                    gfx::SubmitSync& sync);
   // After renderer.endFrame(sync): presents what draw() rendered.
   Status present(VkQueue queue);
   float aspect() const { return extent_.height ? float(extent_.width) / float(extent_.height) : 1.0f; }
@@ -57,13 +59,14 @@ class MirrorWindow {
   VkExtent2D extent_{0, 0};
   std::vector<VkImage> images_;
   std::vector<VkImageView> views_;
-  std::vector<VkSemaphore> renderDone_;         // one per swapchain image
+  std::vector<VkSemaphore> renderDone_;  // one per swapchain image
   // Acquire semaphores and the renderer frame that last waited on each: one is reused only when
   // that frame has retired (the renderer keeps kFramesInFlight frames in flight).
   std::vector<VkSemaphore> acquired_;
   std::vector<uint64_t> acquiredUsedAt_;
   uint32_t imageIndex_ = 0;
   bool pending_ = false, needsRecreate_ = false;
+
  public:
   struct Keys {
     bool thirdPerson = false, recenter = false;

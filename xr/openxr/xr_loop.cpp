@@ -16,7 +16,9 @@ namespace embody::xr {
 
 namespace {
 
-gfx::FovAngles fovOf(const XrFovf& f) { return {f.angleLeft, f.angleRight, f.angleUp, f.angleDown}; }
+gfx::FovAngles fovOf(const XrFovf& f) {
+  return {f.angleLeft, f.angleRight, f.angleUp, f.angleDown};
+}
 
 // Midpoint of the eyes with the left eye's orientation: the head pose the body follows.
 Pose headFromViews(const Views& v) {
@@ -138,8 +140,10 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
       if (!placement.calibrated()) placement.calibrate(head);
     }
     for (int h = 0; h < 2; ++h) {
-      if (in.hand(h).grip.valid) ++rep.handValidFrames[h];
-      else if (run.focused()) ++rep.handLostFrames[h];
+      if (in.hand(h).grip.valid)
+        ++rep.handValidFrames[h];
+      else if (run.focused())
+        ++rep.handLostFrames[h];
     }
     rep.interactionProfile = in.interactionProfile();
 
@@ -192,14 +196,27 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
       for (uint32_t e = 0; e < 2 && st; ++e) {
         const auto& sc = run.color()[e];
         gfx::PassTarget target;
-        target.color = {sc.images[color[e]].image, sc.images[color[e]].view, sc.format, sc.extent, 0, 1,
-                        VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+        target.color = {sc.images[color[e]].image,
+                        sc.images[color[e]].view,
+                        sc.format,
+                        sc.extent,
+                        0,
+                        1,
+                        VK_IMAGE_LAYOUT_UNDEFINED,
+                        VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
         if (run.submitsDepth()) {
           const auto& dc = run.depth()[e];
-          target.depth = gfx::TargetImage{dc.images[depth[e]].image, dc.images[depth[e]].view, dc.format, dc.extent, 0, 1,
-                                          VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL};
+          target.depth = gfx::TargetImage{dc.images[depth[e]].image,
+                                          dc.images[depth[e]].view,
+                                          dc.format,
+                                          dc.extent,
+                                          0,
+                                          1,
+                                          VK_IMAGE_LAYOUT_UNDEFINED,
+                                          VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL};
         }
-        const gfx::Camera cam = gfx::cameraFromPose(views.eyes[e].pose.matrix(), fovOf(views.eyes[e].fov), kNear, kFar);
+        const gfx::Camera cam =
+            gfx::cameraFromPose(views.eyes[e].pose.matrix(), fovOf(views.eyes[e].fov), kNear, kFar);
         st = r.drawPass(std::span<const gfx::Camera>(&cam, 1), target);
       }
       ++rendererFrames;
@@ -207,13 +224,16 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
       if (st && mirror) {
         // The left eye again (its pose, the window's aspect), or the avatar from outside.
         const float vfov = views.eyes[0].fov.angleUp - views.eyes[0].fov.angleDown;
-        const gfx::Camera cam = mirror->thirdPerson()
-                                    ? ar.orbitAround(pose, 0.6f, 0.2f)
-                                    : gfx::cameraFromPose(views.eyes[0].pose.matrix(),
-                                                          gfx::FovAngles::symmetric(vfov, mirror->aspect()), kNear, kFar);
+        const gfx::Camera cam =
+            mirror->thirdPerson()
+                ? ar.orbitAround(pose, 0.6f, 0.2f)
+                : gfx::cameraFromPose(views.eyes[0].pose.matrix(),
+                                      gfx::FovAngles::symmetric(vfov, mirror->aspect()), kNear, kFar);
         auto shown = mirror->draw(r, rendererFrames, cam, sync);
-        if (!shown) st = Status(Error{shown.error()});
-        else if (*shown) ++rep.mirrorFrames;
+        if (!shown)
+          st = Status(Error{shown.error()});
+        else if (*shown)
+          ++rep.mirrorFrames;
       }
       if (st) st = r.endFrame(sync);  // submitted before the images are released, as OpenXR requires
       if (st && mirror) st = mirror->present((*device)->queue());
@@ -231,7 +251,8 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
       error = s.error();
       break;
     }
-    if (rendered) renderSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (rendered)
+      renderSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (o.frames > 0 && run.framesSubmitted() >= o.frames) run.requestExit();
   }
   for (; statesSeen < run.stateHistory().size(); ++statesSeen)
@@ -252,7 +273,8 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
   const auto counter = sys.validationCounter();
   system->reset();  // destroying the device and instance can report leaks: count after
   rep.vulkanValidationMessages = counter->load();
-  if (error.empty() && rep.sessionLost) error = "the OpenXR session was lost (the runtime or the headset went away)";
+  if (error.empty() && rep.sessionLost)
+    error = "the OpenXR session was lost (the runtime or the headset went away)";
   rep.error = error;
   return rep;
 }

@@ -1,8 +1,8 @@
 // BVH motion capture as a pose source: the head and hands of the captured person, converted to
 // OpenXR conventions (metres, +Y up, the performer's rest pose facing -Z).
 #include <cmath>
-#include <glm/gtc/constants.hpp>
 #include <fstream>
+#include <glm/gtc/constants.hpp>
 #include <sstream>
 
 #include "xr/runtime/runtime.h"
@@ -57,8 +57,10 @@ std::string loadBvhSamples(const std::string& path, std::vector<BodySample>& out
       in >> tok;  // "Site"
       endSite = true;
     } else if (tok == "{") {
-      if (endSite) ++depthInEndSite;
-      else stack.push_back(static_cast<int>(joints.size()) - 1);
+      if (endSite)
+        ++depthInEndSite;
+      else
+        stack.push_back(static_cast<int>(joints.size()) - 1);
     } else if (tok == "}") {
       if (endSite) {
         endSite = --depthInEndSite > 0;
@@ -86,7 +88,8 @@ std::string loadBvhSamples(const std::string& path, std::vector<BodySample>& out
   int frames = 0;
   double frameTime = 0.0;
   in >> tok >> frames >> tok >> tok >> frameTime;  // "Frames:" N "Frame" "Time:" dt
-  if (!in || frames <= 0 || !(frameTime > 0.0) || frameTime > 1.0) return path + ": broken frame count or frame time";
+  if (!in || frames <= 0 || !(frameTime > 0.0) || frameTime > 1.0)
+    return path + ": broken frame count or frame time";
   const int head = findJoint(joints, {"Head", "head", "Neck1", "Neck"});
   const int left = findJoint(joints, {"LeftHand", "LeftWrist", "lhand", "l_hand"});
   const int right = findJoint(joints, {"RightHand", "RightWrist", "rhand", "r_hand"});
@@ -119,8 +122,10 @@ std::string loadBvhSamples(const std::string& path, std::vector<BodySample>& out
       for (size_t c = 0; c < joints[j].channels.size(); ++c) {
         const float x = v[joints[j].firstChannel + c];
         const int code = joints[j].channels[c];
-        if (code < 3) t[code] = x + (joints[j].parent < 0 ? 0.0f : joints[j].offset[code]);
-        else r = r * glm::mat4_cast(glm::angleAxis(glm::radians(x), glm::vec3(code == 3, code == 4, code == 5)));
+        if (code < 3)
+          t[code] = x + (joints[j].parent < 0 ? 0.0f : joints[j].offset[code]);
+        else
+          r = r * glm::mat4_cast(glm::angleAxis(glm::radians(x), glm::vec3(code == 3, code == 4, code == 5)));
       }
       glm::mat4 local = r;
       local[3] = glm::vec4(t, 1.0f);
