@@ -77,6 +77,7 @@ void checkRetargeting(const AvatarAsset& avatar, SpineMode spine = SpineMode::Au
   std::vector<glm::mat4> globals;
   std::mt19937 rng(42);
   double worstPos = 0.0, worstRot = 0.0, moved = 0.0;
+  std::map<ik::JointId, Eigen::Vector3d> restPos;
   for (int trial = 0; trial < 20; ++trial) {
     const Eigen::VectorXd q = trial == 0 ? Eigen::VectorXd::Zero(body->model.dofs) : randomPose(body->model, rng);
     REQUIRE(data.setConfiguration(q).ok());
@@ -88,7 +89,8 @@ void checkRetargeting(const AvatarAsset& avatar, SpineMode spine = SpineMode::Au
       const Eigen::Vector3d ikPos = data.jointFrame(j).translation();
       const glm::vec3 av(globals[static_cast<size_t>(a)][3]);
       worstPos = std::max(worstPos, (ikPos - Eigen::Vector3d(av.x, av.y, av.z)).norm());
-      moved = std::max(moved, (ikPos - body->model.joints[static_cast<size_t>(j)].desc.rest.translation()).norm());
+      if (trial == 0) restPos[j] = ikPos;
+      moved = std::max(moved, (ikPos - restPos[j]).norm());
       // The avatar bone turned by the same world rotation as its IK joint.
       const Eigen::Quaterniond delta =
           Eigen::Quaterniond(data.jointFrame(j).rotation()) * body->ikRestRotation[static_cast<size_t>(j)].conjugate();
