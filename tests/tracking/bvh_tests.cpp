@@ -211,26 +211,38 @@ TEST_CASE("the CMU walk: 524 frames at 120 Hz, a plausible head height, about 3.
   auto src = openBvhSource(path, {}, &map);
   REQUIRE(src.ok());
   auto& s = **src;
-  CHECK(s.frameCount() == 524);
+  auto clip = avatar::loadBvh(path);
+  REQUIRE(clip.ok());
+  CHECK(clip->frameCount == 524);
+  CHECK(clip->frameTime == Approx(1.0 / 120.0).epsilon(0.001));
+  // Frame 0 of CMU's conversions is a T-pose reference, skipped with a note.
+  CHECK(s.frameCount() == 523);
+  bool noted = false;
+  for (const auto& n : s.notes()) noted = noted || n.rfind("frame 0 is a reference pose", 0) == 0;
+  CHECK(noted);
   CHECK(s.nativeRate() == Approx(120.0).epsilon(0.001));
-  CHECK(s.duration() == Approx(523.0 / 120.0).epsilon(0.001));
+  CHECK(s.duration() == Approx(522.0 / 120.0).epsilon(0.001));
   CHECK(s.trackers() == TrackerMask::all());
-  // The rest skeleton is 24.2 units tall (sole to the top of the head), fitted to 1.75 m.
-  CHECK(map.restHeightUnits == Approx(24.18).margin(0.05));
-  float minHead = 10, maxHead = 0, minFoot = 10;
+  // Standing height 25 units (the rest skeleton with its splayed legs straightened), fitted to 1.75 m.
+  CHECK(map.restHeightUnits == Approx(25.0).margin(0.1));
+  float minHead = 10, maxHead = 0, minFoot = 10, maxSpeed = 0;
   float forward = 0;
+  glm::vec3 prevHand = s.trace().samples[0][TrackerId::RightHand].position;
   for (const auto& f : s.trace().samples) {
     minHead = std::min(minHead, f[TrackerId::Head].position.y);
     maxHead = std::max(maxHead, f[TrackerId::Head].position.y);
     minFoot = std::min({minFoot, f[TrackerId::LeftFoot].position.y, f[TrackerId::RightFoot].position.y});
     forward += -(f[TrackerId::Head].orientation * glm::vec3(0, 0, -1)).z;
     CHECK(f[TrackerId::LeftHand].position.x < f[TrackerId::RightHand].position.x);
+    maxSpeed = std::max(maxSpeed, glm::length(f[TrackerId::RightHand].position - prevHand) * 120.0f);
+    prevHand = f[TrackerId::RightHand].position;
   }
+  CHECK(maxSpeed < 3.0f);  // no reference-pose jump left
   CHECK(minHead > 1.5f);
   CHECK(maxHead < 1.8f);
   CHECK(minFoot > 0.02f);
   CHECK(minFoot < 0.15f);
-  CHECK(forward / 524.0f > 0.9f);  // looking where it walks: along -Z
+  CHECK(forward / 523.0f > 0.9f);  // looking where it walks: along -Z
   const auto& samples = s.trace().samples;
   const glm::vec3 walked = samples.back()[TrackerId::Hips].position - samples.front()[TrackerId::Hips].position;
   CHECK(walked.z < 0.0f);

@@ -115,19 +115,39 @@ Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, 
   const glm::dmat3 toXr = glm::transpose(glm::dmat3(-left, up, -forward));
   const glm::dquat qToXr = glm::quat_cast(toXr);
 
-  // Rest height along up (every joint and end site), and the scale.
-  double lo = 1e300, hi = -1e300;
+  // Standing height in file units from the rest skeleton, with the legs straightened: rest poses
+  // often stand with the legs apart (CMU's does), which would underestimate the height.
+  const double rootLevel = glm::dot(rest[0].position, up);
+  double top = -1e300, lowest = 1e300;
   for (const auto& g : rest) {
-    const double h = glm::dot(g.position, up);
-    lo = std::min(lo, h);
-    hi = std::max(hi, h);
+    top = std::max(top, glm::dot(g.position, up) - rootLevel);
+    lowest = std::min(lowest, glm::dot(g.position, up) - rootLevel);
   }
-  m.restHeightUnits = hi - lo;
+  double legHeight = -lowest;  // fallback without feet: the rest pose as it is
+  for (auto foot : {TrackerId::LeftFoot, TrackerId::RightFoot}) {
+    const int ankle = joint(foot);
+    if (ankle < 0) continue;
+    double straight = 0.0;
+    for (int j = ankle; j > 0; j = clip.joints[static_cast<size_t>(j)].parent) {
+      const glm::dvec3& o = clip.joints[static_cast<size_t>(j)].offset;
+      const double len = glm::length(o), vertical = std::abs(glm::dot(o, up));
+      straight += vertical > 0.8 * len ? len : vertical;  // leg bones count whole, hip offsets only vertically
+    }
+    double sole = glm::dot(rest[static_cast<size_t>(ankle)].position, up);
+    for (size_t j = static_cast<size_t>(ankle) + 1; j < clip.joints.size(); ++j) {
+      int a = clip.joints[j].parent;
+      while (a > ankle) a = clip.joints[static_cast<size_t>(a)].parent;
+      if (a == ankle) sole = std::min(sole, glm::dot(rest[j].position, up));
+    }
+    legHeight = std::max(legHeight, straight + glm::dot(rest[static_cast<size_t>(ankle)].position, up) - sole);
+  }
+  m.restHeightUnits = top + legHeight;
   if (!(m.restHeightUnits > 1e-9)) return Error{"BVH rest skeleton has no height (all joints at one level)"};
   m.scale = options.scale > 0.0 ? options.scale : options.userHeight / m.restHeightUnits;
   {
     char buf[200];
-    std::snprintf(buf, sizeof buf, "rest skeleton %.2f units tall, %s up, facing %s; scale %.4f m/unit (%s)",
+    std::snprintf(buf, sizeof buf, "standing height %.2f units (rest skeleton, legs straight), %s up, facing %s; "
+                  "scale %.4f m/unit (%s)",
                   m.restHeightUnits, m.upAxis.c_str(), m.facingAxis.c_str(), m.scale,
                   options.scale > 0.0 ? "given" : "fitted to the user height");
     m.notes.insert(m.notes.begin(), buf);
@@ -156,17 +176,16 @@ Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, 
   glm::dvec3 eyeOffset(0.0);
   if (joint(TrackerId::Head) >= 0) {
     // Eyes at 0.936 of the standing height, ahead of the head joint (OpenXR axes, rest pose).
-    const double sole = lo * m.scale;
-    const double eyeLevel = sole + 0.936 * performer;
-    const glm::dvec3 head = restXr(joint(TrackerId::Head));
-    const double rise = std::clamp(eyeLevel - head.y, -0.05 * performer, 0.1 * performer);
+    const double headAboveSole =
+        (legHeight + glm::dot(rest[static_cast<size_t>(joint(TrackerId::Head))].position, up) - rootLevel) * m.scale;
+    const double rise = std::clamp(0.936 * performer - headAboveSole, -0.05 * performer, 0.1 * performer);
     eyeOffset = glm::dvec3(0.0, rise, -static_cast<double>(body.eyeForward));
   }
 
   Trace trace;
   trace.source = "bvh";
   trace.userHeight = options.userHeight;
-  trace.samples.resize(clip.frameCount);
+  trace.samples.resize(clip.frameCount);  // times from 0; TraceSource replays from the first sample
   std::vector<BvhGlobal> g;
   for (auto id : kAllTrackers)
     if (joint(id) >= 0) trace.trackers.set(id);
@@ -187,6 +206,25 @@ Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, 
       t.position = glm::vec3(p);
       t.orientation = glm::normalize(glm::quat(delta * reference[static_cast<size_t>(index(id))]));
       t.valid = true;
+    }
+  }
+  // Many converted clips (CMU's among them) start with a reference pose (a T-pose) one frame
+  // before the motion: a jump no person makes. Skip it rather than replay the jump.
+  if (trace.samples.size() > 2) {
+    auto fastest = [&](const PoseSample& a, const PoseSample& b) {
+      float v = 0.0f;
+      for (auto id : kAllTrackers)
+        if (trace.trackers.has(id))
+          v = std::max(v, glm::length(b[id].position - a[id].position) / static_cast<float>(clip.frameTime));
+      return v;
+    };
+    const float first = fastest(trace.samples[0], trace.samples[1]);
+    if (first > 10.0f && fastest(trace.samples[1], trace.samples[2]) < 10.0f) {
+      trace.samples.erase(trace.samples.begin());
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "frame 0 is a reference pose (a tracker jumps at %.0f m/s to frame 1); skipped",
+                    static_cast<double>(first));
+      m.notes.push_back(buf);
     }
   }
   glm::vec3 shift(0.0f);
