@@ -1,0 +1,775 @@
+#include "avatar/ik/solver.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "avatar/ik/expmap.h"
+#include "avatar/ik/solver_detail.h"
+
+namespace embody::ik {
+namespace {
+
+Error fail(const std::string& what) { return Error{"ik: " + what}; }
+
+class SteadyClock final : public Clock {
+ public:
+  time_point now() const override { return std::chrono::steady_clock::now(); }
+};
+
+bool sameShape(const Model& model, const Workspace& w) {
+  return w.n == model.dofs && w.task_count == static_cast<int>(model.tasks.size()) &&
+         w.rows == model.task_rows;
+}
+
+}  // namespace
+
+const Clock& steadyClock() {
+  static const SteadyClock clock;
+  return clock;
+}
+
+const char* toString(StopReason reason) {
+  switch (reason) {
+    case StopReason::Converged: return "converged";
+    case StopReason::IterationCap: return "iteration cap";
+    case StopReason::Deadline: return "deadline";
+    case StopReason::Stalled: return "stalled";
+    case StopReason::InvalidState: return "invalid state";
+  }
+  return "?";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Workspace / Data
+
+Workspace::Workspace(const Model& model)
+    : n(model.dofs), task_count(static_cast<int>(model.tasks.size())), rows(model.task_rows) {
+  q.setZero(n);
+  target_position.assign(task_count, Eigen::Vector3d::Zero());
+  target_orientation.assign(task_count, Eigen::Quaterniond::Identity());
+  weight.resize(task_count);
+  enabled.resize(task_count);
+  task_dofs.resize(task_count);
+  for (int t = 0; t < task_count; ++t) {
+    const Model::Task& task = model.tasks[t];
+    weight[t] = task.desc.weight;
+    task_type.push_back(task.desc.type);
+    task_joint.push_back(task.desc.joint);
+    task_offset.push_back(task.desc.offset);
+    enabled[t] = task.desc.enabled ? 1 : 0;
+    for (size_t j = 0; j < model.joints.size(); ++j)
+      if (task.recruited[j])
+        for (int k = 0; k < model.joints[j].dof_count; ++k) task_dofs[t].push_back(model.joints[j].first_dof + k);
+  }
+  const size_t nj = model.joints.size();
+  frames.assign(nj, Eigen::Isometry3d::Identity());
+  subtree_mass.assign(nj, 0.0);
+  subtree_moment.assign(nj, Eigen::Vector3d::Zero());
+  dof_linear.setZero(3, n);
+  dof_angular.setZero(3, n);
+  dof_joint.resize(n);
+  for (size_t j = 0; j < nj; ++j)
+    for (int k = 0; k < model.joints[j].dof_count; ++k) dof_joint[model.joints[j].first_dof + k] = static_cast<int>(j);
+
+  jacobian.setZero(rows, n);
+  error.setZero(rows);
+  residual.resize(task_count);
+
+  // Equality rows: Gram-Schmidt (twice, for orthogonality to round-off) with the same dependency
+  // test as the model's corrected Algorithm 1.
+  const Eigen::MatrixXd& a = model.equality_matrix;
+  eq_basis.setZero(n, n);
+  eq_factor.setZero(n, n);
+  for (Eigen::Index i = 0; i < a.rows(); ++i) {
+    const Eigen::VectorXd c = a.row(i).transpose();
+    Eigen::VectorXd t = eq_basis.leftCols(eq_rank).transpose() * c;
+    Eigen::VectorXd u = c - eq_basis.leftCols(eq_rank) * t;
+    if (!(u.norm() > 1e-9 * c.norm())) continue;
+    const Eigen::VectorXd t2 = eq_basis.leftCols(eq_rank).transpose() * u;
+    u -= eq_basis.leftCols(eq_rank) * t2;
+    t += t2;
+    eq_basis.col(eq_rank) = u / u.norm();
+    eq_factor.row(eq_rank).head(eq_rank) = t.transpose();
+    eq_factor(eq_rank, eq_rank) = u.norm();
+    eq_rows.push_back(static_cast<int>(i));
+    ++eq_rank;
+  }
+  eq_nullspace.setZero(n, n);
+  if (eq_rank > 0) {
+    Eigen::HouseholderQR<Eigen::MatrixXd> qr(eq_basis.leftCols(eq_rank));
+    const Eigen::MatrixXd full = qr.householderQ();
+    eq_nullspace.leftCols(n - eq_rank) = full.rightCols(n - eq_rank);
+  }
+  basis.setZero(n, n);
+  factor.setZero(n, n);
+  active_rhs.setZero(n);
+  mask.setOnes(n);
+  nullspace.setZero(n, n);
+  dq0.setZero(n);
+  dq.setZero(n);
+  tmp_n.setZero(n);
+  tmp_n2.setZero(n);
+  y.setZero(n);
+
+  reduced_jacobian.setZero(rows, n);
+  row_space.setZero(n, n);
+  projector.setZero(n, n);
+  projector0.setZero(n, n);
+  for (const Model::Level& level : model.levels) {
+    const int m = level.rows;
+    level_j.emplace_back(Eigen::MatrixXd::Zero(m, n));
+    level_gram.emplace_back(Eigen::MatrixXd::Zero(m, m));
+    level_res.emplace_back(Eigen::VectorXd::Zero(m));
+    level_coef.emplace_back(Eigen::VectorXd::Zero(m));
+    level_tmp.emplace_back(Eigen::VectorXd::Zero(m));
+    level_jw.emplace_back(Eigen::MatrixXd::Zero(m, n));
+    level_eig.emplace_back(m);
+    level_svd.emplace_back(m, n, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  }
+
+  ineq_begin.push_back(0);
+  for (const InequalityRow& row : model.inequalities) {
+    for (const LinearTerm& t : row.terms) {
+      ineq_dof.push_back(model.dofIndex(t.dof));
+      ineq_coef.push_back(t.coefficient);
+    }
+    ineq_begin.push_back(static_cast<int>(ineq_dof.size()));
+  }
+  ineq_active.assign(model.inequalities.size(), 0);
+  ineq_reported.assign(model.inequalities.size(), 0);
+
+  report.tasks.resize(task_count);
+  report.levels.resize(model.levels.size());
+  report.active_clamps.reserve(model.inequalities.size());
+  report.unsatisfiable.reserve(model.inequalities.size());
+}
+
+Data::Data(const Model& model) : ws_(std::make_unique<Workspace>(model)) {
+  kinematics(model, *this, false);
+  // Start with every task on its current value, so a fresh Data is already solved.
+  for (int t = 0; t < ws_->task_count; ++t) {
+    ws_->target_position[t] = taskPosition(t);
+    ws_->target_orientation[t] = taskOrientation(t);
+  }
+}
+
+Data::~Data() = default;
+Data::Data(Data&&) noexcept = default;
+Data& Data::operator=(Data&&) noexcept = default;
+Data::Data(const Data& other) : ws_(std::make_unique<Workspace>(*other.ws_)) {}
+Data& Data::operator=(const Data& other) {
+  if (this != &other) ws_ = std::make_unique<Workspace>(*other.ws_);
+  return *this;
+}
+
+Status Data::setConfiguration(const Eigen::VectorXd& q) {
+  if (q.size() != ws_->n)
+    return fail("configuration has " + std::to_string(q.size()) + " entries, the model " + std::to_string(ws_->n));
+  if (!q.allFinite()) return fail("configuration is not finite");
+  ws_->q = q;
+  return Status::success();
+}
+
+const Eigen::VectorXd& Data::q() const { return ws_->q; }
+
+namespace {
+Status checkTask(const Workspace& w, TaskId task) {
+  if (task < 0 || task >= w.task_count) return fail("task " + std::to_string(task) + " does not exist");
+  return Status::success();
+}
+}  // namespace
+
+Status Data::setTarget(TaskId task, const Eigen::Vector3d& position) {
+  if (Status s = checkTask(*ws_, task); !s) return s;
+  if (!position.allFinite()) return fail("target position of task " + std::to_string(task) + " is not finite");
+  ws_->target_position[task] = position;
+  return Status::success();
+}
+
+Status Data::setTarget(TaskId task, const Eigen::Quaterniond& orientation) {
+  if (Status s = checkTask(*ws_, task); !s) return s;
+  const double norm = orientation.norm();
+  if (!orientation.coeffs().allFinite() || !(norm > 1e-9))
+    return fail("target orientation of task " + std::to_string(task) + " is not a finite non-zero quaternion");
+  ws_->target_orientation[task] = Eigen::Quaterniond(orientation.coeffs() / norm);
+  return Status::success();
+}
+
+Status Data::setTarget(TaskId task, const Eigen::Isometry3d& pose) {
+  if (Status s = checkTask(*ws_, task); !s) return s;
+  if (!pose.matrix().allFinite()) return fail("target pose of task " + std::to_string(task) + " is not finite");
+  const Eigen::Matrix3d r = pose.linear();
+  if (!(r.transpose() * r).isApprox(Eigen::Matrix3d::Identity(), 1e-6) || r.determinant() <= 0)
+    return fail("target pose of task " + std::to_string(task) + " has a linear part that is not a rotation");
+  ws_->target_position[task] = pose.translation();
+  ws_->target_orientation[task] = Eigen::Quaterniond(r).normalized();
+  return Status::success();
+}
+
+Status Data::setWeight(TaskId task, double weight) {
+  if (Status s = checkTask(*ws_, task); !s) return s;
+  if (!(std::isfinite(weight) && weight > 0)) return fail("weight of task " + std::to_string(task) + " must be finite and > 0");
+  ws_->weight[task] = weight;
+  return Status::success();
+}
+
+Status Data::setEnabled(TaskId task, bool enabled) {
+  if (Status s = checkTask(*ws_, task); !s) return s;
+  ws_->enabled[task] = enabled ? 1 : 0;
+  return Status::success();
+}
+
+bool Data::enabled(TaskId task) const { return ws_->enabled.at(task) != 0; }
+const Eigen::Vector3d& Data::targetPosition(TaskId task) const { return ws_->target_position.at(task); }
+const Eigen::Quaterniond& Data::targetOrientation(TaskId task) const { return ws_->target_orientation.at(task); }
+const Eigen::Isometry3d& Data::jointFrame(JointId joint) const { return ws_->frames.at(joint); }
+const Eigen::Vector3d& Data::centerOfMass() const { return ws_->com; }
+const SolveReport& Data::report() const { return ws_->report; }
+
+const Eigen::MatrixXd& taskJacobian(const Data& data) { return data.workspace().jacobian; }
+const Eigen::VectorXd& taskError(const Data& data) { return data.workspace().error; }
+
+// ---------------------------------------------------------------------------------------------
+// Kinematics
+
+namespace {
+
+Eigen::Vector3d clampNorm(const Eigen::Vector3d& v, double max) {
+  const double n = v.norm();
+  return n > max ? Eigen::Vector3d(v * (max / n)) : v;
+}
+
+Eigen::Vector2d clampNorm(const Eigen::Vector2d& v, double max) {
+  const double n = v.norm();
+  return n > max ? Eigen::Vector2d(v * (max / n)) : v;
+}
+
+void forward(const Model& model, Workspace& w) {
+  const size_t nj = model.joints.size();
+  for (size_t j = 0; j < nj; ++j) {
+    const Model::Joint& joint = model.joints[j];
+    const JointDesc& d = joint.desc;
+    const Eigen::Isometry3d pre = d.parent == kNoParent ? d.rest : Eigen::Isometry3d(w.frames[d.parent] * d.rest);
+    const Eigen::Matrix3d preR = pre.linear();
+    const int f = joint.first_dof;
+    Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+    switch (d.type) {
+      case JointType::Free: {
+        const Eigen::Vector3d v = w.q.segment<3>(f + 3);
+        motion.translation() = w.q.segment<3>(f);
+        motion.linear() = expMapRotation(v);
+        w.dof_linear.middleCols<3>(f) = preR;
+        w.dof_angular.middleCols<3>(f).setZero();
+        w.dof_linear.middleCols<3>(f + 3).setZero();
+        w.dof_angular.middleCols<3>(f + 3).noalias() = preR * leftJacobian(v);
+        break;
+      }
+      case JointType::Ball: {
+        const Eigen::Vector3d v = w.q.segment<3>(f);
+        motion.linear() = expMapRotation(v);
+        w.dof_linear.middleCols<3>(f).setZero();
+        w.dof_angular.middleCols<3>(f).noalias() = preR * leftJacobian(v);
+        break;
+      }
+      case JointType::Swing: {
+        const Eigen::Vector3d v = joint.swing_basis * w.q.segment<2>(f);
+        motion.linear() = expMapRotation(v);
+        w.dof_linear.middleCols<2>(f).setZero();
+        w.dof_angular.middleCols<2>(f).noalias() = preR * leftJacobian(v) * joint.swing_basis;
+        break;
+      }
+      case JointType::Revolute:
+        motion.linear() = Eigen::AngleAxisd(w.q(f), d.axis).toRotationMatrix();
+        w.dof_linear.col(f).setZero();
+        w.dof_angular.col(f).noalias() = preR * d.axis;
+        break;
+      case JointType::Fixed: break;
+    }
+    w.frames[j] = pre * motion;
+  }
+  // Subtree masses and mass moments (children come after parents: sweep backwards).
+  for (size_t j = 0; j < nj; ++j) {
+    const JointDesc& d = model.joints[j].desc;
+    w.subtree_mass[j] = d.mass;
+    w.subtree_moment[j] = d.mass * (w.frames[j] * d.com);
+  }
+  for (size_t j = nj; j-- > 0;) {
+    const JointId p = model.joints[j].desc.parent;
+    if (p != kNoParent) {
+      w.subtree_mass[p] += w.subtree_mass[j];
+      w.subtree_moment[p] += w.subtree_moment[j];
+    }
+  }
+  w.com.setZero();
+  if (model.total_mass > 0) {
+    for (size_t j = 0; j < nj; ++j)
+      if (model.joints[j].desc.parent == kNoParent) w.com += w.subtree_moment[j];
+    w.com /= model.total_mass;
+  }
+}
+
+void taskRows(const Model& model, Workspace& w, TaskId t) {
+  const Model::Task& task = model.tasks[t];
+  const TaskDesc& d = task.desc;
+  const int row = task.first_row;
+  const double s = w.enabled[t] ? std::sqrt(w.weight[t]) : 0.0;
+  TaskResidual& res = w.residual[t];
+  res = TaskResidual{};
+  res.enabled = w.enabled[t] != 0;
+  switch (d.type) {
+    case TaskType::CenterOfMass: {
+      const Eigen::Vector2d e = model.ground_axes.transpose() * (w.target_position[t] - w.com);
+      res.position = e.norm();
+      w.error.segment<2>(row) = s * clampNorm(e, d.max_position_error);
+      const double invM = 1.0 / model.total_mass;
+      for (int dof : w.task_dofs[t]) {
+        const int j = w.dof_joint[dof];
+        const Eigen::Vector3d o = w.frames[j].translation();
+        const Eigen::Vector3d col = invM * (w.subtree_mass[j] * w.dof_linear.col(dof) +
+                                            w.dof_angular.col(dof).cross(w.subtree_moment[j] - w.subtree_mass[j] * o));
+        w.jacobian.block<2, 1>(row, dof) = s * (model.ground_axes.transpose() * col);
+      }
+      break;
+    }
+    case TaskType::Position:
+    case TaskType::Orientation:
+    case TaskType::Pose: {
+      const Eigen::Isometry3d& frame = w.frames[d.joint];
+      const Eigen::Vector3d p = frame * d.offset;
+      const bool hasPos = d.type != TaskType::Orientation;
+      const bool hasRot = d.type != TaskType::Position;
+      int r = row;
+      Eigen::Vector3d ep = Eigen::Vector3d::Zero();
+      if (hasPos) {
+        const Eigen::Vector3d full = w.target_position[t] - p;
+        const std::uint8_t axes = d.type == TaskType::Pose ? kAxesXYZ : d.axes;
+        for (int k = 0; k < 3; ++k)
+          if (axes & (1 << k)) ep(k) = full(k);
+        res.position = ep.norm();
+        const Eigen::Vector3d clamped = clampNorm(ep, d.max_position_error);
+        for (int k = 0; k < 3; ++k) {
+          if (!(axes & (1 << k))) continue;
+          w.error(r) = s * clamped(k);
+          for (int dof : w.task_dofs[t]) {
+            const int j = w.dof_joint[dof];
+            const Eigen::Vector3d col =
+                w.dof_linear.col(dof) + w.dof_angular.col(dof).cross(p - w.frames[j].translation());
+            w.jacobian(r, dof) = s * col(k);
+          }
+          ++r;
+        }
+      }
+      if (hasRot) {
+        const Eigen::Quaterniond current(frame.linear());
+        Eigen::Quaterniond err = w.target_orientation[t] * current.conjugate();
+        if (err.w() < 0) err.coeffs() = -err.coeffs();
+        const Eigen::AngleAxisd aa(err);
+        const Eigen::Vector3d er = aa.angle() * aa.axis();
+        res.rotation = er.norm();
+        w.error.segment<3>(r) = s * clampNorm(er, d.max_rotation_error);
+        for (int dof : w.task_dofs[t]) w.jacobian.block<3, 1>(r, dof) = s * w.dof_angular.col(dof);
+      }
+      break;
+    }
+  }
+  res.satisfied = !res.enabled || (res.position <= d.position_tolerance && res.rotation <= d.rotation_tolerance);
+}
+
+}  // namespace
+
+Eigen::Vector3d Data::taskPosition(TaskId task) const {
+  const Workspace& w = *ws_;
+  if (w.task_type.at(task) == TaskType::CenterOfMass) return w.com;
+  return w.frames[w.task_joint[task]] * w.task_offset[task];
+}
+
+Eigen::Quaterniond Data::taskOrientation(TaskId task) const {
+  const Workspace& w = *ws_;
+  if (w.task_type.at(task) == TaskType::CenterOfMass) return Eigen::Quaterniond::Identity();
+  return Eigen::Quaterniond(w.frames[w.task_joint[task]].linear());
+}
+
+void kinematics(const Model& model, Data& data, bool jacobians) {
+  Workspace& w = data.workspace();
+  if (!sameShape(model, w)) return;
+  forward(model, w);
+  if (!jacobians) return;
+  for (int t = 0; t < w.task_count; ++t) taskRows(model, w, t);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Active set: equality rows plus pinned inequalities
+
+namespace {
+
+void resetActiveSet(const Model& model, Workspace& w, Path path) {
+  const int r = w.eq_rank;
+  w.rank = r;
+  if (r > 0) {
+    w.basis.leftCols(r) = w.eq_basis.leftCols(r);
+    w.factor.topLeftCorner(r, r) = w.eq_factor.topLeftCorner(r, r);
+    for (int i = 0; i < r; ++i) {
+      const int row = w.eq_rows[i];
+      w.active_rhs(i) = model.equality_rhs(row) - model.equality_matrix.row(row).dot(w.q);
+    }
+  }
+  w.mask_mode = r == 0;
+  w.mask.setOnes();
+  w.null_dim = w.n - r;
+  if (!w.mask_mode) w.nullspace.leftCols(w.null_dim) = w.eq_nullspace.leftCols(w.null_dim);
+  if (path == Path::Reference) {
+    w.projector0.setIdentity();
+    if (r > 0) w.projector0.noalias() -= w.basis.leftCols(r) * w.basis.leftCols(r).transpose();
+  }
+  std::fill(w.ineq_active.begin(), w.ineq_active.end(), 0);
+  std::fill(w.ineq_reported.begin(), w.ineq_reported.end(), 0);
+}
+
+// Δq0 = A⁺ (b_A - A q) = basis * factor⁻¹ * active_rhs (minimum-norm solution).
+void computeDq0(Workspace& w) {
+  const int r = w.rank;
+  w.dq0.setZero();
+  if (r == 0) return;
+  auto y = w.y.head(r);
+  y = w.active_rhs.head(r);
+  w.factor.topLeftCorner(r, r).triangularView<Eigen::Lower>().solveInPlace(y);
+  w.dq0.noalias() = w.basis.leftCols(r) * y;
+}
+
+// Adds row c (in w.tmp_n) pinned so that c^T (q + Δq) = c^T q + rhs_delta. Returns false when
+// the row depends linearly on the active set (then nothing changes).
+bool addActiveRow(Workspace& w, double rhs_delta, int single_dof, Path path, double tolerance) {
+  const int r = w.rank;
+  const Eigen::VectorXd& c = w.tmp_n;
+  auto t = w.y.head(r);
+  Eigen::VectorXd& u = w.tmp_n2;
+  u = c;
+  if (r > 0) {
+    t.noalias() = w.basis.leftCols(r).transpose() * c;
+    u.noalias() -= w.basis.leftCols(r) * t;
+  }
+  const double cn = c.norm();
+  if (!(u.norm() > tolerance * cn)) return false;
+  if (r > 0) {  // second Gram-Schmidt sweep keeps the basis orthonormal to round-off
+    auto t2 = w.dq0.head(r);  // dq0 is recomputed after rows are added
+    t2.noalias() = w.basis.leftCols(r).transpose() * u;
+    u.noalias() -= w.basis.leftCols(r) * t2;
+    t += t2;
+    w.factor.row(r).head(r) = t.transpose();
+  }
+  const double un = u.norm();
+  u /= un;
+  w.basis.col(r) = u;
+  w.factor(r, r) = un;
+  w.active_rhs(r) = rhs_delta;
+  w.rank = r + 1;
+
+  if (w.mask_mode && single_dof >= 0) {
+    w.mask(single_dof) = 0.0;
+  } else {
+    if (w.mask_mode) {  // materialise the diagonal projector's basis: the unmasked unit vectors
+      w.nullspace.setZero();
+      int k = 0;
+      for (int i = 0; i < w.n; ++i)
+        if (w.mask(i) != 0.0) w.nullspace(i, k++) = 1.0;
+      w.mask_mode = false;
+    }
+    // Householder reflection H with H (Nᵀ u) = α e_last; then N H's last column is ±u: drop it.
+    const int d = w.null_dim;
+    auto v = w.tmp_n.head(d);  // c is no longer needed
+    v.noalias() = w.nullspace.leftCols(d).transpose() * u;
+    const double yn = v.norm();
+    const double alpha = v(d - 1) > 0 ? -yn : yn;
+    v(d - 1) -= alpha;
+    const double vv = v.squaredNorm();
+    if (vv > 0) {
+      Eigen::VectorXd& nv = w.tmp_n2;  // u is no longer needed (copied into basis)
+      nv.noalias() = w.nullspace.leftCols(d) * v;
+      w.nullspace.leftCols(d).noalias() -= (2.0 / vv) * nv * v.transpose();
+    }
+  }
+  w.null_dim -= 1;
+  if (path == Path::Reference) w.projector0.noalias() -= w.basis.col(r) * w.basis.col(r).transpose();
+  return true;
+}
+
+double smoothDampingSquared(double sigma, const SolveOptions& o) {
+  if (sigma >= o.damping_eps) return 0.0;
+  const double x = sigma / o.damping_eps;
+  return (1.0 - x * x) * o.damping_max * o.damping_max;
+}
+
+bool levelActive(const Model::Level& level, const Workspace& w) {
+  for (TaskId t : level.tasks)
+    if (w.enabled[t]) return true;
+  return false;
+}
+
+void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
+  w.dq = w.dq0;
+  const int r = w.mask_mode ? w.n : w.null_dim;
+  if (w.mask_mode)
+    w.reduced_jacobian.noalias() = w.jacobian * w.mask.asDiagonal();
+  else
+    w.reduced_jacobian.leftCols(r).noalias() = w.jacobian * w.nullspace.leftCols(r);
+  int s = 0;  // columns of W (orthonormal rows of the higher levels, reduced coordinates)
+  for (size_t k = 0; k < model.levels.size(); ++k) {
+    const Model::Level& level = model.levels[k];
+    if (!levelActive(level, w) || s >= r) continue;
+    const int m = level.rows;
+    Eigen::MatrixXd& jh = w.level_j[k];
+    auto jhr = jh.leftCols(r);
+    Eigen::VectorXd& res = w.level_res[k];
+    res = w.error.segment(level.first_row, m);
+    res.noalias() -= w.jacobian.middleRows(level.first_row, m) * w.dq;  // compensated error
+    jhr = w.reduced_jacobian.block(level.first_row, 0, m, r);
+    if (s > 0) {
+      auto jw = w.level_jw[k].leftCols(s);
+      jw.noalias() = jhr * w.row_space.topLeftCorner(r, s);
+      jhr.noalias() -= jw * w.row_space.topLeftCorner(r, s).transpose();
+    }
+    w.level_gram[k].noalias() = jhr * jhr.transpose();
+    auto& eig = w.level_eig[k];
+    eig.compute(w.level_gram[k]);
+    const auto& values = eig.eigenvalues();
+    const auto& vectors = eig.eigenvectors();
+    Eigen::VectorXd& coef = w.level_coef[k];
+    coef.noalias() = vectors.transpose() * res;
+    for (int i = 0; i < m; ++i) {
+      const double s2 = std::max(values(i), 0.0);
+      const double sigma = std::sqrt(s2);
+      const double denom = s2 + smoothDampingSquared(sigma, o);
+      coef(i) = denom > 0 ? coef(i) / denom : 0.0;
+    }
+    Eigen::VectorXd& tmp = w.level_tmp[k];
+    tmp.noalias() = vectors * coef;
+    auto dz = w.tmp_n.head(r);
+    dz.noalias() = jhr.transpose() * tmp;
+    if (w.mask_mode)
+      w.dq += dz;
+    else
+      w.dq.noalias() += w.nullspace.leftCols(r) * dz;
+    // Projector update (undamped, rank-thresholded): append the level's row space to W.
+    for (int i = m; i-- > 0 && s < r;) {
+      const double sigma = std::sqrt(std::max(values(i), 0.0));
+      if (!(sigma > o.rank_tolerance)) break;  // eigenvalues ascend
+      auto v = w.row_space.col(s).head(r);
+      v.noalias() = jhr.transpose() * vectors.col(i);
+      v /= sigma;
+      if (s > 0) {  // re-orthogonalise against W (round-off only)
+        auto proj = w.tmp_n2.head(s);
+        proj.noalias() = w.row_space.topLeftCorner(r, s).transpose() * v;
+        v.noalias() -= w.row_space.topLeftCorner(r, s) * proj;
+      }
+      const double vn = v.norm();
+      if (!(vn > 0.5)) continue;  // numerically inside W already
+      v /= vn;
+      ++s;
+    }
+  }
+}
+
+void referencePass(const Model& model, Workspace& w, const SolveOptions& o) {
+  w.dq = w.dq0;
+  w.projector = w.projector0;
+  for (size_t k = 0; k < model.levels.size(); ++k) {
+    const Model::Level& level = model.levels[k];
+    if (!levelActive(level, w)) continue;
+    const int m = level.rows;
+    const auto j = w.jacobian.middleRows(level.first_row, m);
+    Eigen::VectorXd& res = w.level_res[k];
+    res = w.error.segment(level.first_row, m);
+    res.noalias() -= j * w.dq;
+    Eigen::MatrixXd& jh = w.level_j[k];
+    jh.noalias() = j * w.projector;
+    auto& svd = w.level_svd[k];
+    svd.compute(jh);
+    const auto& sv = svd.singularValues();
+    Eigen::VectorXd& coef = w.level_coef[k];
+    const int p = static_cast<int>(sv.size());
+    coef.head(p).noalias() = svd.matrixU().transpose() * res;
+    for (int i = 0; i < p; ++i) {
+      const double sigma = sv(i);
+      const double denom = sigma * sigma + smoothDampingSquared(sigma, o);
+      coef(i) = denom > 0 ? coef(i) * sigma / denom : 0.0;
+    }
+    w.dq.noalias() += svd.matrixV() * coef.head(p);
+    for (int i = 0; i < p; ++i)
+      if (sv(i) > o.rank_tolerance) w.projector.noalias() -= svd.matrixV().col(i) * svd.matrixV().col(i).transpose();
+  }
+}
+
+void runPass(const Model& model, Workspace& w, const SolveOptions& o) {
+  if (o.path == Path::Fast)
+    fastPass(model, w, o);
+  else
+    referencePass(model, w, o);
+}
+
+double rowValue(const Workspace& w, size_t i, const Eigen::VectorXd& x) {
+  double v = 0.0;
+  for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) v += w.ineq_coef[k] * x(w.ineq_dof[k]);
+  return v;
+}
+
+// Pins every inequality violated by q + Δq (user couplings first: the model keeps that order).
+// Returns whether a row was added.
+bool pinViolations(const Model& model, Workspace& w, const SolveOptions& o) {
+  bool added = false;
+  for (size_t i = 0; i < model.inequalities.size(); ++i) {
+    if (w.ineq_active[i]) continue;
+    const double rhs = model.inequalities[i].rhs;
+    const double current = rowValue(w, i, w.q);
+    double next = current;
+    for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) next += w.ineq_coef[k] * w.dq(w.ineq_dof[k]);
+    if (!(next > rhs + o.inequality_tolerance)) continue;
+    w.tmp_n.setZero();
+    for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) w.tmp_n(w.ineq_dof[k]) += w.ineq_coef[k];
+    const int single = w.ineq_begin[i + 1] - w.ineq_begin[i] == 1 ? w.ineq_dof[w.ineq_begin[i]] : -1;
+    if (addActiveRow(w, rhs - current, single, o.path, 1e-9)) {
+      w.ineq_active[i] = 1;
+      w.report.active_clamps.push_back(static_cast<int>(i));
+      added = true;
+    } else if (!w.ineq_reported[i]) {
+      w.ineq_reported[i] = 1;
+      w.report.unsatisfiable.push_back(static_cast<int>(i));
+    }
+  }
+  return added;
+}
+
+void reportRemainingViolations(const Model& model, Workspace& w, const SolveOptions& o) {
+  for (size_t i = 0; i < model.inequalities.size(); ++i) {
+    if (w.ineq_active[i] || w.ineq_reported[i]) continue;
+    double next = rowValue(w, i, w.q);
+    for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) next += w.ineq_coef[k] * w.dq(w.ineq_dof[k]);
+    if (next > model.inequalities[i].rhs + o.inequality_tolerance) {
+      w.ineq_reported[i] = 1;
+      w.report.unsatisfiable.push_back(static_cast<int>(i));
+    }
+  }
+}
+
+void reparameterize(const Model& model, Workspace& w) {
+  for (const Model::Joint& j : model.joints) {
+    if (!j.reparameterize) continue;
+    if (j.desc.type == JointType::Swing) {
+      Eigen::Vector3d v = j.swing_basis * w.q.segment<2>(j.first_dof);
+      if (reparameterizeExpMap(v)) w.q.segment<2>(j.first_dof) = j.swing_basis.transpose() * v;
+      continue;
+    }
+    const int f = j.first_dof + (j.desc.type == JointType::Free ? 3 : 0);
+    Eigen::Vector3d v = w.q.segment<3>(f);
+    if (reparameterizeExpMap(v)) w.q.segment<3>(f) = v;
+  }
+}
+
+// The iteration after kinematics(): active-set reset, clamping loop, q += Δq.
+// Returns false (q unchanged) if the step came out non-finite.
+bool step(const Model& model, Workspace& w, const SolveOptions& o) {
+  w.report.active_clamps.clear();
+  w.report.unsatisfiable.clear();
+  resetActiveSet(model, w, o.path);
+  computeDq0(w);
+  runPass(model, w, o);
+  int passes = 1;
+  while (o.clamping) {
+    if (!pinViolations(model, w, o)) break;
+    computeDq0(w);
+    runPass(model, w, o);
+    ++passes;
+    if (passes >= std::max(1, o.max_clamp_passes)) {
+      reportRemainingViolations(model, w, o);
+      break;
+    }
+  }
+  w.report.clamp_passes = passes;
+  if (!w.dq.allFinite()) return false;
+  w.q += w.dq;
+  reparameterize(model, w);
+  return true;
+}
+
+bool validOptions(const SolveOptions& o) {
+  return o.max_iterations >= 0 && std::isfinite(o.damping_max) && o.damping_max >= 0 &&
+         std::isfinite(o.damping_eps) && o.damping_eps > 0 && std::isfinite(o.rank_tolerance) &&
+         o.rank_tolerance > 0 && std::isfinite(o.inequality_tolerance) && o.inequality_tolerance >= 0;
+}
+
+void fillResiduals(const Model& model, Workspace& w) {
+  for (int t = 0; t < w.task_count; ++t) w.report.tasks[t] = w.residual[t];
+  for (size_t k = 0; k < model.levels.size(); ++k) {
+    double sum = 0.0;
+    for (TaskId t : model.levels[k].tasks)
+      if (w.enabled[t]) sum += w.residual[t].position * w.residual[t].position + w.residual[t].rotation * w.residual[t].rotation;
+    w.report.levels[k] = std::sqrt(sum);
+  }
+}
+
+bool allSatisfied(const Workspace& w) {
+  for (const TaskResidual& r : w.residual)
+    if (!r.satisfied) return false;
+  return true;
+}
+
+}  // namespace
+
+const Eigen::VectorXd& priorityPass(const Model& model, Data& data, const SolveOptions& options) {
+  Workspace& w = data.workspace();
+  if (!sameShape(model, w)) return w.dq;
+  resetActiveSet(model, w, options.path);
+  computeDq0(w);
+  runPass(model, w, options);
+  return w.dq;
+}
+
+void iterate(const Model& model, Data& data, const SolveOptions& options) {
+  Workspace& w = data.workspace();
+  if (!sameShape(model, w) || !validOptions(options)) return;
+  kinematics(model, data, true);
+  step(model, w, options);
+}
+
+const SolveReport& solve(const Model& model, Data& data, const SolveOptions& options) {
+  Workspace& w = data.workspace();
+  SolveReport& report = w.report;
+  const Clock& clock = options.clock ? *options.clock : steadyClock();
+  const Clock::time_point start = clock.now();
+  report.iterations = 0;
+  report.clamp_passes = 0;
+  report.active_clamps.clear();
+  report.unsatisfiable.clear();
+  if (!sameShape(model, w) || !validOptions(options)) {
+    report.stop = StopReason::InvalidState;
+    report.elapsed = std::chrono::nanoseconds(0);
+    return report;
+  }
+  report.stop = StopReason::IterationCap;
+  kinematics(model, data, true);
+  for (;;) {
+    if (allSatisfied(w)) {
+      report.stop = StopReason::Converged;
+      break;
+    }
+    if (report.iterations >= options.max_iterations) break;
+    if (options.deadline && clock.now() >= *options.deadline) {
+      report.stop = StopReason::Deadline;
+      break;
+    }
+    if (!step(model, w, options)) {
+      report.stop = StopReason::InvalidState;
+      break;
+    }
+    ++report.iterations;
+    kinematics(model, data, true);
+    if (w.dq.norm() < options.min_step) {
+      report.stop = allSatisfied(w) ? StopReason::Converged : StopReason::Stalled;
+      break;
+    }
+  }
+  fillResiduals(model, w);
+  report.elapsed = std::chrono::duration_cast<std::chrono::nanoseconds>(clock.now() - start);
+  return report;
+}
+
+}  // namespace embody::ik

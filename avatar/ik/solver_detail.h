@@ -1,0 +1,94 @@
+#pragma once
+// The solver's workspace (private to avatar/ik and its tests): every buffer is sized once in
+// Data's constructor, so an iteration only writes into existing storage.
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+
+#include <vector>
+
+#include "avatar/ik/model.h"
+#include "avatar/ik/solver.h"
+
+namespace embody::ik {
+
+struct Workspace {
+  explicit Workspace(const Model& model);
+
+  int n = 0;          // dofs
+  int task_count = 0;
+  int rows = 0;       // stacked task rows
+
+  Eigen::VectorXd q;
+
+  // Per-frame task state.
+  std::vector<Eigen::Vector3d> target_position;
+  std::vector<Eigen::Quaterniond> target_orientation;
+  std::vector<double> weight;
+  std::vector<char> enabled;
+  std::vector<std::vector<int>> task_dofs;  // recruited dof indices per task
+  std::vector<TaskType> task_type;
+  std::vector<JointId> task_joint;
+  std::vector<Eigen::Vector3d> task_offset;
+
+  // Forward kinematics.
+  std::vector<Eigen::Isometry3d> frames;  // world frame of each joint
+  std::vector<double> subtree_mass;       // Σ mass over the joint's subtree
+  std::vector<Eigen::Vector3d> subtree_moment;  // Σ mass * world CoM over the subtree
+  Eigen::Vector3d com = Eigen::Vector3d::Zero();
+  Eigen::Matrix3Xd dof_linear;   // translation dofs: world direction; others 0
+  Eigen::Matrix3Xd dof_angular;  // rotation dofs: world angular-velocity direction; others 0
+  std::vector<int> dof_joint;    // joint owning each dof
+
+  // Task Jacobian (rows x n; recruitment, weights and on/off applied) and errors.
+  Eigen::MatrixXd jacobian;
+  Eigen::VectorXd error;             // clamped and weighted: what the priority loop tracks
+  std::vector<TaskResidual> residual;  // unclamped
+
+  // Active set A (equalities + pinned inequalities): orthonormal rows `basis` (n x rank) from
+  // Gram-Schmidt with the lower-triangular factor `factor` (A_independent = factor * basisᵀ) and
+  // `active_rhs` = b_A - A q. Equality part precomputed once (`eq_*`).
+  Eigen::MatrixXd basis;
+  Eigen::MatrixXd factor;
+  Eigen::VectorXd active_rhs;
+  int rank = 0;
+  Eigen::MatrixXd eq_basis, eq_factor;
+  std::vector<int> eq_rows;  // independent equality row indices
+  int eq_rank = 0;
+
+  // Null space of A. Mask mode (only single-dof rows active, no equality rows): the projector is
+  // diagonal, `mask` zeroes pinned dofs. Dense mode: `nullspace` (n x null_dim) orthonormal.
+  bool mask_mode = true;
+  Eigen::VectorXd mask;
+  Eigen::MatrixXd nullspace;
+  int null_dim = 0;
+  Eigen::MatrixXd eq_nullspace;  // equality-only null space, copied at each iteration's reset
+
+  Eigen::VectorXd dq0, dq, tmp_n, tmp_n2, y;
+
+  // Fast path scratch.
+  Eigen::MatrixXd reduced_jacobian;  // rows x null_dim (J N)
+  Eigen::MatrixXd row_space;         // null_dim x n: accumulated orthonormal task rows (W)
+  int row_space_dim = 0;
+  std::vector<Eigen::MatrixXd> level_j;      // m_k x n
+  std::vector<Eigen::MatrixXd> level_gram;   // m_k x m_k
+  std::vector<Eigen::VectorXd> level_res, level_coef, level_tmp;
+  std::vector<Eigen::MatrixXd> level_jw;     // m_k x n (J W)
+  std::vector<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>> level_eig;
+
+  // Reference path scratch.
+  Eigen::MatrixXd projector, projector0;
+  std::vector<Eigen::JacobiSVD<Eigen::MatrixXd>> level_svd;
+
+  // Inequalities in sparse form.
+  std::vector<int> ineq_begin;  // into ineq_dof / ineq_coef, size rows + 1
+  std::vector<int> ineq_dof;
+  std::vector<double> ineq_coef;
+  std::vector<char> ineq_active;
+  std::vector<char> ineq_reported;
+
+  SolveReport report;
+};
+
+}  // namespace embody::ik
