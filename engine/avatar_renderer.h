@@ -17,10 +17,12 @@
 namespace embody::gfx {
 
 enum class ViewKind { ThirdPerson, FirstPerson };
-// Stereo pair: one multiview pass into a 2-layer image, or one pass per eye. docs/renderer.md
-// records which is faster on lavapipe; kDefaultStereoMode is that one.
+// Stereo pair: one multiview pass into a 2-layer image, or one pass per eye. On lavapipe both
+// cost the same (docs/performance.md: 2x1440x1584 ~20 ms either way) and multiview mis-clips
+// lines crossing the near plane in the second view (Mesa 22.3), so two passes is the default;
+// it also serves OpenXR runtimes that hand out one swapchain per eye.
 enum class StereoMode { Multiview, TwoPass };
-constexpr StereoMode kDefaultStereoMode = StereoMode::Multiview;
+constexpr StereoMode kDefaultStereoMode = StereoMode::TwoPass;
 
 struct FrameOptions {
   ViewKind view = ViewKind::ThirdPerson;

@@ -97,6 +97,8 @@ Result<size_t> choosePhysicalDevice(const std::vector<PhysicalDeviceInfo>& devic
 RequiredDeviceFeatures::RequiredDeviceFeatures() {
   features13.dynamicRendering = VK_TRUE;
   features13.synchronization2 = VK_TRUE;
+  // glslang's Vulkan 1.3 output declares compute workgroup sizes with LocalSizeId.
+  features13.maintenance4 = VK_TRUE;
   features11.multiview = VK_TRUE;
   features11.shaderDrawParameters = VK_FALSE;
   features2.features.fillModeNonSolid = VK_FALSE;
@@ -114,6 +116,7 @@ std::string missingRequiredFeatures(VkPhysicalDevice physical) {
   std::string missing;
   if (!f13.dynamicRendering) missing += " dynamicRendering";
   if (!f13.synchronization2) missing += " synchronization2";
+  if (!f13.maintenance4) missing += " maintenance4";
   if (!f11.multiview) missing += " multiview";
   return missing;
 }

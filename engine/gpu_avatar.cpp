@@ -130,12 +130,9 @@ Result<std::unique_ptr<GpuAvatar>> Renderer::upload(const avatar::AvatarAsset& a
     g.alphaMode = m.alphaMode;
     g.alphaCutoff = m.alphaCutoff;
     g.doubleSided = m.doubleSided;
-    VkDescriptorSetLayout layout = materialLayout_.get();
-    VkDescriptorSetAllocateInfo dai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-    dai.descriptorPool = pool;
-    dai.descriptorSetCount = 1;
-    dai.pSetLayouts = &layout;
-    if (vkAllocateDescriptorSets(dev, &dai, &g.descriptorSet) != VK_SUCCESS) return Error{"vkAllocateDescriptorSets"};
+    auto set = allocateDescriptorSet(dev, pool, materialLayout_.get());
+    if (!set) return Error{set.error()};
+    g.descriptorSet = *set;
     const int tex = m.baseColorImage >= 0 ? textureOf[m.baseColorImage] : *whiteTex;
     VkDescriptorImageInfo ii{sampler, a->textures_[tex].view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};

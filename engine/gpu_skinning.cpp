@@ -28,16 +28,12 @@ Result<std::unique_ptr<GpuSkinner>> GpuSkinner::create(const Device& device) {
   if (vkCreatePipelineLayout(dev, &pli, nullptr, &pl) != VK_SUCCESS) return Error{"pipeline layout"};
   s->pipelineLayout_ = UniquePipelineLayout(dev, pl);
 
-  VkShaderModuleCreateInfo smci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-  smci.codeSize = sizeof(skin_comp_spv);
-  smci.pCode = skin_comp_spv;
-  VkShaderModule module = VK_NULL_HANDLE;
-  if (vkCreateShaderModule(dev, &smci, nullptr, &module) != VK_SUCCESS) return Error{"skin.comp module"};
-  UniqueShaderModule moduleOwner(dev, module);
+  auto module = createShaderModule(dev, skin_comp_spv, sizeof(skin_comp_spv));
+  if (!module) return Error{module.error()};
   VkComputePipelineCreateInfo cci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   cci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
   cci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-  cci.stage.module = module;
+  cci.stage.module = module->get();
   cci.stage.pName = "main";
   cci.layout = pl;
   VkPipeline pipeline = VK_NULL_HANDLE;
@@ -53,11 +49,9 @@ Result<std::unique_ptr<GpuSkinner>> GpuSkinner::create(const Device& device) {
   VkDescriptorPool pool = VK_NULL_HANDLE;
   if (vkCreateDescriptorPool(dev, &dpci, nullptr, &pool) != VK_SUCCESS) return Error{"descriptor pool"};
   s->pool_ = UniqueDescriptorPool(dev, pool);
-  VkDescriptorSetAllocateInfo dai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-  dai.descriptorPool = pool;
-  dai.descriptorSetCount = 1;
-  dai.pSetLayouts = &layout;
-  if (vkAllocateDescriptorSets(dev, &dai, &s->set_) != VK_SUCCESS) return Error{"descriptor set"};
+  auto set = allocateDescriptorSet(dev, pool, layout);
+  if (!set) return Error{set.error()};
+  s->set_ = *set;
   return s;
 }
 
@@ -98,15 +92,8 @@ Status GpuSkinner::run(const GpuAvatar& avatar, std::span<const glm::mat4> palet
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipelineLayout_.get(), 0, 1, &set_, 0, nullptr);
     vkCmdPushConstants(cmd, pipelineLayout_.get(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(uint32_t), &n);
     vkCmdDispatch(cmd, (n + 63) / 64, 1, 1);
-    VkMemoryBarrier2 mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-    mb.srcStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
-    mb.srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
-    mb.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
-    mb.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
-    VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-    dep.memoryBarrierCount = 1;
-    dep.pMemoryBarriers = &mb;
-    vkCmdPipelineBarrier2(cmd, &dep);
+    memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                  VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
   });
   if (!status) return status;
   output_.invalidate();

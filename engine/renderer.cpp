@@ -77,12 +77,9 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const Device& device) {
     VkFence fence = VK_NULL_HANDLE;
     vkCreateFence(dev, &fci, nullptr, &fence);
     f.fence = UniqueFence(dev, fence);
-    VkDescriptorSetLayout layout = r->sceneLayout_.get();
-    VkDescriptorSetAllocateInfo dai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-    dai.descriptorPool = dpool;
-    dai.descriptorSetCount = 1;
-    dai.pSetLayouts = &layout;
-    if (vkAllocateDescriptorSets(dev, &dai, &f.set) != VK_SUCCESS) return Error{"vkAllocateDescriptorSets failed"};
+    auto set = allocateDescriptorSet(dev, dpool, r->sceneLayout_.get());
+    if (!set) return Error{set.error()};
+    f.set = *set;
     auto block = Buffer::create(device, sizeof(SceneBlock), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, MemoryUse::HostUpload);
     auto palette = Buffer::create(device, sizeof(glm::mat4) * 64, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                                   MemoryUse::HostUpload);

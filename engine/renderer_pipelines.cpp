@@ -13,16 +13,6 @@ namespace embody::gfx {
 
 namespace {
 
-Result<UniqueShaderModule> makeModule(VkDevice device, const uint32_t* code, size_t bytes) {
-  VkShaderModuleCreateInfo ci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-  ci.codeSize = bytes;
-  ci.pCode = code;
-  VkShaderModule m = VK_NULL_HANDLE;
-  if (VkResult r = vkCreateShaderModule(device, &ci, nullptr, &m); r != VK_SUCCESS)
-    return Error{std::string("vkCreateShaderModule: ") + vkResultName(r)};
-  return UniqueShaderModule(device, m);
-}
-
 struct PipelineDesc {
   VkShaderModule vert, frag;
   const VkSpecializationInfo* fragSpec = nullptr;
@@ -34,10 +24,10 @@ struct PipelineDesc {
 
 Status Renderer::init() {
   const VkDevice dev = device_.handle();
-  auto sv = makeModule(dev, skinned_vert_spv, sizeof(skinned_vert_spv));
-  auto sf = makeModule(dev, skinned_frag_spv, sizeof(skinned_frag_spv));
-  auto lv = makeModule(dev, lines_vert_spv, sizeof(lines_vert_spv));
-  auto lf = makeModule(dev, lines_frag_spv, sizeof(lines_frag_spv));
+  auto sv = createShaderModule(dev, skinned_vert_spv, sizeof(skinned_vert_spv));
+  auto sf = createShaderModule(dev, skinned_frag_spv, sizeof(skinned_frag_spv));
+  auto lv = createShaderModule(dev, lines_vert_spv, sizeof(lines_vert_spv));
+  auto lf = createShaderModule(dev, lines_frag_spv, sizeof(lines_frag_spv));
   if (!sv || !sf || !lv || !lf) return Error{"could not create the renderer's shader modules"};
   skinnedVert_ = std::move(sv).value();
   skinnedFrag_ = std::move(sf).value();

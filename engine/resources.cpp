@@ -174,6 +174,40 @@ void transitionImage(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspe
   vkCmdPipelineBarrier2(cmd, &dep);
 }
 
+void memoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
+                   VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess) {
+  VkMemoryBarrier2 mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+  mb.srcStageMask = srcStage;
+  mb.srcAccessMask = srcAccess;
+  mb.dstStageMask = dstStage;
+  mb.dstAccessMask = dstAccess;
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.memoryBarrierCount = 1;
+  dep.pMemoryBarriers = &mb;
+  vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+Result<UniqueShaderModule> createShaderModule(VkDevice device, const uint32_t* code, size_t bytes) {
+  VkShaderModuleCreateInfo ci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+  ci.codeSize = bytes;
+  ci.pCode = code;
+  VkShaderModule m = VK_NULL_HANDLE;
+  if (VkResult r = vkCreateShaderModule(device, &ci, nullptr, &m); r != VK_SUCCESS)
+    return Error{std::string("vkCreateShaderModule: ") + vkResultName(r)};
+  return UniqueShaderModule(device, m);
+}
+
+Result<VkDescriptorSet> allocateDescriptorSet(VkDevice device, VkDescriptorPool pool, VkDescriptorSetLayout layout) {
+  VkDescriptorSetAllocateInfo dai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  dai.descriptorPool = pool;
+  dai.descriptorSetCount = 1;
+  dai.pSetLayouts = &layout;
+  VkDescriptorSet set = VK_NULL_HANDLE;
+  if (VkResult r = vkAllocateDescriptorSets(device, &dai, &set); r != VK_SUCCESS)
+    return Error{std::string("vkAllocateDescriptorSets: ") + vkResultName(r)};
+  return set;
+}
+
 Result<size_t> Uploader::stage(std::span<const std::byte> bytes) {
   auto staging = Buffer::create(device_, bytes.size(), VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUse::HostUpload);
   if (!staging) return Error{staging.error()};
@@ -220,15 +254,8 @@ Status Uploader::flush() {
                       VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
     }
     // Make buffer copies visible to every later read (vertex input, index, shader storage).
-    VkMemoryBarrier2 mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-    mb.srcStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
-    mb.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-    mb.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-    mb.dstAccessMask = VK_ACCESS_2_MEMORY_READ_BIT;
-    VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-    dep.memoryBarrierCount = 1;
-    dep.pMemoryBarriers = &mb;
-    vkCmdPipelineBarrier2(cmd, &dep);
+    memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                  VK_ACCESS_2_MEMORY_READ_BIT);
   });
   bufferCopies_.clear();
   imageCopies_.clear();

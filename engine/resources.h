@@ -78,6 +78,14 @@ VkImageAspectFlags aspectOf(VkFormat format);
 void transitionImage(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect, VkImageLayout from,
                      VkImageLayout to, uint32_t baseLayer = 0, uint32_t layerCount = VK_REMAINING_ARRAY_LAYERS);
 
+// A global memory barrier (synchronization2): make `srcAccess` writes at `srcStage` visible to
+// `dstAccess` at `dstStage` (uploads -> vertex input, compute -> host readback, copy -> host).
+void memoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
+                   VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess);
+
+Result<UniqueShaderModule> createShaderModule(VkDevice device, const uint32_t* code, size_t bytes);
+Result<VkDescriptorSet> allocateDescriptorSet(VkDevice device, VkDescriptorPool pool, VkDescriptorSetLayout layout);
+
 // Batches uploads into device-local buffers/images through host-visible staging buffers and
 // submits them together. Staging memory is freed once flush() has waited for the copies.
 class Uploader {
