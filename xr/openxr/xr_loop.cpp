@@ -9,6 +9,7 @@
 #include "engine/overlay.h"
 #include "xr/openxr/mirror_window.h"
 #include "xr/openxr/xr_input.h"
+#include "xr/openxr/xr_pose_source.h"
 #include "xr/openxr/xr_session.h"
 #include "xr/openxr/xr_system.h"
 
@@ -82,6 +83,8 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
   const glm::vec3 avatarEye(ar.eyePose(rest)[3]);
   AvatarPlacement placement(avatarEye, ar.anchors().forward, o.placement);
   avatar::SkeletonPose pose = rest;
+  XrPoseSource trackers;  // this frame's head and wrists as a tracking sample
+  XrTime firstDisplayTime = 0;
   std::vector<gfx::LineVertex> lines, overlay;
   bool recentered = false;
 
@@ -146,11 +149,23 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
         ++rep.handLostFrames[h];
     }
     rep.interactionProfile = in.interactionProfile();
+    if (!firstDisplayTime) firstDisplayTime = t;
+    auto world = [&](TrackedPose p) {
+      if (p.valid) p.pose = placement.toWorld(p.pose);
+      return p;
+    };
+    trackers.publish(double(t - firstDisplayTime) * 1e-9, TrackedPose{head, views.valid, views.tracked},
+                     world(in.hand(0).wrist), world(in.hand(1).wrist));
 
     bool rendered = false;
     if (timing->shouldRender && views.valid) {
       pose = rest;
-      placement.place(o.avatar->skeleton, head, pose);
+      if (o.bodyPose && o.bodyPose(trackers.sample(0.0), pose)) {
+        ++rep.bodyPoseFrames;
+      } else {
+        pose = rest;
+        placement.place(o.avatar->skeleton, head, pose);
+      }
       if (auto s = ar.computePose(pose); !s) {
         error = s.error();
         break;
