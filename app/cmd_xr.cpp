@@ -26,7 +26,9 @@ int runXr(cli::Argv argv) {
   args.option("stats", "FILE", "write a JSON report of the run (states, frames, tracking, validation)");
   args.flag("seated", "seated mode: the avatar follows your head down instead of standing on the floor");
   args.flag("recenter", "recenter at start (your position and heading become the origin)");
-  args.flag("mirror", "show the left eye in a desktop window (V: third-person view, R: recenter, Esc: quit)");
+  args.flag(
+      "mirror",
+      "show the left eye in a desktop window (V: third-person view, R: recenter, C: recalibrate, Esc: quit)");
   args.flag("validate", "enable the Khronos validation layer on the Vulkan device and count its messages");
   args.flag("verbose", "print every session state change");
   if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);

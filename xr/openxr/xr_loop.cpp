@@ -130,8 +130,11 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
     }
     Views views = run.locateViews(t);
     const Pose headTracking = headFromViews(views);
-    const bool mirrorRecenter = mirror && mirror->takeRecenterRequest();
-    if (views.valid && ((o.recenterAtStart && !recentered) || in.recenterPressed() || mirrorRecenter)) {
+    // The recenter button (or R in the mirror) also recalibrates the height: the user stands
+    // up straight and presses it. C in the mirror recalibrates only.
+    const bool buttonRecenter = in.recenterPressed() || (mirror && mirror->takeRecenterRequest());
+    const bool recalibrate = buttonRecenter || (mirror && mirror->takeCalibrateRequest());
+    if (views.valid && ((o.recenterAtStart && !recentered) || buttonRecenter)) {
       placement.recenter(headTracking);
       recentered = true;
     }
@@ -140,7 +143,7 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
     const Pose head = headFromViews(views);
     if (views.tracked) {
       ++rep.headTrackedFrames;
-      if (!placement.calibrated()) placement.calibrate(head);
+      if (!placement.calibrated() || recalibrate) placement.calibrate(head);
     }
     for (int h = 0; h < 2; ++h) {
       if (in.hand(h).grip.valid)
@@ -221,14 +224,15 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
                         VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
         if (run.submitsDepth()) {
           const auto& dc = run.depth()[e];
-          target.depth = gfx::TargetImage{dc.images[depth[e]].image,
-                                          dc.images[depth[e]].view,
-                                          dc.format,
-                                          dc.extent,
-                                          0,
-                                          1,
-                                          VK_IMAGE_LAYOUT_UNDEFINED,
-                                          VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL};
+          target.depth =
+              gfx::TargetImage{dc.images[depth[e]].image,
+                               dc.images[depth[e]].view,
+                               dc.format,
+                               dc.extent,
+                               0,
+                               1,
+                               VK_IMAGE_LAYOUT_UNDEFINED,
+                               VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};  // OpenXR's release layout
         }
         const gfx::Camera cam =
             gfx::cameraFromPose(views.eyes[e].pose.matrix(), fovOf(views.eyes[e].fov), kNear, kFar);
