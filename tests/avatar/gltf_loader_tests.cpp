@@ -159,15 +159,3 @@ TEST_CASE("hostile glTF files give a clear error, never a crash or a huge alloca
     CHECK_THAT(r.error(), Catch::Contains("cannot open"));
   }
 }
-
-TEST_CASE("dump CesiumMan", "[.dump]") {
-  EMBODY_REQUIRE_SHARED_ASSET(path, "CesiumMan.glb");
-  auto a = loadGltfFile(path);
-  std::vector<glm::mat4> g;
-  computeGlobals(a->skeleton, SkeletonPose::rest(a->skeleton), g);
-  for (size_t i = 0; i < g.size(); ++i) {
-    int d = 0;
-    for (int p = a->skeleton.joints[i].parent; p >= 0; p = a->skeleton.joints[p].parent) ++d;
-    printf("%2zu %*s%s  (%.3f %.3f %.3f)\n", i, 2 * d, "", a->skeleton.joints[i].name.c_str(), g[i][3].x, g[i][3].y, g[i][3].z);
-  }
-}

@@ -1,0 +1,163 @@
+#include <catch2/catch.hpp>
+
+#include <random>
+
+#include "avatar/avatar_loader.h"
+#include "avatar/body/body_model.h"
+#include "avatar/gltf/gltf_loader.h"
+#include "avatar/procedural/default_avatar.h"
+#include "gltf_test_files.h"
+#include "humanoid_test_files.h"
+#include "test_paths.h"
+
+using namespace embody;
+using namespace embody::avatar;
+
+namespace {
+
+AvatarAsset fromFile(embody::test::HumanoidFile f) {
+  auto a = loadGltfFromMemory(f.glb(), "");
+  REQUIRE(a.ok());
+  REQUIRE(prepareAvatar(a.value(), "").ok());
+  return std::move(a.value());
+}
+
+AvatarAsset vrm1Avatar() {
+  std::map<std::string, std::string> names;
+  int i = 0;
+  for (const auto& s : embody::test::humanoidJointSpecs()) names[s.bone] = "J" + std::to_string(100 + i++);
+  embody::test::HumanoidFile f(names);
+  nlohmann::json bones = nlohmann::json::object();
+  for (const auto& [bone, node] : f.nodeOfBone) bones[bone] = {{"node", node}};
+  f.doc["extensionsUsed"] = {"VRMC_vrm"};
+  f.doc["extensions"]["VRMC_vrm"] = {{"specVersion", "1.0"}, {"humanoid", {{"humanBones", bones}}}};
+  return fromFile(f);
+}
+
+AvatarAsset mixamoAvatar() {
+  std::map<std::string, std::string> m = {
+      {"hips", "Hips"}, {"spine", "Spine"}, {"chest", "Spine1"}, {"upperChest", "Spine2"}, {"neck", "Neck"},
+      {"head", "Head"}, {"leftShoulder", "LeftShoulder"}, {"leftUpperArm", "LeftArm"}, {"leftLowerArm", "LeftForeArm"},
+      {"leftHand", "LeftHand"}, {"rightShoulder", "RightShoulder"}, {"rightUpperArm", "RightArm"},
+      {"rightLowerArm", "RightForeArm"}, {"rightHand", "RightHand"}, {"leftUpperLeg", "LeftUpLeg"},
+      {"leftLowerLeg", "LeftLeg"}, {"leftFoot", "LeftFoot"}, {"leftToes", "LeftToeBase"}, {"rightUpperLeg", "RightUpLeg"},
+      {"rightLowerLeg", "RightLeg"}, {"rightFoot", "RightFoot"}, {"rightToes", "RightToeBase"}};
+  for (auto& [bone, name] : m) name = "mixamorig:" + name;
+  return fromFile(embody::test::HumanoidFile(m));
+}
+
+Eigen::VectorXd randomPose(const ik::Model& model, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(model.dofs);
+  for (const auto& j : model.joints) {
+    for (int k = 0; k < j.dof_count; ++k) {
+      double lo = -0.4, hi = 0.4;
+      if (j.desc.type == ik::JointType::Free) lo = k < 3 ? -0.2 : -0.6, hi = -lo;
+      if (!j.desc.lower.empty() && std::isfinite(j.desc.lower[k])) lo = j.desc.lower[k];
+      if (!j.desc.upper.empty() && std::isfinite(j.desc.upper[k])) hi = j.desc.upper[k];
+      // Stay inside the exp-map's well-behaved ball.
+      lo = std::max(lo, -1.2);
+      hi = std::min(hi, 1.2);
+      q[j.first_dof + k] = lo + (hi - lo) * u(rng);
+    }
+  }
+  return q;
+}
+
+// Drives the body model to poses and checks that the retargeted avatar's head, hands and feet
+// sit where the IK model's are (position within 1 mm, orientation within 0.06 degrees).
+void checkRetargeting(const AvatarAsset& avatar, SpineMode spine = SpineMode::Auto) {
+  BodyModelOptions options;
+  options.spine = spine;
+  auto body = buildBodyModel(avatar, options);
+  REQUIRE(body.ok());
+  CHECK(body->model.total_mass == Approx(75.0).epsilon(1e-9));
+  ik::Data data(body->model);
+  SkeletonPose pose;
+  std::vector<glm::mat4> globals;
+  std::mt19937 rng(42);
+  double worstPos = 0.0, worstRot = 0.0, moved = 0.0;
+  std::map<ik::JointId, Eigen::Vector3d> restPos;
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::VectorXd q = trial == 0 ? Eigen::VectorXd::Zero(body->model.dofs) : randomPose(body->model, rng);
+    REQUIRE(data.setConfiguration(q).ok());
+    ik::kinematics(body->model, data, false);
+    retarget(body.value(), avatar, data, pose);
+    computeGlobals(avatar.skeleton, pose, globals);
+    for (ik::JointId j : {body->head, body->leftHand, body->rightHand, body->leftFoot, body->rightFoot}) {
+      const int a = body->avatarJoint[static_cast<size_t>(j)];
+      const Eigen::Vector3d ikPos = data.jointFrame(j).translation();
+      const glm::vec3 av(globals[static_cast<size_t>(a)][3]);
+      worstPos = std::max(worstPos, (ikPos - Eigen::Vector3d(av.x, av.y, av.z)).norm());
+      if (trial == 0) restPos[j] = ikPos;
+      moved = std::max(moved, (ikPos - restPos[j]).norm());
+      // The avatar bone turned by the same world rotation as its IK joint.
+      const Eigen::Quaterniond delta =
+          Eigen::Quaterniond(data.jointFrame(j).rotation()) * body->ikRestRotation[static_cast<size_t>(j)].conjugate();
+      const glm::vec3 c0(globals[static_cast<size_t>(a)][0]), c1(globals[static_cast<size_t>(a)][1]),
+          c2(globals[static_cast<size_t>(a)][2]);
+      const glm::quat got = glm::quat_cast(glm::mat3(glm::normalize(c0), glm::normalize(c1), glm::normalize(c2)));
+      const glm::quat rest = body->avatarRestGlobalRotation[static_cast<size_t>(a)];
+      const Eigen::Quaterniond want = delta * Eigen::Quaterniond(rest.w, rest.x, rest.y, rest.z);
+      worstRot = std::max(worstRot, want.angularDistance(Eigen::Quaterniond(got.w, got.x, got.y, got.z)));
+    }
+    if (trial == 0) {  // q = 0 is the rest pose
+      std::vector<glm::mat4> rest;
+      computeGlobals(avatar.skeleton, SkeletonPose::rest(avatar.skeleton), rest);
+      for (size_t i = 0; i < rest.size(); ++i)
+        REQUIRE(glm::length(glm::vec3(rest[i][3]) - glm::vec3(globals[i][3])) < 1e-5f);
+    }
+  }
+  INFO("worst position error " << worstPos << " m, rotation " << worstRot << " rad");
+  CHECK(moved > 0.05);  // the poses really move the end effectors
+  CHECK(worstPos < 1e-3);
+  CHECK(worstRot < 1e-3);
+}
+
+}  // namespace
+
+TEST_CASE("body model: the default avatar gets one spine site per vertebra and retargets exactly", "[body]") {
+  const AvatarAsset a = buildDefaultAvatar();
+  auto body = buildBodyModel(a);
+  REQUIRE(body.ok());
+  CHECK(body->spineModel == "full");
+  CHECK(body->spineSites.size() == 25);
+  checkRetargeting(a);
+}
+
+TEST_CASE("body model: --spine simplified groups the default avatar's vertebrae into 8 sites", "[body]") {
+  const AvatarAsset a = buildDefaultAvatar();
+  BodyModelOptions o;
+  o.spine = SpineMode::Simplified;
+  auto body = buildBodyModel(a, o);
+  REQUIRE(body.ok());
+  CHECK(body->spineModel == "simplified");
+  CHECK(body->spineSites.size() == 9);  // 8 sites + the head
+  checkRetargeting(a, SpineMode::Simplified);
+}
+
+TEST_CASE("body model: VRM 1.0 with non-identity rest rotations retargets within 1 mm", "[body]") {
+  checkRetargeting(vrm1Avatar());
+}
+
+TEST_CASE("body model: a Mixamo rig retargets within 1 mm", "[body]") { checkRetargeting(mixamoAvatar()); }
+
+TEST_CASE("body model: CesiumMan retargets within 1 mm", "[body]") {
+  EMBODY_REQUIRE_SHARED_ASSET(path, "CesiumMan.glb");
+  auto a = loadAvatarFile(path);
+  REQUIRE(a.ok());
+  auto body = buildBodyModel(a.value());
+  REQUIRE(body.ok());
+  CHECK(body->spineModel == "bones");
+  checkRetargeting(a.value());
+}
+
+TEST_CASE("body model: an unmapped avatar is refused with the missing bones", "[body]") {
+  embody::test::TriangleFile t;
+  auto a = loadGltfFromMemory(t.glb(), "");
+  REQUIRE(a.ok());
+  REQUIRE(prepareAvatar(a.value(), "").ok());
+  auto body = buildBodyModel(a.value());
+  REQUIRE_FALSE(body.ok());
+  CHECK_THAT(body.error(), Catch::Contains("leftHand"));
+}
