@@ -92,8 +92,10 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
     const glm::vec3 s(glm::length(c0), glm::length(c1), glm::length(c2));
     body.avatarRestGlobalScale[j] = s;
     body.avatarRestGlobalRotation[j] = glm::normalize(glm::quat_cast(glm::mat3(c0 / s.x, c1 / s.y, c2 / s.z)));
-    pivot[j] = toEigen(glm::vec3(globals[j][3]));
+    pivot[j] = options.scale * toEigen(glm::vec3(globals[j][3]));
   }
+  if (!(options.scale > 0.05 && options.scale < 20.0)) return Error{"body scale must be between 0.05 and 20"};
+  body.scale = options.scale;
   const Eigen::Vector3d up = toEigen(map.up).normalized();
   const Eigen::Vector3d forward = toEigen(map.forward).normalized();
   const double height = std::max(0.5, pivot[static_cast<size_t>(map.joint(HumanBone::head))].dot(up) -
@@ -395,7 +397,7 @@ void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& 
       const glm::quat parentRot = glm::normalize(glm::quat_cast(glm::mat3(glm::normalize(c0), glm::normalize(c1), glm::normalize(c2))));
       local.rotation = glm::normalize(glm::inverse(parentRot) * wanted);
       if (ikJoint == body.hips) {
-        const Eigen::Vector3d p = frame.translation();
+        const Eigen::Vector3d p = frame.translation() / body.scale;
         local.translation = glm::vec3(glm::inverse(parent) * glm::vec4(float(p.x()), float(p.y()), float(p.z()), 1.0f));
       }
     }

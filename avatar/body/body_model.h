@@ -44,6 +44,10 @@ struct BodyModelOptions {
   SpineMode spine = SpineMode::Auto;
   double totalMass = 75.0;  // kg, distributed with de Leva's fractions
   bool addTasks = true;     // feet (0), centre of mass (1), head (2), hands (3), as in PIK
+  // Uniform scale from the avatar to the user (calibration.h): the IK model is built at the
+  // user's size; retargeting divides the hips translation back, so the renderer draws the avatar
+  // with this scale on its model matrix.
+  double scale = 1.0;
 };
 
 struct BodyModel {
@@ -58,6 +62,7 @@ struct BodyModel {
   std::vector<glm::vec3> avatarRestGlobalScale;        // per avatar joint (columns' lengths)
   // The spine sites: avatar joint of each and the vertebral joints it stands for.
   std::vector<SpineBone> spineSites;
+  double scale = 1.0;      // BodyModelOptions::scale
   std::string spineModel;  // "full" (every vertebra a site), "bones" (the avatar's spine bones), "simplified"
   ik::JointId hips = -1, head = -1, leftHand = -1, rightHand = -1, leftFoot = -1, rightFoot = -1;
   ik::TaskId headTask = -1, leftHandTask = -1, rightHandTask = -1, leftFootTask = -1, rightFootTask = -1, comTask = -1;
@@ -67,7 +72,8 @@ struct BodyModel {
 Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptions& options = {});
 
 // IK configuration -> local transforms of the avatar's bones. `pose` is resized to the skeleton
-// and starts from the rest pose; driven bones get rotations (and the hips a translation).
+// and starts from the rest pose; driven bones get rotations (and the hips a translation, divided
+// by BodyModel::scale: avatar model space = IK world / scale).
 // Allocation-free after the first call with a given skeleton.
 void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& data, SkeletonPose& pose);
 

@@ -161,3 +161,57 @@ TEST_CASE("body model: an unmapped avatar is refused with the missing bones", "[
   REQUIRE_FALSE(body.ok());
   CHECK_THAT(body.error(), Catch::Contains("leftHand"));
 }
+
+#include <filesystem>
+
+#include "avatar/body/calibration.h"
+
+TEST_CASE("calibration scales the body to the user and round-trips through the profile", "[body][calibration]") {
+  const AvatarAsset a = buildDefaultAvatar();
+  CHECK(avatarHeight(a) == Approx(1.755).margin(0.01));
+  CalibrationInput in;
+  in.userHeight = 1.93;
+  in.armSpan = 1.95;
+  auto p = calibrate(a, in);
+  REQUIRE(p.ok());
+  CHECK(p->scale == Approx(1.93 / avatarHeight(a)));
+  CHECK(p->eyeHeight == Approx(kEyeHeightRatio * 1.93));
+  CHECK(p->avatarArmSpan == Approx(1.75).margin(0.15));
+  // Eye height alone (the HMD at calibration) gives the same scale.
+  CalibrationInput eyes;
+  eyes.eyeHeight = kEyeHeightRatio * 1.93;
+  CHECK(calibrate(a, eyes)->scale == Approx(p->scale));
+  CHECK_FALSE(calibrate(a, {}).ok());
+  CalibrationInput absurd;
+  absurd.userHeight = 17.0;
+  CHECK_FALSE(calibrate(a, absurd).ok());
+
+  const auto file = std::filesystem::temp_directory_path() / ("embody_profile_" + std::to_string(::getpid()) + ".json");
+  REQUIRE(saveProfile(p.value(), file.string()).ok());
+  auto back = loadProfile(file.string());
+  std::filesystem::remove(file);
+  REQUIRE(back.ok());
+  CHECK(back->scale == Approx(p->scale));
+  CHECK(back->armSpan == Approx(1.95));
+  CHECK_FALSE(loadProfile("/nonexistent/profile.json").ok());
+
+  // The scaled body model: IK pivots are the avatar's times the scale, and retargeting divides
+  // the root motion back so avatar * scale lands on the IK model.
+  BodyModelOptions o;
+  o.scale = p->scale;
+  auto body = buildBodyModel(a, o);
+  REQUIRE(body.ok());
+  ik::Data data(body->model);
+  std::mt19937 rng(7);
+  REQUIRE(data.setConfiguration(randomPose(body->model, rng)).ok());
+  ik::kinematics(body->model, data, false);
+  SkeletonPose pose;
+  retarget(body.value(), a, data, pose);
+  std::vector<glm::mat4> g;
+  computeGlobals(a.skeleton, pose, g);
+  for (ik::JointId j : {body->head, body->leftHand, body->rightHand}) {
+    const glm::vec3 av = glm::vec3(g[static_cast<size_t>(body->avatarJoint[static_cast<size_t>(j)])][3]) *
+                         static_cast<float>(p->scale);
+    CHECK((data.jointFrame(j).translation() - Eigen::Vector3d(av.x, av.y, av.z)).norm() < 1e-3);
+  }
+}
