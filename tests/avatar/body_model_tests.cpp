@@ -215,3 +215,34 @@ TEST_CASE("calibration scales the body to the user and round-trips through the p
     CHECK((data.jointFrame(j).translation() - Eigen::Vector3d(av.x, av.y, av.z)).norm() < 1e-3);
   }
 }
+
+TEST_CASE("body model: the solver reaches a hand target on the default avatar and retargeting follows", "[body][solve]") {
+  const AvatarAsset a = buildDefaultAvatar();
+  auto body = buildBodyModel(a);
+  REQUIRE(body.ok());
+  ik::Data data(body->model);
+  ik::kinematics(body->model, data, false);
+  // Hold feet, balance and head where they are; reach 25 cm forward and 10 cm up with the left hand.
+  for (ik::TaskId t : {body->leftFootTask, body->rightFootTask, body->headTask, body->leftHandTask, body->rightHandTask})
+    REQUIRE(data.setTarget(t, data.jointFrame(body->model.tasks[static_cast<size_t>(t)].desc.joint)).ok());
+  REQUIRE(data.setTarget(body->comTask, data.centerOfMass()).ok());
+  Eigen::Isometry3d hand = data.jointFrame(body->leftHand);
+  hand.translation() += Eigen::Vector3d(0.0, 0.10, 0.25);
+  REQUIRE(data.setTarget(body->leftHandTask, hand).ok());
+  REQUIRE(data.setEnabled(body->rightHandTask, false).ok());
+  ik::SolveOptions options;
+  options.max_iterations = 300;
+  const auto& report = ik::solve(body->model, data, options);
+  INFO("stop " << ik::toString(report.stop) << " after " << report.iterations << " iterations");
+  const auto& hr = report.tasks[static_cast<size_t>(body->leftHandTask)];
+  INFO("hand residual " << hr.position << " m, " << hr.rotation << " rad");
+  CHECK(hr.position < 0.01);
+  CHECK(report.tasks[static_cast<size_t>(body->leftFootTask)].position < 1e-3);
+  SkeletonPose pose;
+  retarget(body.value(), a, data, pose);
+  std::vector<glm::mat4> g;
+  computeGlobals(a.skeleton, pose, g);
+  const glm::vec3 av(g[static_cast<size_t>(body->avatarJoint[static_cast<size_t>(body->leftHand)])][3]);
+  CHECK((data.jointFrame(body->leftHand).translation() - Eigen::Vector3d(av.x, av.y, av.z)).norm() < 1e-3);
+  CHECK((Eigen::Vector3d(av.x, av.y, av.z) - hand.translation()).norm() < 0.01);
+}
