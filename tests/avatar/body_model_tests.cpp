@@ -142,6 +142,20 @@ TEST_CASE("body model: VRM 1.0 with non-identity rest rotations retargets within
 
 TEST_CASE("body model: a Mixamo rig retargets within 1 mm", "[body]") { checkRetargeting(mixamoAvatar()); }
 
+TEST_CASE("body model: a VRM 0.x avatar facing -Z retargets within 1 mm", "[body]") {
+  std::map<std::string, std::string> names;
+  int i = 0;
+  for (const auto& s : embody::test::humanoidJointSpecs()) names[s.bone] = "J" + std::to_string(100 + i++);
+  embody::test::HumanoidFile f(names, /*facesMinusZ=*/true);
+  nlohmann::json bones = nlohmann::json::array();
+  for (const auto& [bone, node] : f.nodeOfBone) bones.push_back({{"bone", bone}, {"node", node}});
+  f.doc["extensionsUsed"] = {"VRM"};
+  f.doc["extensions"]["VRM"] = {{"humanoid", {{"humanBones", bones}}}};
+  const AvatarAsset a = fromFile(f);
+  REQUIRE(a.humanoid.forward.z < -0.99f);
+  checkRetargeting(a);
+}
+
 TEST_CASE("body model: CesiumMan retargets within 1 mm", "[body]") {
   EMBODY_REQUIRE_SHARED_ASSET(path, "CesiumMan.glb");
   auto a = loadAvatarFile(path);
