@@ -260,3 +260,21 @@ TEST_CASE("randomly corrupted humanoid files load or fail cleanly, never crash",
   INFO(loaded << " loaded, " << failed << " refused");
   CHECK(loaded + failed == 300);
 }
+
+TEST_CASE("a humanoid skeleton without any mesh still maps (names and topology)", "[humanoid]") {
+  for (bool meaningless : {false, true}) {
+    HumanoidFile f(meaningless ? meaninglessNames() : std::map<std::string, std::string>{});
+    for (auto& node : f.doc["nodes"]) {
+      node.erase("mesh");
+      node.erase("skin");
+    }
+    f.doc.erase("meshes");
+    f.doc.erase("skins");
+    auto a = loadPrepared(f);
+    REQUIRE(a.ok());
+    CHECK(a->skinJointCount == 0);
+    CHECK(a->mesh.triangleCount() == 0);
+    CHECK(a->humanoid.method == (meaningless ? MappingMethod::Topology : MappingMethod::Names));
+    CHECK(a->humanoid.missingRequired.empty());
+  }
+}
