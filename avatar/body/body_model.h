@@ -48,6 +48,9 @@ struct BodyModelOptions {
   // user's size; retargeting divides the hips translation back, so the renderer draws the avatar
   // with this scale on its model matrix.
   double scale = 1.0;
+  // true: the coupled spine (avatar/spine: swing + torsion joints per site, coupling rows);
+  // false: one uncoupled Ball joint per site with its vertebrae's summed ranges.
+  bool coupledSpine = true;
 };
 
 struct BodyModel {
@@ -63,6 +66,7 @@ struct BodyModel {
   // The spine sites: avatar joint of each and the vertebral joints it stands for.
   std::vector<SpineBone> spineSites;
   double scale = 1.0;      // BodyModelOptions::scale
+  int spineEqualities = 0;  // coupling rows the spine added (0 for the uncoupled spine)
   std::string spineModel;  // "full" (every vertebra a site), "bones" (the avatar's spine bones), "simplified"
   ik::JointId hips = -1, head = -1, leftHand = -1, rightHand = -1, leftFoot = -1, rightFoot = -1;
   ik::TaskId headTask = -1, leftHandTask = -1, rightHandTask = -1, leftFootTask = -1, rightFootTask = -1, comTask = -1;

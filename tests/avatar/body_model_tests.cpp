@@ -66,9 +66,10 @@ Eigen::VectorXd randomPose(const ik::Model& model, std::mt19937& rng) {
 
 // Drives the body model to poses and checks that the retargeted avatar's head, hands and feet
 // sit where the IK model's are (position within 1 mm, orientation within 0.06 degrees).
-void checkRetargeting(const AvatarAsset& avatar, SpineMode spine = SpineMode::Auto) {
+void checkRetargeting(const AvatarAsset& avatar, SpineMode spine = SpineMode::Auto, bool coupled = true) {
   BodyModelOptions options;
   options.spine = spine;
+  options.coupledSpine = coupled;
   auto body = buildBodyModel(avatar, options);
   REQUIRE(body.ok());
   CHECK(body->model.total_mass == Approx(75.0).epsilon(1e-9));
@@ -122,7 +123,13 @@ TEST_CASE("body model: the default avatar gets one spine site per vertebra and r
   REQUIRE(body.ok());
   CHECK(body->spineModel == "full");
   CHECK(body->spineSites.size() == 25);
+  // The coupled spine: 24 vertebral sites (swing or torsion joints) with chain rows, plus the head.
+  CHECK(body->spineEqualities == 33);
+  CHECK(body->model.equalities.size() == 33);
+  for (int level = 0; level < kVertebralJointCount; ++level)
+    CHECK(a.skeleton.joints[static_cast<size_t>(body->spineSites[static_cast<size_t>(level)].joint)].name == vertebralJointName(level));
   checkRetargeting(a);
+  checkRetargeting(a, SpineMode::Auto, /*coupled=*/false);
 }
 
 TEST_CASE("body model: --spine simplified groups the default avatar's vertebrae into 8 sites", "[body]") {
@@ -137,7 +144,14 @@ TEST_CASE("body model: --spine simplified groups the default avatar's vertebrae 
 }
 
 TEST_CASE("body model: VRM 1.0 with non-identity rest rotations retargets within 1 mm", "[body]") {
-  checkRetargeting(vrm1Avatar());
+  const AvatarAsset a = vrm1Avatar();
+  auto body = buildBodyModel(a);
+  REQUIRE(body.ok());
+  CHECK(body->spineModel == "bones");
+  // spine | chest + upperChest (thoracic: coupled to each other) | neck | head.
+  REQUIRE(body->spineSites.size() == 5);
+  CHECK(body->spineEqualities > 0);
+  checkRetargeting(a);
 }
 
 TEST_CASE("body model: a Mixamo rig retargets within 1 mm", "[body]") { checkRetargeting(mixamoAvatar()); }
@@ -251,6 +265,9 @@ TEST_CASE("body model: the solver reaches a hand target on the default avatar an
   const auto& hr = report.tasks[static_cast<size_t>(body->leftHandTask)];
   INFO("hand residual " << hr.position << " m, " << hr.rotation << " rad");
   CHECK(hr.position < 0.01);
+  // The coupled spine's rows hold in the solution.
+  const Eigen::VectorXd residual = body->model.equality_matrix * data.q() - body->model.equality_rhs;
+  CHECK(residual.cwiseAbs().maxCoeff() < 1e-6);
   CHECK(report.tasks[static_cast<size_t>(body->leftFootTask)].position < 1e-3);
   SkeletonPose pose;
   retarget(body.value(), a, data, pose);
