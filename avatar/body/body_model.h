@@ -12,8 +12,8 @@
 // Joints (frames: +Y along the bone towards its child, +X = +Y x forward, +Z = X x Y; at the
 // rest pose every dof is 0):
 //   hips                  Free (6)
-//   each spine site       Ball (3) carrying the summed ranges of the vertebrae it stands for
-//                         (spine.md §1, White & Panjabi; flexion 60 % / extension 40 %)
+//   each spine site       the coupled spine's swing + torsion joints with the ranges and coupling
+//                         rows of the vertebrae it stands for
 //   head                  Ball, the Occ-C1 range
 //   shoulder (clavicle)   Swing (2) about the bone axis, ±20°
 //   upperArm              Ball; lowerArm: Revolute elbow (axis from the rest geometry, 0..150°)
@@ -22,10 +22,8 @@
 // Segment masses and centres of mass: de Leva (1996) fractions scaled to the total mass,
 // centres along each segment towards its child pivot.
 //
-// Interim spine: until the coupled spine (avatar/spine, branch `spine`) is merged, each spine
-// site is an uncoupled Ball joint with its vertebrae's summed ranges (the paper's "uncoupled"
-// variant); the sites and rest frames already follow spine::appendSpine's conventions so the
-// coupled joints and rows can replace them without changing retargeting.
+// The spine sites carry the coupled spine of avatar/spine (appendSpine on the avatar's own spine
+// bones, see docs/avatars.md); `coupledSpine = false` gives one uncoupled Ball per site.
 #include <Eigen/Geometry>
 #include <string>
 #include <vector>
