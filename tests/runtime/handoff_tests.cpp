@@ -148,7 +148,7 @@ TEST_CASE("IK thread between a tracking thread and a render thread: newest whole
   CHECK(maxAcquire < 0.05);
 }
 
-TEST_CASE("task layout: balance first, head, then hands; lower body inferred without feet") {
+TEST_CASE("task layout: balance first, head, then hands, lower body inferred without feet") {
   const TaskLayout three = taskLayoutFor(tracking::TrackerMask::threePoint());
   CHECK(three.inferLowerBody);
   CHECK(three.levels() == 4);

@@ -86,7 +86,7 @@ TEST_CASE("a lost hand is held relative to the head's heading, then eases to han
   CHECK(later.pose[TrackerId::LeftHand].position.y < 1.0f);
 }
 
-TEST_CASE("implausible jumps are rejected; a lasting jump is accepted and blended in") {
+TEST_CASE("implausible jumps are rejected, a lasting jump is accepted and blended in") {
   TrackingGuard guard;
   PoseSample s;
   s[TrackerId::Head] = {glm::vec3(0, 1.64f, 0), glm::quat(1, 0, 0, 0), true};
@@ -116,7 +116,7 @@ TEST_CASE("implausible jumps are rejected; a lasting jump is accepted and blende
   CHECK(maxStep / kDt < 3.0);
 }
 
-TEST_CASE("never-seen trackers: hands neutral, hips and feet absent, head at eye height; all finite") {
+TEST_CASE("never-seen trackers: hands neutral, hips and feet absent, head at eye height, all finite") {
   TrackingGuard guard;
   PoseSample s;  // nothing valid at all
   s[TrackerId::Head].position = glm::vec3(std::nanf(""));
@@ -137,7 +137,7 @@ TEST_CASE("never-seen trackers: hands neutral, hips and feet absent, head at eye
   CHECK(glm::length(h.pose[TrackerId::Head].position - glm::vec3(0, 1.638f, 0)) < 2.0f * 0.1f + 1e-3f);  // dt clamped to 0.1 s
 }
 
-TEST_CASE("lost feet hold in the world, then drop; lost head holds") {
+TEST_CASE("lost feet hold in the world, then drop, a lost head holds") {
   TrackingGuard guard;
   auto src = SyntheticSource::create("idle").value();
   PoseSample s = src->sample(0.0);
