@@ -19,7 +19,8 @@ IterationBudget::IterationBudget(const Clock& clock, TimePoint deadline, Iterati
 bool IterationBudget::startIteration() {
   const TimePoint now = clock_.now();
   if (iterations_ > 0) model_->observe(now - lastStart_);
-  if (now + model_->predicted() > deadline_) return false;
+  // The first iteration always runs: progress every frame, an overshoot of at most one iteration.
+  if (iterations_ > 0 && now + model_->predicted() > deadline_) return false;
   lastStart_ = now;
   ++iterations_;
   return true;

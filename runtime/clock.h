@@ -53,7 +53,8 @@ class IterationCostModel {
 // Decides, before each iteration, whether one more fits before the deadline. An iteration starts
 // only when now + predicted cost <= deadline, so the solve ends before the deadline while
 // iterations cost what they did, and overshoots by at most one iteration when one suddenly costs
-// more than predicted.
+// more than predicted. The first iteration always runs (a budget smaller than one iteration
+// still makes progress, late by that one iteration).
 class IterationBudget {
  public:
   IterationBudget(const Clock& clock, TimePoint deadline, IterationCostModel* model = nullptr);

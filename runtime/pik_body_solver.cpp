@@ -1,5 +1,7 @@
 #include "runtime/pik_body_solver.h"
 
+#include <algorithm>
+
 #include "runtime/task_layout.h"
 
 namespace embody::runtime {
@@ -53,6 +55,12 @@ SolveResult PikBodySolver::solve(const SolveRequest& request, avatar::SkeletonPo
   ik::SolveOptions options = options_;
   options.clock = request.clock;
   options.deadline = cost_.safeDeadline(request.deadline);
+  if (*options.deadline <= request.clock->now()) {
+    // Not even one iteration is predicted to fit: run exactly one (progress every frame, an
+    // overshoot of at most one iteration), which also refreshes the cost estimate.
+    options.deadline.reset();
+    options.max_iterations = std::min(options.max_iterations, 1);
+  }
   const ik::SolveReport& report = ik::solve(*model_, data_, options);
   cost_.observe(report.elapsed, report.iterations);
   if (report.stop == ik::StopReason::InvalidState || !data_.q().allFinite()) resetWarmStart();
