@@ -58,6 +58,7 @@ TEST_CASE("embody motion errors: usage errors exit 2, broken inputs exit 1 with 
   CHECK(runEmbody("motion dance").exitCode == 2);
   CHECK(runEmbody("motion record --motion synthetic:idle").exitCode == 2);
   CHECK(runEmbody("motion info synthetic:idle --user-height tall").exitCode == 2);
+  CHECK(runEmbody("motion info synthetic:idle --lose elbow@1-2").exitCode == 2);
   auto unknown = runEmbody("motion info synthetic:dance", true);
   CHECK(unknown.exitCode == 1);
   CHECK(unknown.output.find("known: synthetic:idle") != std::string::npos);
@@ -70,4 +71,28 @@ TEST_CASE("embody motion errors: usage errors exit 2, broken inputs exit 1 with 
   std::filesystem::remove(path);
   CHECK(broken.exitCode == 1);
   CHECK(broken.output.find("embody_motion_cli_broken.jsonl:2: not valid JSON") != std::string::npos);
+}
+
+TEST_CASE("embody motion record --lose writes a trace with the hands invalid for a second", "[cli]") {
+  const auto path = std::filesystem::temp_directory_path() / "embody_motion_cli_loss.jsonl";
+  auto rec = runEmbody("motion record --motion synthetic:reach --out " + path.string() +
+                       " --frames 360 --fps 90 --three-point --lose left,right@2-3");
+  REQUIRE(rec.exitCode == 0);
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);  // header
+  int invalid = 0, lines = 0;
+  while (std::getline(in, line)) {
+    const auto j = nlohmann::json::parse(line);
+    const double t = j["t"].get<double>();
+    const bool lost = !j["left"]["valid"].get<bool>();
+    CHECK(lost == (t >= 2.0 && t < 3.0));
+    CHECK(j["left"]["p"][0].is_null() == lost);
+    CHECK(j["head"]["valid"].get<bool>());
+    invalid += lost ? 1 : 0;
+    ++lines;
+  }
+  std::filesystem::remove(path);
+  CHECK(lines == 360);
+  CHECK(invalid == 90);
 }
