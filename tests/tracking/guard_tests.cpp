@@ -160,3 +160,19 @@ TEST_CASE("lost feet hold in the world, then drop, a lost head holds") {
   CHECK(later[TrackerId::Head] == TrackerStatus::Held);
   CHECK(statusName(TrackerStatus::Easing) == "easing");
 }
+
+TEST_CASE("a hand recovering towards a target beyond the estimated reach still arrives") {
+  // Bowing: the head-only shoulder estimate is off, the live hands are farther than it allows.
+  auto src = SyntheticSource::create("bow").value();
+  TrackingGuard guard;
+  for (int i = 0; i < 90 * 4; ++i) {
+    const double t = 1.5 + i * kDt;  // deep in the bow
+    PoseSample s = src->sample(t);
+    if (i < 90) s[TrackerId::LeftHand].valid = false;
+    const GuardedSample& g = guard.update(s);
+    if (i > 200) {
+      CHECK(g[TrackerId::LeftHand] == TrackerStatus::Tracked);
+      CHECK(g.pose[TrackerId::LeftHand].position == s[TrackerId::LeftHand].position);
+    }
+  }
+}
