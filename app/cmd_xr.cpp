@@ -6,7 +6,7 @@
 
 #include "app/args.h"
 #include "avatar/gltf/gltf_loader.h"
-#include "engine/test_avatar.h"
+#include "avatar/procedural/default_avatar.h"
 #include "xr/openxr/xr_loop.h"
 
 namespace {
@@ -20,7 +20,7 @@ int runXr(cli::Argv argv) {
       "selected by XR_RUNTIME_JSON). Until the body solver is connected the avatar stands in its rest "
       "pose under your head and gizmos follow your hands.");
   args.option("avatar", "FILE|default",
-              "a .gltf/.glb/.vrm file, or 'default' (the built-in procedural avatar)", "default");
+              "a .gltf/.glb/.vrm file, or 'default' (the built-in humanoid avatar)", "default");
   args.option("frames", "N", "end the session after N submitted frames (0: until the runtime ends it)", "0");
   args.option("height", "METRES", "your standing eye height (skips the calibration from the HMD height)");
   args.option("stats", "FILE", "write a JSON report of the run (states, frames, tracking, validation)");
@@ -56,7 +56,7 @@ int runXr(cli::Argv argv) {
   avatar::AvatarAsset asset;
   const std::string avatarArg = args.get("avatar");
   if (avatarArg == "default") {
-    asset = gfx::makeTestAvatar();
+    asset = avatar::buildDefaultAvatar();
   } else {
     auto loaded = avatar::loadAvatarFile(avatarArg);
     if (!loaded) {
