@@ -100,11 +100,20 @@ Workspace::Workspace(const Model& model)
     const Eigen::MatrixXd full = qr.householderQ();
     eq_nullspace.leftCols(n - eq_rank) = full.rightCols(n - eq_rank);
   }
+  eq_matrix.setZero(eq_rank, n);
+  eq_rhs.setZero(eq_rank);
+  for (int i = 0; i < eq_rank; ++i) {
+    eq_matrix.row(i) = a.row(eq_rows[i]);
+    eq_rhs(i) = model.equality_rhs(eq_rows[i]);
+  }
   basis.setZero(n, n);
   factor.setZero(n, n);
+  basis.leftCols(eq_rank) = eq_basis.leftCols(eq_rank);
+  factor.topLeftCorner(eq_rank, eq_rank) = eq_factor.topLeftCorner(eq_rank, eq_rank);
   active_rhs.setZero(n);
   mask.setOnes(n);
-  nullspace.setZero(n, n);
+  nullspace = eq_nullspace;
+  eq_projector0 = Eigen::MatrixXd::Identity(n, n) - eq_basis.leftCols(eq_rank) * eq_basis.leftCols(eq_rank).transpose();
   dq0.setZero(n);
   dq.setZero(n);
   tmp_n.setZero(n);
@@ -115,7 +124,7 @@ Workspace::Workspace(const Model& model)
   reduced_jacobian.setZero(rows, n);
   row_space.setZero(n, n);
   projector.setZero(n, n);
-  projector0.setZero(n, n);
+  projector0 = eq_projector0;
   for (const Model::Level& level : model.levels) {
     const int m = level.rows;
     level_j.emplace_back(Eigen::MatrixXd::Zero(m, n));
@@ -409,24 +418,26 @@ void kinematics(const Model& model, Data& data, bool jacobians) {
 
 namespace {
 
-void resetActiveSet(const Model& model, Workspace& w, Path path) {
+// Back to the equality rows only. The equality part of basis / factor is written once (in the
+// constructor) and pinned rows only append after it; the null-space basis and the reference
+// projector are restored only when pinned rows changed them.
+void resetActiveSet(Workspace& w, Path path) {
   const int r = w.eq_rank;
   w.rank = r;
   if (r > 0) {
-    w.basis.leftCols(r) = w.eq_basis.leftCols(r);
-    w.factor.topLeftCorner(r, r) = w.eq_factor.topLeftCorner(r, r);
-    for (int i = 0; i < r; ++i) {
-      const int row = w.eq_rows[i];
-      w.active_rhs(i) = model.equality_rhs(row) - model.equality_matrix.row(row).dot(w.q);
-    }
+    w.active_rhs.head(r) = w.eq_rhs;
+    w.active_rhs.head(r).noalias() -= w.eq_matrix * w.q;
   }
   w.mask_mode = r == 0;
   w.mask.setOnes();
   w.null_dim = w.n - r;
-  if (!w.mask_mode) w.nullspace.leftCols(w.null_dim) = w.eq_nullspace.leftCols(w.null_dim);
-  if (path == Path::Reference) {
-    w.projector0.setIdentity();
-    if (r > 0) w.projector0.noalias() -= w.basis.leftCols(r) * w.basis.leftCols(r).transpose();
+  if (!w.mask_mode && w.nullspace_dirty) {
+    w.nullspace.leftCols(w.null_dim) = w.eq_nullspace.leftCols(w.null_dim);
+    w.nullspace_dirty = false;
+  }
+  if (path == Path::Reference && w.projector0_dirty) {
+    w.projector0 = w.eq_projector0;
+    w.projector0_dirty = false;
   }
   std::fill(w.ineq_active.begin(), w.ineq_active.end(), 0);
   std::fill(w.ineq_reported.begin(), w.ineq_reported.end(), 0);
@@ -474,6 +485,7 @@ bool addActiveRow(Workspace& w, double rhs_delta, int single_dof, Path path, dou
   if (w.mask_mode && single_dof >= 0) {
     w.mask(single_dof) = 0.0;
   } else {
+    w.nullspace_dirty = true;
     if (w.mask_mode) {  // materialise the diagonal projector's basis: the unmasked unit vectors
       w.nullspace.setZero();
       int k = 0;
@@ -496,7 +508,10 @@ bool addActiveRow(Workspace& w, double rhs_delta, int single_dof, Path path, dou
     }
   }
   w.null_dim -= 1;
-  if (path == Path::Reference) w.projector0.noalias() -= w.basis.col(r) * w.basis.col(r).transpose();
+  if (path == Path::Reference) {
+    w.projector0.noalias() -= w.basis.col(r) * w.basis.col(r).transpose();
+    w.projector0_dirty = true;
+  }
   return true;
 }
 
@@ -756,7 +771,7 @@ void reparameterize(const Model& model, Workspace& w) {
 bool step(const Model& model, Workspace& w, const SolveOptions& o) {
   w.report.active_clamps.clear();
   w.report.unsatisfiable.clear();
-  resetActiveSet(model, w, o.path);
+  resetActiveSet(w, o.path);
   computeDq0(w);
   runPass(model, w, o);
   int passes = 1;
@@ -819,7 +834,7 @@ bool allSatisfied(const Workspace& w) {
 const Eigen::VectorXd& priorityPass(const Model& model, Data& data, const SolveOptions& options) {
   Workspace& w = data.workspace();
   if (!sameShape(model, w)) return w.dq;
-  resetActiveSet(model, w, options.path);
+  resetActiveSet(w, options.path);
   computeDq0(w);
   runPass(model, w, options);
   return w.dq;
