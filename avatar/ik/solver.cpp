@@ -536,6 +536,29 @@ bool levelActive(const Model::Level& level, const Workspace& w) {
 // undamped (a lower bound) and 0 when G is singular.
 constexpr int kInverseIterations = 8;
 
+// Triangular solves with the Cholesky factor (lower, column-major) for the small m x m systems of
+// one level: plain loops beat Eigen's blocked kernels at these sizes (m <= ~16).
+void solveLower(const Eigen::MatrixXd& l, double* x) {
+  const Eigen::Index m = l.rows();
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const double xj = (x[j] /= l(j, j));
+    for (Eigen::Index i = j + 1; i < m; ++i) x[i] -= l(i, j) * xj;
+  }
+}
+void solveLowerTransposed(const Eigen::MatrixXd& l, double* x) {
+  const Eigen::Index m = l.rows();
+  for (Eigen::Index j = m; j-- > 0;) {
+    double v = x[j];
+    for (Eigen::Index i = j + 1; i < m; ++i) v -= l(i, j) * x[i];
+    x[j] = v / l(j, j);
+  }
+}
+// x := G⁻¹ x with G = L Lᵀ.
+void choleskySolve(const Eigen::MatrixXd& l, double* x) {
+  solveLower(l, x);
+  solveLowerTransposed(l, x);
+}
+
 struct LevelDamping {
   double lambda2 = 0.0;
   double sigma_min = 0.0;
@@ -569,9 +592,10 @@ LevelDamping levelDamping(const Eigen::MatrixXd& gram, Workspace& w, size_t k, c
   for (Eigen::Index i = 0; i < m; ++i) x(i) = 1.0 + 0.1 * static_cast<double>(i);  // deterministic start
   x.normalize();
   double mu = 0.0;
+  const Eigen::MatrixXd& l = gramLlt.matrixLLT();
   for (int it = 0; it < kInverseIterations; ++it) {
     z = x;
-    gramLlt.solveInPlace(z);
+    choleskySolve(l, z.data());
     mu = x.dot(z);
     const double zn = z.norm();
     if (!(zn > 0) || !std::isfinite(zn)) break;
@@ -618,9 +642,9 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
       damped = gram;
       damped.diagonal().array() += d.lambda2;
       w.level_llt2[k].compute(damped);
-      w.level_llt2[k].solveInPlace(y);
+      choleskySolve(w.level_llt2[k].matrixLLT(), y.data());
     } else {
-      w.level_llt[k].solveInPlace(y);  // λ = 0 only when G is positive definite
+      choleskySolve(w.level_llt[k].matrixLLT(), y.data());  // λ = 0 only when G is positive definite
     }
     auto dz = w.tmp_n.head(r);
     dz.noalias() = jhr.transpose() * y;
