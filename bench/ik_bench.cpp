@@ -11,6 +11,7 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
@@ -155,8 +156,8 @@ struct KdlHumanoid {
       }
       for (size_t k = 0; k < dofs.size(); ++k) {
         parent = add(d.name + "_" + std::to_string(k), dofs[k], KDL::Frame::Identity(), parent);
-        const double l = std::isfinite(d.lower[k]) ? d.lower[k] : (d.type == JointType::Free && k < 3 ? -10.0 : -M_PI);
-        const double h = std::isfinite(d.upper[k]) ? d.upper[k] : (d.type == JointType::Free && k < 3 ? 10.0 : M_PI);
+        const double l = std::isfinite(d.lower[k]) ? d.lower[k] : (d.type == JointType::Free && k < 3 ? -10.0 : -std::numbers::pi);
+        const double h = std::isfinite(d.upper[k]) ? d.upper[k] : (d.type == JointType::Free && k < 3 ? 10.0 : std::numbers::pi);
         lo.push_back(l);
         hi.push_back(h);
         mid.push_back(d.neutral[k]);
