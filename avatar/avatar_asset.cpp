@@ -2,6 +2,15 @@
 
 namespace embody::avatar {
 
+std::string_view avatarFormatName(AvatarFormat f) {
+  switch (f) {
+    case AvatarFormat::Vrm0: return "vrm0";
+    case AvatarFormat::Vrm1: return "vrm1";
+    case AvatarFormat::Procedural: return "procedural";
+    default: return "gltf";
+  }
+}
+
 void computeSkinningPalette(const AvatarAsset& asset, const std::vector<glm::mat4>& globals,
                             std::vector<glm::mat4>& palette) {
   palette.resize(globals.size());

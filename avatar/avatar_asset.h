@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "avatar/humanoid/humanoid_map.h"
 #include "avatar/skeleton.h"
 
 namespace embody::avatar {
@@ -47,6 +48,8 @@ struct Primitive {
   uint32_t firstIndex = 0;
   uint32_t indexCount = 0;
   int material = -1;  // index into AvatarAsset::materials, -1 for the default material
+  int sourceNode = -1;  // glTF node and mesh the triangles came from (VRM first-person annotations)
+  int sourceMesh = -1;
 };
 
 struct SkinnedMesh {
@@ -62,6 +65,15 @@ struct SkinnedMesh {
 };
 
 enum class AvatarFormat { Gltf, Vrm0, Vrm1, Procedural };
+std::string_view avatarFormatName(AvatarFormat f);  // "gltf", "vrm0", "vrm1", "procedural"
+
+// How the first-person draw list was made.
+struct FirstPersonInfo {
+  std::string mode;          // "vrm" (meshAnnotations), "auto" (head-weighted triangles dropped), "none"
+  int headJoint = -1;        // the joint whose subtree is hidden in first person
+  size_t removedTriangles = 0;  // triangles in the third-person list that first person does not draw
+  std::vector<std::string> annotations;  // "node or mesh name: type" for VRM files
+};
 
 struct AvatarAsset {
   std::string sourcePath;  // "" for the procedural default
@@ -72,6 +84,9 @@ struct AvatarAsset {
   std::vector<Image> images;
   int skinJointCount = 0;  // joints of the glTF skin(s); 0 when the file has no skin
   std::string rawJson;     // the glTF JSON document, for extensions read later (VRM humanoid, firstPerson)
+  std::vector<int> gltfNodeToJoint;  // glTF node index -> Skeleton joint index (empty for procedural)
+  HumanoidMap humanoid;              // filled by loadAvatarFile / buildDefaultAvatar
+  FirstPersonInfo firstPerson;
 };
 
 // Palette for a pose: palette[j] = global[j] * inverseBind[j].

@@ -45,7 +45,7 @@ struct SolveOptions {
   bool clamping = true;         // false: inequalities are ignored (tests of the priority loop)
   // Smooth damping (iTaSC rule): for each singular value σ < eps, λ² = (1 - (σ/eps)²) λmax².
   double damping_max = 0.1;     // λmax
-  double damping_eps = 0.3;     // eps
+  double damping_eps = 0.2;     // eps
   double rank_tolerance = 1e-6; // singular values below this are rank-deficient (projectors)
   double inequality_tolerance = 1e-9;  // a row counts as violated above rhs + this
   // Scale the task part of the step down when it reverses the previous one (damps period-2

@@ -2,6 +2,7 @@
 // The solver's workspace (private to avatar/ik and its tests): every buffer is sized once in
 // Data's constructor, so an iteration only writes into existing storage.
 #include <Eigen/Core>
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
@@ -80,6 +81,9 @@ struct Workspace {
   std::vector<Eigen::VectorXd> level_res, level_coef, level_tmp;
   std::vector<Eigen::MatrixXd> level_jw;     // m_k x n (J W)
   std::vector<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>> level_eig;
+  std::vector<Eigen::MatrixXd> level_shifted;  // G - eps² I
+  std::vector<Eigen::LLT<Eigen::MatrixXd>> level_llt, level_llt2;  // G; G ± scalar shifts
+  std::vector<Eigen::VectorXd> level_y;
 
   // Reference path scratch.
   Eigen::MatrixXd projector, projector0;

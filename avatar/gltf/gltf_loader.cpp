@@ -1,0 +1,713 @@
+// glTF/GLB/VRM -> AvatarAsset. tinygltf parses the JSON and resolves buffers and images; every
+// index and byte range it hands back is checked here before use, because tinygltf 2.7 does not
+// validate accessors, node children or texture sources.
+#include "avatar/gltf/gltf_loader.h"
+
+#include <stb_image.h>
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <glm/gtc/matrix_inverse.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <limits>
+
+namespace embody::avatar {
+namespace {
+
+Error fail(const std::string& what) { return Error{what}; }
+
+// ---------------------------------------------------------------------------------------------
+// Images: decoded by us (stb) so that dimensions are checked before any pixel is allocated.
+struct ImageLoaderContext {
+  int maxDimension = 8192;
+  std::vector<std::string>* warnings = nullptr;
+};
+
+bool decodeImage(tinygltf::Image* image, const int imageIndex, std::string* /*err*/, std::string* /*warn*/,
+                 int /*reqWidth*/, int /*reqHeight*/, const unsigned char* bytes, int size, void* user) {
+  auto* ctx = static_cast<ImageLoaderContext*>(user);
+  auto warn = [&](const std::string& w) {
+    if (ctx->warnings) ctx->warnings->push_back("image " + std::to_string(imageIndex) + ": " + w);
+  };
+  // An image we cannot decode leaves the material untextured rather than failing the avatar.
+  image->image.clear();
+  image->width = image->height = 0;
+  image->component = 4;
+  image->bits = 8;
+  image->pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
+  int w = 0, h = 0, comp = 0;
+  if (!bytes || size <= 0 || !stbi_info_from_memory(bytes, size, &w, &h, &comp)) {
+    warn("cannot be decoded (" + std::string(stbi_failure_reason() ? stbi_failure_reason() : "no data") +
+         "); drawn untextured");
+    return true;
+  }
+  if (w <= 0 || h <= 0 || w > ctx->maxDimension || h > ctx->maxDimension) {
+    warn(std::to_string(w) + "x" + std::to_string(h) + " exceeds the " + std::to_string(ctx->maxDimension) +
+         " pixel limit; drawn untextured");
+    return true;
+  }
+  stbi_uc* pixels = stbi_load_from_memory(bytes, size, &w, &h, &comp, 4);
+  if (!pixels) {
+    warn("cannot be decoded; drawn untextured");
+    return true;
+  }
+  image->width = w;
+  image->height = h;
+  image->image.assign(pixels, pixels + static_cast<size_t>(w) * static_cast<size_t>(h) * 4);
+  stbi_image_free(pixels);
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// GLB container: checked by hand so that the JSON chunk can be kept and a truncated file gives a
+// precise reason before tinygltf sees it.
+struct GlbChunks {
+  std::string json;
+  bool isGlb = false;
+};
+
+uint32_t readU32(const uint8_t* p) {
+  return static_cast<uint32_t>(p[0]) | static_cast<uint32_t>(p[1]) << 8 | static_cast<uint32_t>(p[2]) << 16 |
+         static_cast<uint32_t>(p[3]) << 24;
+}
+
+Result<GlbChunks> splitContainer(const std::vector<uint8_t>& bytes) {
+  GlbChunks out;
+  if (bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0) {
+    out.isGlb = true;
+    if (bytes.size() < 20) return fail("truncated GLB: " + std::to_string(bytes.size()) + " bytes, header needs 20");
+    const uint32_t version = readU32(&bytes[4]);
+    const uint32_t total = readU32(&bytes[8]);
+    if (version != 2) return fail("GLB version " + std::to_string(version) + " is not supported (need 2)");
+    if (total > bytes.size())
+      return fail("truncated GLB: header says " + std::to_string(total) + " bytes, file has " +
+                  std::to_string(bytes.size()));
+    if (total < 20) return fail("GLB header length " + std::to_string(total) + " is smaller than the header");
+    const uint32_t jsonLength = readU32(&bytes[12]);
+    const uint32_t jsonType = readU32(&bytes[16]);
+    if (jsonType != 0x4E4F534Au) return fail("GLB first chunk is not JSON");
+    if (static_cast<uint64_t>(jsonLength) + 20 > total)
+      return fail("truncated GLB: JSON chunk of " + std::to_string(jsonLength) + " bytes runs past the end");
+    uint64_t at = 20 + static_cast<uint64_t>(jsonLength);
+    at = (at + 3) & ~uint64_t{3};
+    if (at + 8 <= total) {
+      const uint32_t binLength = readU32(&bytes[at]);
+      if (at + 8 + binLength > total)
+        return fail("truncated GLB: BIN chunk of " + std::to_string(binLength) + " bytes runs past the end");
+    }
+    out.json.assign(reinterpret_cast<const char*>(&bytes[20]), jsonLength);
+    while (!out.json.empty() && (out.json.back() == ' ' || out.json.back() == '\0')) out.json.pop_back();
+  } else {
+    out.json.assign(bytes.begin(), bytes.end());
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Accessors: one bounds-checked reader for every attribute, with normalisation and sparse data.
+int componentSize(int type) {
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+    default: return 0;
+  }
+}
+
+int componentCount(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return 1;
+    case TINYGLTF_TYPE_VEC2: return 2;
+    case TINYGLTF_TYPE_VEC3: return 3;
+    case TINYGLTF_TYPE_VEC4: return 4;
+    case TINYGLTF_TYPE_MAT4: return 16;
+    default: return 0;
+  }
+}
+
+double readComponent(const uint8_t* p, int type, bool normalized) {
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE: {
+      int8_t v;
+      std::memcpy(&v, p, 1);
+      return normalized ? std::max(v / 127.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? p[0] / 255.0 : p[0];
+    case TINYGLTF_COMPONENT_TYPE_SHORT: {
+      int16_t v;
+      std::memcpy(&v, p, 2);
+      return normalized ? std::max(v / 32767.0, -1.0) : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+      uint16_t v;
+      std::memcpy(&v, p, 2);
+      return normalized ? v / 65535.0 : v;
+    }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+      uint32_t v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+    default: {
+      float v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+  }
+}
+
+class AccessorReader {
+ public:
+  AccessorReader(const tinygltf::Model& m, const GltfLimits& l) : model_(m), limits_(l) {}
+
+  // Reads accessor `index` as `count x components` doubles after checking type, component type
+  // and every byte range. `allowed` lists the acceptable component types.
+  Result<std::vector<double>> read(int index, int components, std::initializer_list<int> allowed,
+                                   const std::string& what) const {
+    const std::string where = what + " (accessor " + std::to_string(index) + ")";
+    if (index < 0 || static_cast<size_t>(index) >= model_.accessors.size())
+      return fail(what + ": accessor index " + std::to_string(index) + " out of range");
+    const tinygltf::Accessor& a = model_.accessors[index];
+    if (componentCount(a.type) != components)
+      return fail(where + ": expected " + std::to_string(components) + " components per element");
+    if (std::find(allowed.begin(), allowed.end(), a.componentType) == allowed.end())
+      return fail(where + ": component type " + std::to_string(a.componentType) + " not allowed here");
+    if (a.count > limits_.maxAccessorCount)
+      return fail(where + ": count " + std::to_string(a.count) + " exceeds the limit of " +
+                  std::to_string(limits_.maxAccessorCount));
+    const size_t elemSize = static_cast<size_t>(componentSize(a.componentType)) * components;
+    std::vector<double> out(a.count * components, 0.0);
+    if (a.bufferView >= 0) {
+      auto view = bufferView(a.bufferView, where);
+      if (!view.ok()) return Error{view.error()};
+      const tinygltf::BufferView& bv = model_.bufferViews[a.bufferView];
+      const size_t stride = bv.byteStride ? bv.byteStride : elemSize;
+      if (stride < elemSize) return fail(where + ": byteStride " + std::to_string(stride) + " < element size");
+      if (a.count > 0) {
+        const uint64_t need = static_cast<uint64_t>(a.byteOffset) + (a.count - 1) * stride + elemSize;
+        if (need > bv.byteLength)
+          return fail(where + ": reads " + std::to_string(need) + " bytes of a " + std::to_string(bv.byteLength) +
+                      "-byte bufferView");
+      }
+      const uint8_t* base = view.value() + a.byteOffset;
+      const int cs = componentSize(a.componentType);
+      for (size_t i = 0; i < a.count; ++i)
+        for (int c = 0; c < components; ++c)
+          out[i * components + c] = readComponent(base + i * stride + c * cs, a.componentType, a.normalized);
+    }
+    if (a.sparse.isSparse) {
+      const auto& sp = a.sparse;
+      if (sp.count < 0 || static_cast<size_t>(sp.count) > a.count)
+        return fail(where + ": sparse count " + std::to_string(sp.count) + " out of range");
+      const int ics = componentSize(sp.indices.componentType);
+      if (ics == 0 || sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_BYTE ||
+          sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_SHORT ||
+          sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT)
+        return fail(where + ": bad sparse index component type");
+      auto iv = bufferView(sp.indices.bufferView, where + " sparse indices");
+      if (!iv.ok()) return Error{iv.error()};
+      auto vv = bufferView(sp.values.bufferView, where + " sparse values");
+      if (!vv.ok()) return Error{vv.error()};
+      if (sp.indices.byteOffset < 0 || sp.values.byteOffset < 0) return fail(where + ": negative sparse offset");
+      const uint64_t ineed = static_cast<uint64_t>(sp.indices.byteOffset) + static_cast<uint64_t>(sp.count) * ics;
+      const uint64_t vneed = static_cast<uint64_t>(sp.values.byteOffset) + static_cast<uint64_t>(sp.count) * elemSize;
+      if (ineed > model_.bufferViews[sp.indices.bufferView].byteLength ||
+          vneed > model_.bufferViews[sp.values.bufferView].byteLength)
+        return fail(where + ": sparse data runs past its bufferView");
+      const int cs = componentSize(a.componentType);
+      for (int s = 0; s < sp.count; ++s) {
+        const auto target = static_cast<uint64_t>(
+            readComponent(iv.value() + sp.indices.byteOffset + static_cast<size_t>(s) * ics, sp.indices.componentType, false));
+        if (target >= a.count) return fail(where + ": sparse index " + std::to_string(target) + " out of range");
+        for (int c = 0; c < components; ++c)
+          out[target * components + c] =
+              readComponent(vv.value() + sp.values.byteOffset + s * elemSize + c * cs, a.componentType, a.normalized);
+      }
+    }
+    for (double v : out)
+      if (!std::isfinite(v)) return fail(where + ": contains a non-finite value");
+    return out;
+  }
+
+  size_t count(int index) const { return model_.accessors[index].count; }
+
+ private:
+  Result<const uint8_t*> bufferView(int index, const std::string& where) const {
+    if (index < 0 || static_cast<size_t>(index) >= model_.bufferViews.size())
+      return fail(where + ": bufferView " + std::to_string(index) + " out of range");
+    const tinygltf::BufferView& bv = model_.bufferViews[index];
+    if (bv.buffer < 0 || static_cast<size_t>(bv.buffer) >= model_.buffers.size())
+      return fail(where + ": buffer " + std::to_string(bv.buffer) + " out of range");
+    const auto& data = model_.buffers[bv.buffer].data;
+    if (static_cast<uint64_t>(bv.byteOffset) + bv.byteLength > data.size())
+      return fail(where + ": bufferView " + std::to_string(index) + " runs past the end of its " +
+                  std::to_string(data.size()) + "-byte buffer");
+    return data.data() + bv.byteOffset;
+  }
+
+  const tinygltf::Model& model_;
+  const GltfLimits& limits_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Node hierarchy -> Skeleton (parents first), rejecting cycles and shared children.
+Result<Transform> nodeTransform(const tinygltf::Node& n, int index) {
+  Transform t;
+  const std::string where = "node " + std::to_string(index) + " ('" + n.name + "')";
+  auto finite = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+  };
+  if (!finite(n.matrix) || !finite(n.translation) || !finite(n.rotation) || !finite(n.scale))
+    return fail(where + ": non-finite transform");
+  if (n.matrix.size() == 16) {
+    glm::dmat4 m = glm::make_mat4(n.matrix.data());
+    t.translation = glm::vec3(m[3]);
+    glm::dvec3 s(glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2])));
+    if (s.x <= 0 || s.y <= 0 || s.z <= 0) return fail(where + ": matrix has a zero scale axis");
+    const glm::dvec3 c0{m[0]}, c1{m[1]}, c2{m[2]};
+    glm::dmat3 r{c0 / s.x, c1 / s.y, c2 / s.z};
+    if (glm::determinant(r) < 0) {  // a mirror: put it in the scale
+      s.x = -s.x;
+      r[0] = -r[0];
+    }
+    t.rotation = glm::normalize(glm::quat(glm::quat_cast(r)));
+    t.scale = glm::vec3(s);
+  } else if (!n.matrix.empty()) {
+    return fail(where + ": matrix must have 16 numbers");
+  } else {
+    if (n.translation.size() == 3) t.translation = glm::vec3(n.translation[0], n.translation[1], n.translation[2]);
+    if (n.rotation.size() == 4) {
+      glm::quat q(static_cast<float>(n.rotation[3]), static_cast<float>(n.rotation[0]),
+                  static_cast<float>(n.rotation[1]), static_cast<float>(n.rotation[2]));
+      const float len = glm::length(q);
+      if (!(len > 1e-6f)) return fail(where + ": zero rotation quaternion");
+      t.rotation = q / len;
+    }
+    if (n.scale.size() == 3) t.scale = glm::vec3(n.scale[0], n.scale[1], n.scale[2]);
+  }
+  return t;
+}
+
+Status buildSkeleton(const tinygltf::Model& m, const GltfLimits& limits, AvatarAsset& asset) {
+  const int n = static_cast<int>(m.nodes.size());
+  if (n > limits.maxNodes)
+    return Error{"the file has " + std::to_string(n) + " nodes, more than the limit of " + std::to_string(limits.maxNodes)};
+  std::vector<int> parent(n, -1);
+  for (int i = 0; i < n; ++i)
+    for (int c : m.nodes[i].children) {
+      if (c < 0 || c >= n)
+        return Error{"node " + std::to_string(i) + " has child " + std::to_string(c) + ", out of range"};
+      if (c == i) return Error{"node " + std::to_string(i) + " is its own child (cycle in the hierarchy)"};
+      if (parent[c] != -1)
+        return Error{"node " + std::to_string(c) + " has two parents (" + std::to_string(parent[c]) + " and " +
+                     std::to_string(i) + "); the hierarchy must be a tree"};
+      parent[c] = i;
+    }
+  // Depth-first from every root; nodes never reached sit on a cycle (each has one parent, so a
+  // component without a root is a ring).
+  asset.gltfNodeToJoint.assign(n, -1);
+  asset.skeleton.joints.clear();
+  asset.skeleton.joints.reserve(n);
+  std::vector<int> stack;
+  for (int root = 0; root < n; ++root) {
+    if (parent[root] != -1) continue;
+    stack.push_back(root);
+    while (!stack.empty()) {
+      const int node = stack.back();
+      stack.pop_back();
+      auto t = nodeTransform(m.nodes[node], node);
+      if (!t.ok()) return Error{t.error()};
+      Joint j;
+      j.name = m.nodes[node].name.empty() ? "node" + std::to_string(node) : m.nodes[node].name;
+      j.parent = parent[node] < 0 ? -1 : asset.gltfNodeToJoint[parent[node]];
+      j.rest = t.value();
+      asset.gltfNodeToJoint[node] = static_cast<int>(asset.skeleton.joints.size());
+      asset.skeleton.joints.push_back(std::move(j));
+      const auto& ch = m.nodes[node].children;
+      for (auto it = ch.rbegin(); it != ch.rend(); ++it) stack.push_back(*it);
+    }
+  }
+  for (int i = 0; i < n; ++i)
+    if (asset.gltfNodeToJoint[i] < 0) return Error{"node " + std::to_string(i) + " is part of a cycle in the hierarchy"};
+  if (auto why = asset.skeleton.validate(); !why.empty()) return Error{why};
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Meshes.
+std::vector<uint32_t> triangulate(int mode, const std::vector<uint32_t>& idx) {
+  std::vector<uint32_t> tris;
+  if (mode == TINYGLTF_MODE_TRIANGLES) {
+    tris.assign(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(idx.size() / 3 * 3));
+  } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+    for (size_t i = 2; i < idx.size(); ++i) {
+      if (i % 2 == 0) tris.insert(tris.end(), {idx[i - 2], idx[i - 1], idx[i]});
+      else tris.insert(tris.end(), {idx[i - 1], idx[i - 2], idx[i]});
+    }
+  } else if (mode == TINYGLTF_MODE_TRIANGLE_FAN) {
+    for (size_t i = 2; i < idx.size(); ++i) tris.insert(tris.end(), {idx[0], idx[i - 1], idx[i]});
+  }
+  return tris;
+}
+
+void computeNormals(std::vector<SkinnedVertex>& verts, size_t firstVertex, const std::vector<uint32_t>& localTris) {
+  std::vector<glm::vec3> acc(verts.size() - firstVertex, glm::vec3(0.0f));
+  for (size_t t = 0; t + 2 < localTris.size(); t += 3) {
+    const glm::vec3& a = verts[firstVertex + localTris[t]].position;
+    const glm::vec3& b = verts[firstVertex + localTris[t + 1]].position;
+    const glm::vec3& c = verts[firstVertex + localTris[t + 2]].position;
+    const glm::vec3 n = glm::cross(b - a, c - a);  // length = 2 * area: area weighting for free
+    for (int k = 0; k < 3; ++k) acc[localTris[t + k]] += n;
+  }
+  for (size_t i = 0; i < acc.size(); ++i) {
+    const float len = glm::length(acc[i]);
+    verts[firstVertex + i].normal = len > 1e-20f ? acc[i] / len : glm::vec3(0.0f, 1.0f, 0.0f);
+  }
+}
+
+struct MeshBuilder {
+  const tinygltf::Model& m;
+  const GltfLimits& limits;
+  AvatarAsset& asset;
+  std::vector<std::string>& warnings;
+  std::vector<bool> inverseBindSet;
+
+  Status addSkins() {
+    asset.mesh.inverseBind.assign(asset.skeleton.joints.size(), glm::mat4(1.0f));
+    inverseBindSet.assign(asset.skeleton.joints.size(), false);
+    AccessorReader reader(m, limits);
+    std::vector<bool> isSkinJoint(asset.skeleton.joints.size(), false);
+    for (size_t s = 0; s < m.skins.size(); ++s) {
+      const tinygltf::Skin& skin = m.skins[s];
+      const std::string where = "skin " + std::to_string(s);
+      std::vector<double> ibm;
+      if (skin.inverseBindMatrices >= 0) {
+        auto r = reader.read(skin.inverseBindMatrices, 16, {TINYGLTF_COMPONENT_TYPE_FLOAT}, where + " inverseBindMatrices");
+        if (!r.ok()) return Error{r.error()};
+        ibm = std::move(r.value());
+        if (ibm.size() / 16 < skin.joints.size())
+          return Error{where + ": " + std::to_string(ibm.size() / 16) + " inverse bind matrices for " +
+                       std::to_string(skin.joints.size()) + " joints"};
+      }
+      for (size_t k = 0; k < skin.joints.size(); ++k) {
+        const int node = skin.joints[k];
+        if (node < 0 || static_cast<size_t>(node) >= m.nodes.size())
+          return Error{where + ": joint node " + std::to_string(node) + " out of range"};
+        const int joint = asset.gltfNodeToJoint[node];
+        isSkinJoint[joint] = true;
+        glm::mat4 inv(1.0f);
+        if (!ibm.empty())
+          for (int c = 0; c < 16; ++c) glm::value_ptr(inv)[c] = static_cast<float>(ibm[k * 16 + c]);
+        if (inverseBindSet[joint]) {
+          float diff = 0.0f;
+          for (int c = 0; c < 4; ++c) diff = std::max(diff, glm::length(inv[c] - asset.mesh.inverseBind[joint][c]));
+          if (diff > 1e-4f)
+            warnings.push_back(where + ": joint '" + asset.skeleton.joints[joint].name +
+                               "' has a different inverse bind matrix than in an earlier skin; the first is used");
+          continue;
+        }
+        asset.mesh.inverseBind[joint] = inv;
+        inverseBindSet[joint] = true;
+      }
+    }
+    asset.skinJointCount = static_cast<int>(std::count(isSkinJoint.begin(), isSkinJoint.end(), true));
+    return {};
+  }
+
+  Status addPrimitive(int node, const tinygltf::Primitive& p, const std::string& where) {
+    if (p.mode != TINYGLTF_MODE_TRIANGLES && p.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+        p.mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+      warnings.push_back(where + ": mode " + std::to_string(p.mode) + " is not triangles; skipped");
+      return {};
+    }
+    auto attr = [&](const char* name) {
+      auto it = p.attributes.find(name);
+      return it == p.attributes.end() ? -1 : it->second;
+    };
+    const int posAcc = attr("POSITION");
+    if (posAcc < 0) {
+      warnings.push_back(where + ": no POSITION; skipped");
+      return {};
+    }
+    AccessorReader reader(m, limits);
+    constexpr int F = TINYGLTF_COMPONENT_TYPE_FLOAT, UB = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                  US = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, UI = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+    auto pos = reader.read(posAcc, 3, {F}, where + " POSITION");
+    if (!pos.ok()) return Error{pos.error()};
+    const size_t vcount = pos->size() / 3;
+    if (asset.mesh.vertices.size() + vcount > limits.maxTotalVertices)
+      return Error{where + ": more than " + std::to_string(limits.maxTotalVertices) + " vertices in total"};
+
+    auto optional = [&](const char* name, int comps, std::initializer_list<int> types) -> Result<std::vector<double>> {
+      const int acc = attr(name);
+      if (acc < 0) return std::vector<double>{};
+      auto r = reader.read(acc, comps, types, where + " " + name);
+      if (!r.ok()) return r;
+      if (r->size() / comps != vcount)
+        return fail(where + " " + name + ": " + std::to_string(r->size() / comps) + " elements for " +
+                    std::to_string(vcount) + " vertices");
+      return r;
+    };
+    auto nrm = optional("NORMAL", 3, {F});
+    if (!nrm.ok()) return Error{nrm.error()};
+    auto uv = optional("TEXCOORD_0", 2, {F, UB, US});
+    if (!uv.ok()) return Error{uv.error()};
+
+    const int skinIndex = m.nodes[node].skin;
+    const tinygltf::Skin* skin = nullptr;
+    if (skinIndex >= 0) {
+      if (static_cast<size_t>(skinIndex) >= m.skins.size())
+        return Error{where + ": skin " + std::to_string(skinIndex) + " out of range"};
+      skin = &m.skins[skinIndex];
+    }
+    std::vector<double> joints[2], weights[2];
+    if (skin) {
+      for (int set = 0; set < 2; ++set) {
+        const std::string j = "JOINTS_" + std::to_string(set), w = "WEIGHTS_" + std::to_string(set);
+        if ((attr(j.c_str()) < 0) != (attr(w.c_str()) < 0))
+          return Error{where + ": " + j + " and " + w + " must come together"};
+        auto jr = optional(j.c_str(), 4, {UB, US});
+        if (!jr.ok()) return Error{jr.error()};
+        auto wr = optional(w.c_str(), 4, {F, UB, US});
+        if (!wr.ok()) return Error{wr.error()};
+        joints[set] = std::move(jr.value());
+        weights[set] = std::move(wr.value());
+      }
+      if (joints[0].empty()) {
+        warnings.push_back(where + ": node has a skin but the mesh has no JOINTS_0; drawn rigidly on its node");
+        skin = nullptr;
+      }
+      if (attr("JOINTS_2") >= 0) warnings.push_back(where + ": JOINTS_2 and beyond ignored (8 influences max)");
+    }
+
+    // Indices.
+    std::vector<uint32_t> local;
+    if (p.indices >= 0) {
+      auto ir = reader.read(p.indices, 1, {UB, US, UI}, where + " indices");
+      if (!ir.ok()) return Error{ir.error()};
+      local.reserve(ir->size());
+      for (double v : ir.value()) {
+        if (v >= static_cast<double>(vcount))
+          return Error{where + ": index " + std::to_string(static_cast<uint64_t>(v)) + " out of range (" +
+                       std::to_string(vcount) + " vertices)"};
+        local.push_back(static_cast<uint32_t>(v));
+      }
+    } else {
+      local.resize(vcount);
+      for (size_t i = 0; i < vcount; ++i) local[i] = static_cast<uint32_t>(i);
+    }
+    if (p.mode == TINYGLTF_MODE_TRIANGLES && local.size() % 3 != 0)
+      warnings.push_back(where + ": index count not a multiple of 3; the last partial triangle is dropped");
+    std::vector<uint32_t> tris = triangulate(p.mode, local);
+    if (asset.mesh.indices.size() + tris.size() > limits.maxTotalIndices)
+      return Error{where + ": more than " + std::to_string(limits.maxTotalIndices) + " indices in total"};
+
+    const size_t first = asset.mesh.vertices.size();
+    const int nodeJoint = asset.gltfNodeToJoint[node];
+    // Rigid vertices are stored in the space where palette[nodeJoint] = global * inverseBind
+    // maps them like global alone would: pre-multiply by inverse(inverseBind[nodeJoint]).
+    const glm::mat4 rigidToBind = glm::inverse(asset.mesh.inverseBind[nodeJoint]);
+    const glm::mat3 rigidNormal = glm::inverseTranspose(glm::mat3(rigidToBind));
+    asset.mesh.vertices.resize(first + vcount);
+    for (size_t i = 0; i < vcount; ++i) {
+      SkinnedVertex& v = asset.mesh.vertices[first + i];
+      v.position = glm::vec3(pos.value()[i * 3], pos.value()[i * 3 + 1], pos.value()[i * 3 + 2]);
+      if (!nrm->empty()) {
+        glm::vec3 n(nrm.value()[i * 3], nrm.value()[i * 3 + 1], nrm.value()[i * 3 + 2]);
+        const float len = glm::length(n);
+        v.normal = len > 1e-12f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
+      }
+      if (!uv->empty()) v.uv = glm::vec2(uv.value()[i * 2], uv.value()[i * 2 + 1]);
+      if (!skin) {
+        v.joints0 = glm::uvec4(static_cast<uint32_t>(nodeJoint), 0, 0, 0);
+        v.weights0 = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
+        v.position = glm::vec3(rigidToBind * glm::vec4(v.position, 1.0f));
+        v.normal = glm::normalize(rigidNormal * v.normal);
+        continue;
+      }
+      float w[8] = {};
+      uint32_t jt[8] = {};
+      float sum = 0.0f;
+      for (int set = 0; set < 2; ++set) {
+        if (joints[set].empty()) continue;
+        for (int k = 0; k < 4; ++k) {
+          const double ji = joints[set][i * 4 + k];
+          const float wk = static_cast<float>(weights[set][i * 4 + k]);
+          if (!(wk >= 0.0f)) return Error{where + ": negative skin weight at vertex " + std::to_string(i)};
+          if (wk == 0.0f) continue;
+          if (ji >= static_cast<double>(skin->joints.size()))
+            return Error{where + ": JOINTS_" + std::to_string(set) + " index " +
+                         std::to_string(static_cast<uint64_t>(ji)) + " out of range (skin has " +
+                         std::to_string(skin->joints.size()) + " joints)"};
+          w[set * 4 + k] = wk;
+          jt[set * 4 + k] = static_cast<uint32_t>(asset.gltfNodeToJoint[skin->joints[static_cast<size_t>(ji)]]);
+          sum += wk;
+        }
+      }
+      if (!(sum > 1e-8f)) {
+        // No influence at all: follow the skin's first joint rather than collapsing to the origin.
+        const int fallback = skin->joints.empty() ? nodeJoint : asset.gltfNodeToJoint[skin->joints[0]];
+        v.joints0 = glm::uvec4(static_cast<uint32_t>(fallback), 0, 0, 0);
+        v.weights0 = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
+        continue;
+      }
+      for (int k = 0; k < 4; ++k) {
+        v.joints0[k] = jt[k];
+        v.weights0[k] = w[k] / sum;
+        v.joints1[k] = jt[4 + k];
+        v.weights1[k] = w[4 + k] / sum;
+      }
+    }
+    if (nrm->empty()) computeNormals(asset.mesh.vertices, first, tris);
+
+    Primitive prim;
+    prim.firstIndex = static_cast<uint32_t>(asset.mesh.indices.size());
+    prim.indexCount = static_cast<uint32_t>(tris.size());
+    prim.material = p.material >= 0 && static_cast<size_t>(p.material) < m.materials.size() ? p.material : -1;
+    prim.sourceNode = node;
+    prim.sourceMesh = m.nodes[node].mesh;
+    if (p.material >= 0 && prim.material < 0)
+      warnings.push_back(where + ": material " + std::to_string(p.material) + " out of range; default material used");
+    for (uint32_t i : tris) asset.mesh.indices.push_back(static_cast<uint32_t>(first) + i);
+    if (prim.indexCount > 0) asset.mesh.primitives.push_back(prim);
+    if (!p.targets.empty() && warnings.size() < 1000)
+      warnings.push_back(where + ": " + std::to_string(p.targets.size()) + " morph targets loaded as the base shape");
+    return {};
+  }
+
+  Status addMeshes() {
+    for (size_t node = 0; node < m.nodes.size(); ++node) {
+      const int mesh = m.nodes[node].mesh;
+      if (mesh < 0) continue;
+      if (static_cast<size_t>(mesh) >= m.meshes.size())
+        return Error{"node " + std::to_string(node) + ": mesh " + std::to_string(mesh) + " out of range"};
+      const auto& prims = m.meshes[mesh].primitives;
+      for (size_t pi = 0; pi < prims.size(); ++pi) {
+        const std::string where = "mesh " + std::to_string(mesh) + " ('" + m.meshes[mesh].name + "') primitive " +
+                                  std::to_string(pi);
+        if (auto s = addPrimitive(static_cast<int>(node), prims[pi], where); !s.ok()) return s;
+      }
+    }
+    return {};
+  }
+};
+
+void addMaterialsAndImages(const tinygltf::Model& m, AvatarAsset& asset, std::vector<std::string>& warnings) {
+  asset.images.resize(m.images.size());
+  for (size_t i = 0; i < m.images.size(); ++i) {
+    const auto& src = m.images[i];
+    if (src.width > 0 && src.height > 0 &&
+        src.image.size() == static_cast<size_t>(src.width) * static_cast<size_t>(src.height) * 4) {
+      asset.images[i].width = src.width;
+      asset.images[i].height = src.height;
+      asset.images[i].rgba = src.image;
+    }
+  }
+  for (size_t i = 0; i < m.materials.size(); ++i) {
+    const auto& src = m.materials[i];
+    Material mat;
+    mat.name = src.name;
+    const auto& f = src.pbrMetallicRoughness.baseColorFactor;
+    if (f.size() == 4 && std::all_of(f.begin(), f.end(), [](double x) { return std::isfinite(x); }))
+      mat.baseColorFactor = glm::vec4(f[0], f[1], f[2], f[3]);
+    const int tex = src.pbrMetallicRoughness.baseColorTexture.index;
+    if (tex >= 0) {
+      if (static_cast<size_t>(tex) < m.textures.size() && m.textures[tex].source >= 0 &&
+          static_cast<size_t>(m.textures[tex].source) < m.images.size()) {
+        const int img = m.textures[tex].source;
+        if (!asset.images[img].rgba.empty()) mat.baseColorImage = img;
+      } else {
+        warnings.push_back("material " + std::to_string(i) + ": texture " + std::to_string(tex) +
+                           " or its image is out of range; untextured");
+      }
+    }
+    if (src.alphaMode == "MASK") mat.alphaMode = AlphaMode::Mask;
+    else if (src.alphaMode == "BLEND") mat.alphaMode = AlphaMode::Blend;
+    mat.alphaCutoff = std::isfinite(src.alphaCutoff) ? static_cast<float>(src.alphaCutoff) : 0.5f;
+    mat.doubleSided = src.doubleSided;
+    asset.materials.push_back(std::move(mat));
+  }
+}
+
+AvatarFormat detectFormat(const tinygltf::Model& m) {
+  auto uses = [&](const std::string& ext) {
+    return m.extensions.count(ext) > 0 ||
+           std::find(m.extensionsUsed.begin(), m.extensionsUsed.end(), ext) != m.extensionsUsed.end();
+  };
+  if (uses("VRMC_vrm")) return AvatarFormat::Vrm1;
+  if (uses("VRM")) return AvatarFormat::Vrm0;
+  return AvatarFormat::Gltf;
+}
+
+}  // namespace
+
+Result<AvatarAsset> loadGltfFromMemory(const std::vector<uint8_t>& bytes, const std::string& baseDir,
+                                       GltfLoadReport* report, const GltfLimits& limits) {
+  GltfLoadReport localReport;
+  std::vector<std::string>& warnings = report ? report->warnings : localReport.warnings;
+  if (bytes.empty()) return fail("empty file");
+  if (bytes.size() > limits.maxFileBytes) return fail("file larger than " + std::to_string(limits.maxFileBytes) + " bytes");
+  auto container = splitContainer(bytes);
+  if (!container.ok()) return Error{container.error()};
+
+  tinygltf::TinyGLTF parser;
+  ImageLoaderContext imageContext{limits.maxImageDimension, &warnings};
+  parser.SetImageLoader(decodeImage, &imageContext);
+  parser.SetStoreOriginalJSONForExtrasAndExtensions(true);
+  tinygltf::Model model;
+  std::string err, warn;
+  bool ok = false;
+  try {
+    if (container->isGlb)
+      ok = parser.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), static_cast<unsigned int>(bytes.size()), baseDir);
+    else
+      ok = parser.LoadASCIIFromString(&model, &err, &warn, container->json.data(),
+                                      static_cast<unsigned int>(container->json.size()), baseDir);
+  } catch (const std::exception& e) {
+    return fail(std::string("glTF parse error: ") + e.what());
+  }
+  if (!ok) {
+    while (!err.empty() && err.back() == '\n') err.pop_back();
+    return fail("glTF parse error: " + (err.empty() ? std::string("unknown") : err));
+  }
+  if (!warn.empty()) warnings.push_back(warn);
+
+  AvatarAsset asset;
+  asset.rawJson = std::move(container->json);
+  asset.format = detectFormat(model);
+  if (auto s = buildSkeleton(model, limits, asset); !s.ok()) return Error{s.error()};
+  MeshBuilder builder{model, limits, asset, warnings, {}};
+  if (auto s = builder.addSkins(); !s.ok()) return Error{s.error()};
+  if (auto s = builder.addMeshes(); !s.ok()) return Error{s.error()};
+  addMaterialsAndImages(model, asset, warnings);
+  asset.mesh.firstPersonIndices = asset.mesh.indices;
+  asset.mesh.firstPersonPrimitives = asset.mesh.primitives;
+  return asset;
+}
+
+Result<AvatarAsset> loadGltfFile(const std::string& path, GltfLoadReport* report, const GltfLimits& limits) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) return fail("cannot open '" + path + "': " + ec.message());
+  if (size > limits.maxFileBytes) return fail("'" + path + "' is larger than " + std::to_string(limits.maxFileBytes) + " bytes");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return fail("cannot open '" + path + "'");
+  std::vector<uint8_t> bytes(size);
+  if (size > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size)))
+    return fail("cannot read '" + path + "'");
+  std::string baseDir = std::filesystem::path(path).parent_path().string();
+  if (baseDir.empty()) baseDir = ".";
+  auto r = loadGltfFromMemory(bytes, baseDir, report, limits);
+  if (!r.ok()) return fail("'" + path + "': " + r.error());
+  r->sourcePath = path;
+  return r;
+}
+
+}  // namespace embody::avatar

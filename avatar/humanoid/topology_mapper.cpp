@@ -1,0 +1,231 @@
+// Humanoid mapping from the skeleton's shape alone, for rigs whose names say nothing
+// (CesiumMan's leg_joint_R_1, Skeleton_arm_joint_R__2_). Works on rest-pose joint positions with
+// +Y up; all thresholds are fractions of the skeleton's height so the scale does not matter.
+#include <algorithm>
+#include <cmath>
+
+#include "avatar/humanoid/humanoid_map.h"
+
+namespace embody::avatar {
+namespace {
+
+struct Shape {
+  const Skeleton& skeleton;
+  std::vector<glm::vec3> pos;
+  std::vector<std::vector<int>> children;
+  std::vector<float> minY, maxY;  // over each joint's subtree, itself included
+  float height = 0.0f;
+
+  explicit Shape(const Skeleton& s) : skeleton(s) {
+    std::vector<glm::mat4> globals;
+    computeGlobals(s, SkeletonPose::rest(s), globals);
+    const size_t n = s.joints.size();
+    pos.resize(n);
+    children.resize(n);
+    for (size_t j = 0; j < n; ++j) {
+      pos[j] = glm::vec3(globals[j][3]);
+      if (s.joints[j].parent >= 0) children[s.joints[j].parent].push_back(static_cast<int>(j));
+    }
+    minY.resize(n);
+    maxY.resize(n);
+    for (size_t j = n; j-- > 0;) {  // children come after parents: reverse order is bottom-up
+      minY[j] = maxY[j] = pos[j].y;
+      for (int c : children[j]) {
+        minY[j] = std::min(minY[j], minY[c]);
+        maxY[j] = std::max(maxY[j], maxY[c]);
+      }
+    }
+    float lo = 0.0f, hi = 0.0f;
+    for (size_t j = 0; j < n; ++j) {
+      lo = j ? std::min(lo, pos[j].y) : pos[j].y;
+      hi = j ? std::max(hi, pos[j].y) : pos[j].y;
+    }
+    height = hi - lo;
+  }
+
+  bool goesDown(int child, int from) const { return minY[child] < pos[from].y - 0.25f * height; }
+  bool goesUp(int child, int from) const { return maxY[child] > pos[from].y + 0.12f * height; }
+
+  // Farthest horizontal reach of a subtree from a point (iterative: hostile files can be deep).
+  float reach(int j, const glm::vec3& from) const {
+    float r = 0.0f;
+    std::vector<int> stack{j};
+    while (!stack.empty()) {
+      const int k = stack.back();
+      stack.pop_back();
+      const glm::vec3 d = pos[k] - from;
+      r = std::max(r, std::hypot(d.x, d.z));
+      stack.insert(stack.end(), children[k].begin(), children[k].end());
+    }
+    return r;
+  }
+
+  std::vector<int> followDown(int j) const {
+    std::vector<int> chain{j};
+    while (!children[j].empty()) {
+      j = *std::min_element(children[j].begin(), children[j].end(), [&](int a, int b) { return minY[a] < minY[b]; });
+      chain.push_back(j);
+    }
+    return chain;
+  }
+  std::vector<int> followUp(int j) const {
+    std::vector<int> chain{j};
+    while (!children[j].empty()) {
+      j = *std::max_element(children[j].begin(), children[j].end(), [&](int a, int b) { return maxY[a] < maxY[b]; });
+      chain.push_back(j);
+    }
+    return chain;
+  }
+  std::vector<int> followOut(int j, const glm::vec3& from) const {
+    std::vector<int> chain{j};
+    while (!children[j].empty()) {
+      j = *std::max_element(children[j].begin(), children[j].end(),
+                            [&](int a, int b) { return reach(a, from) < reach(b, from); });
+      chain.push_back(j);
+    }
+    return chain;
+  }
+  float dist(int a, int b) const { return glm::length(pos[a] - pos[b]); }
+};
+
+// Index where the limb proper starts: skips one leading offset bone (a clavicle, a hip-offset
+// bone) when it is clearly shorter than the next segment and the chain is long enough.
+int limbStart(const Shape& s, const std::vector<int>& chain, float ratio) {
+  if (chain.size() >= 4 && s.dist(chain[0], chain[1]) < ratio * s.dist(chain[1], chain[2])) return 1;
+  return 0;
+}
+
+}  // namespace
+
+HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& jointHasWeights) {
+  HumanoidMap map;
+  map.method = MappingMethod::Topology;
+  // Reach queries make this quadratic in the worst case; real rigs have well under 4096 nodes.
+  if (skeleton.joints.size() < 10 || skeleton.joints.size() > 4096) {
+    map.notes.push_back("topology: needs 10 to 4096 joints, the skeleton has " + std::to_string(skeleton.joints.size()));
+    finishHumanoidMap(skeleton, map);
+    return map;
+  }
+  const Shape s(skeleton);
+  auto set = [&](HumanBone b, int j) { map.bones[static_cast<int>(b)] = j; };
+  const int n = static_cast<int>(skeleton.joints.size());
+
+  // Hips: the first joint (closest to the root) with two branches going down and one going up.
+  // A single down branch that itself splits into two legs (a pelvis bone) also counts.
+  int hips = -1, spineRoot = -1;
+  std::vector<int> legRoots;
+  for (int j = 0; j < n && hips < 0; ++j) {
+    std::vector<int> down, up;
+    for (int c : s.children[j]) {
+      if (s.goesDown(c, j)) down.push_back(c);
+      else if (s.goesUp(c, j)) up.push_back(c);
+    }
+    if (down.size() == 1) {
+      std::vector<int> inner;
+      for (int c : s.children[down[0]])
+        if (s.goesDown(c, down[0])) inner.push_back(c);
+      if (inner.size() >= 2) down = inner;
+    }
+    if (down.size() < 2 || up.empty()) continue;
+    std::sort(down.begin(), down.end(), [&](int a, int b) { return s.minY[a] < s.minY[b]; });
+    hips = j;
+    legRoots = {down[0], down[1]};
+    spineRoot = *std::max_element(up.begin(), up.end(), [&](int a, int b) { return s.maxY[a] < s.maxY[b]; });
+  }
+  if (hips < 0) {
+    map.notes.push_back("topology: no joint branches into two legs and a spine");
+    finishHumanoidMap(skeleton, map);
+    return map;
+  }
+  set(HumanBone::hips, hips);
+
+  // Legs and the facing they imply: lateral axis between the hip joints, forward from the toes
+  // (ankle -> toe), else the glTF convention +Z.
+  std::vector<int> legs[2] = {s.followDown(legRoots[0]), s.followDown(legRoots[1])};
+  int legStart[2] = {limbStart(s, legs[0], 0.5f), limbStart(s, legs[1], 0.5f)};
+  glm::vec3 lateral = s.pos[legs[0][legStart[0]]] - s.pos[legs[1][legStart[1]]];
+  lateral.y = 0.0f;
+  glm::vec3 forward(0.0f, 0.0f, 1.0f);
+  if (glm::length(lateral) > 1e-6f) {
+    glm::vec3 f = glm::normalize(glm::cross(glm::normalize(lateral), map.up));
+    float cue = f.z;  // without toes: the side nearer +Z
+    const auto& leg = legs[0];
+    const size_t foot = static_cast<size_t>(legStart[0]) + 2;
+    if (foot + 1 < leg.size()) {
+      glm::vec3 toe = s.pos[leg[foot + 1]] - s.pos[leg[foot]];
+      toe.y = 0.0f;
+      if (glm::length(toe) > 0.01f * s.height) cue = glm::dot(f, toe);
+    }
+    forward = cue >= 0.0f ? f : -f;
+  }
+  const glm::vec3 left = glm::cross(map.up, forward);
+  auto isLeft = [&](int j) { return glm::dot(s.pos[j] - s.pos[hips], left) > 0.0f; };
+  for (int k = 0; k < 2; ++k) {
+    const auto& leg = legs[k];
+    const size_t a = static_cast<size_t>(legStart[k]);
+    if (leg.size() < a + 3) continue;
+    const bool l = isLeft(leg[a]);
+    set(l ? HumanBone::leftUpperLeg : HumanBone::rightUpperLeg, leg[a]);
+    set(l ? HumanBone::leftLowerLeg : HumanBone::rightLowerLeg, leg[a + 1]);
+    set(l ? HumanBone::leftFoot : HumanBone::rightFoot, leg[a + 2]);
+    if (leg.size() > a + 3) set(l ? HumanBone::leftToes : HumanBone::rightToes, leg[a + 3]);
+  }
+
+  // Spine: climb from the hips to the junction where two arms and a neck leave.
+  std::vector<int> torso;
+  int junction = -1;
+  std::vector<int> arms;
+  int neckRoot = -1;
+  for (int j = spineRoot; j >= 0;) {
+    torso.push_back(j);
+    // The neck is the child that climbs highest; arms are other children reaching out sideways.
+    int upKid = -1;
+    for (int c : s.children[j])
+      if (s.maxY[c] > s.pos[j].y + 0.03f * s.height && (upKid < 0 || s.maxY[c] > s.maxY[upKid])) upKid = c;
+    std::vector<int> lateralKids;
+    for (int c : s.children[j])
+      if (c != upKid && s.reach(c, s.pos[j]) > 0.12f * s.height) lateralKids.push_back(c);
+    if (lateralKids.size() >= 2 && upKid >= 0) {
+      junction = j;
+      std::sort(lateralKids.begin(), lateralKids.end(),
+                [&](int a, int b) { return s.reach(a, s.pos[j]) > s.reach(b, s.pos[j]); });
+      arms = {lateralKids[0], lateralKids[1]};
+      neckRoot = upKid;
+      break;
+    }
+    if (s.children[j].empty()) break;
+    j = *std::max_element(s.children[j].begin(), s.children[j].end(), [&](int a, int b) { return s.maxY[a] < s.maxY[b]; });
+  }
+  if (junction < 0) {
+    map.notes.push_back("topology: the spine never branches into two arms and a neck");
+    finishHumanoidMap(skeleton, map);
+    return map;
+  }
+  set(HumanBone::spine, torso.front());
+  if (torso.size() == 2) set(HumanBone::chest, torso[1]);
+  if (torso.size() >= 3) {
+    set(HumanBone::chest, torso[(torso.size() - 1) / 2]);
+    set(HumanBone::upperChest, torso.back());
+  }
+  // Neck and head: the chain above the junction; trailing unweighted end joints are not the head.
+  std::vector<int> neck = s.followUp(neckRoot);
+  auto weighted = [&](int j) { return jointHasWeights.empty() || (static_cast<size_t>(j) < jointHasWeights.size() && jointHasWeights[j]); };
+  while (neck.size() > 1 && !weighted(neck.back())) neck.pop_back();
+  set(HumanBone::head, neck.back());
+  if (neck.size() >= 2) set(HumanBone::neck, neck.front());
+
+  for (int a : arms) {
+    const auto chain = s.followOut(a, s.pos[junction]);
+    const size_t k = static_cast<size_t>(limbStart(s, chain, 0.75f));
+    if (chain.size() < k + 3) continue;
+    const bool l = isLeft(chain[k + 2]);
+    if (k == 1) set(l ? HumanBone::leftShoulder : HumanBone::rightShoulder, chain[0]);
+    set(l ? HumanBone::leftUpperArm : HumanBone::rightUpperArm, chain[k]);
+    set(l ? HumanBone::leftLowerArm : HumanBone::rightLowerArm, chain[k + 1]);
+    set(l ? HumanBone::leftHand : HumanBone::rightHand, chain[k + 2]);
+  }
+  finishHumanoidMap(skeleton, map);
+  return map;
+}
+
+}  // namespace embody::avatar

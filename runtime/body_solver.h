@@ -1,0 +1,39 @@
+#pragma once
+// The seam between the runtime and an IK solver. The runtime owns timing (budget, deadline,
+// clock), the tracking-loss policy and the hand-off; a BodySolver turns guarded tracker targets
+// into a skeleton pose before a deadline. The PIK solver with the avatar's body model
+// (avatar/ik, avatar/body) is adapted to this interface where they are integrated; tests use
+// fakes whose cost is simulated on a ManualClock.
+#include <array>
+
+#include "avatar/skeleton.h"
+#include "runtime/clock.h"
+#include "xr/tracking/tracking_guard.h"
+
+namespace embody::runtime {
+
+struct SolveRequest {
+  const tracking::GuardedSample* targets = nullptr;  // never null in a request from the runtime
+  const Clock* clock = nullptr;
+  TimePoint deadline{};  // by which solve() must have returned (IterationBudget, IterationCostModel)
+};
+
+struct SolveResult {
+  int iterations = 0;
+  bool converged = false;
+  // Distance in metres between each tracker's target and the body part it drives after the
+  // solve; negative where the tracker drives no task.
+  std::array<float, tracking::kTrackerCount> residual{-1, -1, -1, -1, -1, -1};
+};
+
+class BodySolver {
+ public:
+  virtual ~BodySolver() = default;
+  // Warm-started: a solver continues from its previous solution. Writes every joint's local
+  // transform into `pose` (already sized for the skeleton; must not allocate).
+  virtual SolveResult solve(const SolveRequest& request, avatar::SkeletonPose& pose) = 0;
+  // Forget the warm start (e.g. after a long tracking gap or a new avatar).
+  virtual void resetWarmStart() {}
+};
+
+}  // namespace embody::runtime

@@ -1,0 +1,65 @@
+#include "runtime/frame_stats.h"
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+namespace embody::runtime {
+
+double percentile(std::vector<double>& v, double p) {
+  if (v.empty()) return 0.0;
+  const double rank = std::ceil(std::clamp(p, 0.0, 100.0) / 100.0 * static_cast<double>(v.size()));
+  const size_t k = static_cast<size_t>(std::max(rank, 1.0)) - 1;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+StatsSummary StatsRecorder::summary() const {
+  StatsSummary s;
+  s.frames = frames_.size();
+  if (frames_.empty()) return s;
+  std::vector<double> ik, render;
+  double iterations = 0.0;
+  for (const auto& f : frames_) {
+    ik.push_back(f.ikSeconds * 1e3);
+    if (f.renderSeconds > 0.0) render.push_back(f.renderSeconds * 1e3);
+    iterations += f.iterations;
+    s.deadlineMisses += f.deadlineMiss ? 1 : 0;
+    s.budgetMs = f.budgetSeconds * 1e3;
+  }
+  s.ikMaxMs = *std::max_element(ik.begin(), ik.end());
+  s.ikP50Ms = percentile(ik, 50);
+  s.ikP99Ms = percentile(ik, 99);
+  s.renderP50Ms = percentile(render, 50);
+  s.iterationsMean = iterations / static_cast<double>(frames_.size());
+  for (auto id : tracking::kAllTrackers) {
+    const auto i = static_cast<size_t>(tracking::index(id));
+    std::vector<double> r;
+    size_t tracked = 0;
+    for (const auto& f : frames_) {
+      if (f.residual[i] >= 0.0f) r.push_back(f.residual[i]);
+      tracked += f.status[i] == tracking::TrackerStatus::Tracked ? 1 : 0;
+    }
+    s.residualP95[i] = r.empty() ? -1.0 : percentile(r, 95);
+    s.trackedFraction[i] = static_cast<double>(tracked) / static_cast<double>(frames_.size());
+  }
+  return s;
+}
+
+void toJson(nlohmann::json& j, const StatsSummary& s) {
+  j["frames"] = s.frames;
+  j["ik"] = {{"budget_ms", s.budgetMs},          {"p50_ms", s.ikP50Ms},
+             {"p99_ms", s.ikP99Ms},              {"max_ms", s.ikMaxMs},
+             {"deadline_misses", s.deadlineMisses}, {"iterations_mean", s.iterationsMean}};
+  nlohmann::json trackers = nlohmann::json::object();
+  for (auto id : tracking::kAllTrackers) {
+    const auto i = static_cast<size_t>(tracking::index(id));
+    nlohmann::json t = {{"tracked_fraction", s.trackedFraction[i]}};
+    if (s.residualP95[i] >= 0.0) t["residual_p95_m"] = s.residualP95[i];
+    trackers[std::string(tracking::trackerKey(id))] = t;
+  }
+  j["trackers"] = trackers;
+  j["render"] = {{"p50_ms", s.renderP50Ms}};
+}
+
+}  // namespace embody::runtime

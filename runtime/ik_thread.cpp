@@ -1,0 +1,61 @@
+#include "runtime/ik_thread.h"
+
+#include <chrono>
+
+namespace embody::runtime {
+
+IkThread::IkThread(BodySolver& solver, const Clock& clock, const IkStageConfig& config,
+                   const avatar::SkeletonPose& initialPose)
+    : stage_(solver, clock, config) {
+  SolvedFrame f;
+  f.pose = initialPose;
+  for (auto& s : output_.slots()) s = f;
+}
+
+IkThread::~IkThread() { stop(); }
+
+void IkThread::start() {
+  if (running_.exchange(true)) return;
+  thread_ = std::thread([this] { run(); });
+}
+
+void IkThread::stop() {
+  if (!running_.exchange(false)) return;
+  submitted_.fetch_add(1, std::memory_order_acq_rel);  // wake the thread
+  submitted_.notify_one();
+  if (thread_.joinable()) thread_.join();
+}
+
+void IkThread::submit(const tracking::PoseSample& sample) {
+  input_.back() = sample;
+  input_.publish();
+  submitted_.fetch_add(1, std::memory_order_acq_rel);
+  submitted_.notify_one();
+}
+
+void IkThread::run() {
+  uint32_t seen = 0;
+  while (true) {
+    submitted_.wait(seen, std::memory_order_acquire);  // sleeps until submit() or stop()
+    const uint32_t now = submitted_.load(std::memory_order_acquire);
+    if (!running_.load(std::memory_order_acquire)) break;
+    if (now - seen > 1) skipped_.fetch_add(now - seen - 1, std::memory_order_relaxed);
+    seen = now;
+    if (!input_.acquire()) continue;
+    stage_.process(input_.front(), output_.back());
+    output_.publish();
+    solved_.fetch_add(1, std::memory_order_acq_rel);
+    solved_.notify_all();
+  }
+}
+
+bool IkThread::waitForFrames(uint32_t count, double timeoutSeconds) const {
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeoutSeconds);
+  while (framesSolved() < count) {
+    if (std::chrono::steady_clock::now() > until) return false;
+    std::this_thread::sleep_for(std::chrono::microseconds(100));
+  }
+  return true;
+}
+
+}  // namespace embody::runtime

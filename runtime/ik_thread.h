@@ -1,0 +1,53 @@
+#pragma once
+// The IK thread: the tracking side submits samples, the thread runs IkStage on the newest one
+// (filter, loss guard, budgeted warm-started solve) and publishes a SolvedFrame; the render side
+// takes the newest completed frame. Both hand-offs are lock-free triple buffers: submit() and
+// acquire() never block, so the render thread never waits on the solver. Samples arriving faster
+// than they are solved are skipped (counted in samplesSkipped()), never queued.
+#include <atomic>
+#include <thread>
+
+#include "runtime/ik_stage.h"
+#include "runtime/triple_buffer.h"
+
+namespace embody::runtime {
+
+class IkThread {
+ public:
+  // `initialPose` sizes every slot (and is what acquire() returns before the first solve).
+  IkThread(BodySolver& solver, const Clock& clock, const IkStageConfig& config, const avatar::SkeletonPose& initialPose);
+  ~IkThread();
+  IkThread(const IkThread&) = delete;
+  IkThread& operator=(const IkThread&) = delete;
+
+  void start();
+  void stop();  // joins; safe to call twice
+
+  // Tracking side (one thread): hands over the newest sample.
+  void submit(const tracking::PoseSample& sample);
+
+  // Render side (one thread): takes the newest completed frame; true when it is new.
+  bool acquire() { return output_.acquire(); }
+  const SolvedFrame& frame() const { return output_.front(); }
+
+  uint32_t framesSolved() const { return solved_.load(std::memory_order_acquire); }
+  uint32_t samplesSubmitted() const { return submitted_.load(std::memory_order_acquire); }
+  uint32_t samplesSkipped() const { return skipped_.load(std::memory_order_relaxed); }
+  // Blocks the caller (a test, an offline driver; not the render loop) until at least `count`
+  // frames are solved or `timeoutSeconds` of wall time pass; true when reached.
+  bool waitForFrames(uint32_t count, double timeoutSeconds) const;
+
+ private:
+  void run();
+
+  IkStage stage_;
+  TripleBuffer<tracking::PoseSample> input_;
+  TripleBuffer<SolvedFrame> output_;
+  std::atomic<uint32_t> submitted_{0};
+  std::atomic<uint32_t> solved_{0};
+  std::atomic<uint32_t> skipped_{0};
+  std::atomic<bool> running_{false};
+  std::thread thread_;
+};
+
+}  // namespace embody::runtime

@@ -1,0 +1,80 @@
+#include "runtime/task_layout.h"
+
+#include <algorithm>
+
+namespace embody::runtime {
+
+using tracking::TrackerId;
+using tracking::TrackerStatus;
+
+std::string_view taskKindName(TaskKind kind) {
+  switch (kind) {
+    case TaskKind::Balance: return "balance";
+    case TaskKind::FootPlant: return "foot_plant";
+    case TaskKind::TrackerPosition: return "position";
+    case TaskKind::TrackerOrientation: return "orientation";
+  }
+  return "?";
+}
+
+TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
+  TaskLayout l;
+  const bool feet = trackers.has(TrackerId::LeftFoot) && trackers.has(TrackerId::RightFoot);
+  l.inferLowerBody = !feet;
+  // 1: balance and support. Feet (tracked or planted) and the centre of mass over them.
+  for (auto foot : {TrackerId::LeftFoot, TrackerId::RightFoot}) {
+    if (feet) {
+      l.tasks.push_back({TaskKind::TrackerPosition, foot, 1, 1.0f});
+      l.tasks.push_back({TaskKind::TrackerOrientation, foot, 1, 0.5f});
+    } else {
+      l.tasks.push_back({TaskKind::FootPlant, foot, 1, 1.0f});
+    }
+  }
+  l.tasks.push_back({TaskKind::Balance, TrackerId::Hips, 1, 1.0f});
+  // 2: the head: the user's viewpoint; a mismatch is seen at once in first person.
+  if (trackers.has(TrackerId::Head)) {
+    l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Head, 2, 1.0f});
+    l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, 2, 1.0f});
+  }
+  // 3: hand positions (and the hips when tracked: they shape the trunk).
+  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
+    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerPosition, hand, 3, 1.0f});
+  if (trackers.has(TrackerId::Hips)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Hips, 3, 0.5f});
+  // 4: orientations that matter less than positions.
+  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
+    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerOrientation, hand, 4, 1.0f});
+  if (trackers.has(TrackerId::Hips)) l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Hips, 4, 0.5f});
+  return l;
+}
+
+int TaskLayout::levels() const {
+  int m = 0;
+  for (const auto& t : tasks) m = std::max(m, t.priority);
+  return m;
+}
+
+std::string TaskLayout::describe() const {
+  std::string s;
+  for (const auto& t : tasks) {
+    s += "  " + std::to_string(t.priority) + "  " + std::string(taskKindName(t.kind));
+    if (t.kind != TaskKind::Balance) s += " " + std::string(tracking::trackerKey(t.tracker));
+    if (t.weight != 1.0f) s += " (weight " + std::to_string(t.weight).substr(0, 4) + ")";
+    s += "\n";
+  }
+  if (inferLowerBody) s += "  lower body inferred: feet planted, stepping when the user walks or turns\n";
+  return s;
+}
+
+float statusWeight(TrackerStatus status) {
+  switch (status) {
+    case TrackerStatus::Tracked:
+    case TrackerStatus::Recovering:
+    case TrackerStatus::Held:
+    case TrackerStatus::Easing: return 1.0f;
+    case TrackerStatus::Neutral: return 0.3f;
+    case TrackerStatus::Absent: return 0.0f;
+  }
+  return 0.0f;
+}
+
+}  // namespace embody::runtime

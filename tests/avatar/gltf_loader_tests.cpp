@@ -1,0 +1,181 @@
+#include <catch2/catch.hpp>
+
+#include "avatar/gltf/gltf_loader.h"
+#include "test_paths.h"
+
+using namespace embody::avatar;
+
+TEST_CASE("CesiumMan loads with its skin, texture and 19 skin joints", "[gltf]") {
+  EMBODY_REQUIRE_SHARED_ASSET(path, "CesiumMan.glb");
+  GltfLoadReport report;
+  auto a = loadGltfFile(path, &report);
+  REQUIRE(a.ok());
+  for (auto& w : report.warnings) WARN(w);
+  CHECK(a->skeleton.validate().empty());
+  CHECK(a->skinJointCount == 19);
+  CHECK(a->mesh.triangleCount() > 1000);
+  REQUIRE(a->images.size() == 1);
+  CHECK(a->images[0].width > 0);
+  CHECK(a->materials.size() == 1);
+  CHECK(a->materials[0].baseColorImage == 0);
+  for (auto& j : a->skeleton.joints) INFO(j.name << " parent " << j.parent);
+}
+
+#include <glm/gtc/epsilon.hpp>
+
+#include "gltf_test_files.h"
+
+using embody::test::TriangleFile;
+
+namespace {
+std::string loadError(const std::vector<uint8_t>& bytes) {
+  auto r = loadGltfFromMemory(bytes, "");
+  return r.ok() ? std::string("(loaded)") : r.error();
+}
+}  // namespace
+
+TEST_CASE("a rigid triangle becomes weight 1 on its node with computed normals", "[gltf]") {
+  TriangleFile f;
+  auto a = loadGltfFromMemory(f.glb(), "");
+  REQUIRE(a.ok());
+  REQUIRE(a->skeleton.joints.size() == 1);
+  CHECK(a->skinJointCount == 0);
+  REQUIRE(a->mesh.vertices.size() == 3);
+  REQUIRE(a->mesh.indices.size() == 3);
+  REQUIRE(a->mesh.primitives.size() == 1);
+  CHECK(a->mesh.firstPersonIndices == a->mesh.indices);
+  for (const auto& v : a->mesh.vertices) {
+    CHECK(v.joints0.x == 0u);
+    CHECK(v.weights0.x == 1.0f);
+    CHECK(glm::all(glm::epsilonEqual(v.normal, glm::vec3(0, 0, 1), 1e-6f)));
+  }
+  // Skinned at rest, the vertex lands where the node puts it.
+  std::vector<glm::mat4> globals, palette;
+  computeGlobals(a->skeleton, SkeletonPose::rest(a->skeleton), globals);
+  computeSkinningPalette(a.value(), globals, palette);
+  std::vector<glm::vec3> p, n;
+  skinOnCpu(a->mesh, palette, p, n);
+  CHECK(glm::all(glm::epsilonEqual(p[1], glm::vec3(1, 1, 0), 1e-6f)));
+}
+
+TEST_CASE("hostile glTF files give a clear error, never a crash or a huge allocation", "[gltf]") {
+  SECTION("empty and truncated GLB") {
+    CHECK(loadError({}) == "empty file");
+    auto glb = TriangleFile().glb();
+    for (size_t cut : {size_t{3}, size_t{12}, size_t{19}, size_t{40}, glb.size() - 1}) {
+      auto e = loadError(std::vector<uint8_t>(glb.begin(), glb.begin() + static_cast<std::ptrdiff_t>(cut)));
+      INFO("cut at " << cut << ": " << e);
+      CHECK(e != "(loaded)");
+    }
+    CHECK_THAT(loadError(std::vector<uint8_t>(glb.begin(), glb.end() - 4)), Catch::Contains("truncated GLB"));
+  }
+  SECTION("not glTF at all") {
+    std::string junk = "this is not json";
+    CHECK_THAT(loadError(std::vector<uint8_t>(junk.begin(), junk.end())), Catch::Contains("parse error"));
+  }
+  SECTION("accessor reads past its bufferView") {
+    TriangleFile f;
+    f.doc["accessors"][0]["byteOffset"] = 8;
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("POSITION (accessor 0)") && Catch::Contains("bufferView"));
+  }
+  SECTION("bufferView past its buffer") {
+    TriangleFile f;
+    f.doc["bufferViews"][0]["byteLength"] = 4000;
+    f.doc["accessors"][0]["count"] = 300;
+    CHECK(loadError(f.glb()) != "(loaded)");
+  }
+  SECTION("wrong accessor type") {
+    TriangleFile f;
+    f.doc["accessors"][0]["type"] = "VEC2";
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("expected 3 components"));
+  }
+  SECTION("accessor index out of range") {
+    TriangleFile f;
+    f.doc["meshes"][0]["primitives"][0]["indices"] = 7;
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("out of"));
+  }
+  SECTION("vertex index out of range") {
+    TriangleFile f;
+    uint16_t bad = 3;
+    std::memcpy(&f.bin[36 + 4], &bad, 2);
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("index 3 out of range"));
+  }
+  SECTION("cycle in the hierarchy") {
+    TriangleFile f;
+    f.doc["nodes"].push_back({{"name", "a"}, {"children", {2}}});
+    f.doc["nodes"].push_back({{"name", "b"}, {"children", {1}}});
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("cycle"));
+    f.doc["nodes"][1]["children"] = {1};
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("cycle"));
+  }
+  SECTION("a node with two parents") {
+    TriangleFile f;
+    f.doc["nodes"][0]["children"] = {1};
+    f.doc["nodes"].push_back({{"name", "a"}});
+    f.doc["nodes"].push_back({{"name", "b"}, {"children", {1}}});
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("two parents"));
+  }
+  SECTION("child index out of range") {
+    TriangleFile f;
+    f.doc["nodes"][0]["children"] = {42};
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("child 42"));
+  }
+  SECTION("absurd counts are refused before allocating") {
+    TriangleFile f;
+    f.doc["accessors"][0].erase("bufferView");  // a zero-filled accessor of 2^40 elements
+    f.doc["accessors"][0]["count"] = uint64_t{1} << 40;
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("exceeds the limit"));
+    TriangleFile g;
+    g.doc["accessors"][1]["count"] = 4000000000u;
+    CHECK(loadError(g.glb()) != "(loaded)");
+  }
+  SECTION("skin joint index out of range") {
+    TriangleFile f;
+    std::vector<uint8_t> joints = {5, 0, 0, 0, 5, 0, 0, 0, 5, 0, 0, 0};
+    std::vector<float> weights = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+    const size_t jAt = f.bin.size();
+    embody::test::appendRaw(f.bin, joints);
+    const size_t wAt = f.bin.size();
+    embody::test::appendRaw(f.bin, weights);
+    f.doc["buffers"][0]["byteLength"] = f.bin.size();
+    f.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", jAt}, {"byteLength", 12}});
+    f.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", wAt}, {"byteLength", 48}});
+    f.doc["accessors"].push_back({{"bufferView", 2}, {"componentType", 5121}, {"count", 3}, {"type", "VEC4"}});
+    f.doc["accessors"].push_back({{"bufferView", 3}, {"componentType", 5126}, {"count", 3}, {"type", "VEC4"}});
+    f.doc["meshes"][0]["primitives"][0]["attributes"]["JOINTS_0"] = 2;
+    f.doc["meshes"][0]["primitives"][0]["attributes"]["WEIGHTS_0"] = 3;
+    f.doc["skins"] = {{{"joints", {0}}}};
+    f.doc["nodes"][0]["skin"] = 0;
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("JOINTS_0 index 5 out of range"));
+  }
+  SECTION("non-finite transform") {
+    TriangleFile f;
+    f.doc["nodes"][0]["rotation"] = {0, 0, 0, 0};
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("zero rotation"));
+  }
+  SECTION("missing file") {
+    auto r = loadGltfFile("/nonexistent/file.glb");
+    REQUIRE_FALSE(r.ok());
+    CHECK_THAT(r.error(), Catch::Contains("cannot open"));
+  }
+}
+
+#include <chrono>
+
+#include "avatar/avatar_loader.h"
+
+TEST_CASE("a 60000-node chain loads and maps quickly without deep recursion", "[gltf]") {
+  TriangleFile f;
+  const int n = 60000;
+  for (int i = 1; i < n; ++i) f.doc["nodes"].push_back({{"name", "n" + std::to_string(i)}, {"translation", {0, 0.001, 0}}});
+  for (int i = 0; i + 1 < n; ++i) f.doc["nodes"][static_cast<size_t>(i)]["children"] = {i + 1};
+  const auto start = std::chrono::steady_clock::now();
+  auto a = loadGltfFromMemory(f.glb(), "");
+  REQUIRE(a.ok());
+  REQUIRE(prepareAvatar(a.value(), "").ok());
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  CHECK(a->skeleton.joints.size() == static_cast<size_t>(n));
+  CHECK(a->skeleton.joints.back().parent == n - 2);
+  CHECK(a->humanoid.method == MappingMethod::None);
+  CHECK(seconds < 10.0);
+}

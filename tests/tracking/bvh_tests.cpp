@@ -1,0 +1,259 @@
+// BVH: parsing (channel order, frame time, end sites), broken files, tracker derivation, and the
+// shared CMU walk.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <glm/gtc/quaternion.hpp>
+
+#include "avatar/bvh/bvh.h"
+#include "test_paths.h"
+#include "xr/tracking/bvh_source.h"
+
+using namespace embody;
+using namespace embody::tracking;
+using avatar::BvhClip;
+
+namespace {
+
+// A 45-unit-tall figure facing +Z, +Y up, the usual BVH layout. `names` picks a naming style.
+std::string figure(const std::string& style, int frames = 3, bool withFeet = true) {
+  auto n = [&](const std::string& cmu, const std::string& mixamo, const std::string& bandai) {
+    return style == "mixamo" ? mixamo : style == "bandai" ? bandai : cmu;
+  };
+  std::string s = "HIERARCHY\nROOT " + n("Hips", "mixamorig:Hips", "Hips") + "\n{\n  OFFSET 0 0 0\n"
+                  "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+                  "  JOINT " + n("Spine", "mixamorig:Spine", "Chest") + "\n  {\n    OFFSET 0 10 0\n"
+                  "    CHANNELS 3 Xrotation Zrotation Yrotation\n"
+                  "    JOINT " + n("Head", "mixamorig:Head", "Head") + "\n    {\n      OFFSET 0 10 0\n"
+                  "      CHANNELS 3 Zrotation Yrotation Xrotation\n      End Site\n      {\n        OFFSET 0 5 0\n      }\n    }\n";
+  for (int side = 0; side < 2; ++side) {
+    const std::string sx = side == 0 ? "" : "-";
+    const std::string arm = side == 0 ? n("LeftArm", "mixamorig:LeftArm", "UpperArm_L") : n("RightArm", "mixamorig:RightArm", "UpperArm_R");
+    const std::string hand = side == 0 ? n("LeftHand", "mixamorig:LeftHand", "Hand_L") : n("RightHand", "mixamorig:RightHand", "Hand_R");
+    s += "    JOINT " + arm + "\n    {\n      OFFSET " + sx + "5 8 0\n      CHANNELS 3 Zrotation Yrotation Xrotation\n"
+         "      JOINT " + hand + "\n      {\n        OFFSET " + sx + "8 0 0\n        CHANNELS 3 Zrotation Yrotation Xrotation\n"
+         "        End Site\n        {\n          OFFSET " + sx + "2 0 0\n        }\n      }\n    }\n";
+  }
+  s += "  }\n";
+  for (int side = 0; side < 2; ++side) {
+    const std::string sx = side == 0 ? "" : "-";
+    const std::string leg = side == 0 ? n("LeftUpLeg", "mixamorig:LeftUpLeg", "UpperLeg_L") : n("RightUpLeg", "mixamorig:RightUpLeg", "UpperLeg_R");
+    const std::string foot = side == 0 ? n("LeftFoot", "mixamorig:LeftFoot", "Foot_L") : n("RightFoot", "mixamorig:RightFoot", "Foot_R");
+    s += "  JOINT " + leg + "\n  {\n    OFFSET " + sx + "3 0 0\n    CHANNELS 3 Zrotation Yrotation Xrotation\n";
+    if (withFeet)
+      s += "    JOINT " + foot + "\n    {\n      OFFSET 0 -18 0\n      CHANNELS 3 Zrotation Yrotation Xrotation\n"
+           "      End Site\n      {\n        OFFSET 0 -2 3\n      }\n    }\n";
+    else
+      s += "    End Site\n    {\n      OFFSET 0 -20 0\n    }\n";
+    s += "  }\n";
+  }
+  s += "}\nMOTION\nFrames: " + std::to_string(frames) + "\nFrame Time: 0.0333333\n";
+  const int channels = withFeet ? 36 : 30;
+  for (int f = 0; f < frames; ++f) {
+    // The root walks forward (+Z in the file) 10 units per frame at 20 units height.
+    s += "0 20 " + std::to_string(10 * f);
+    for (int c = 3; c < channels; ++c) s += " 0";
+    s += "\n";
+  }
+  return s;
+}
+
+glm::dquat rot(char axis, double deg) {
+  const glm::dvec3 a(axis == 'X', axis == 'Y', axis == 'Z');
+  return glm::angleAxis(glm::radians(deg), a);
+}
+
+}  // namespace
+
+TEST_CASE("BVH parsing keeps the hierarchy, channel order and frame time") {
+  auto clip = avatar::parseBvh(figure("cmu"), "fig.bvh");
+  REQUIRE(clip.ok());
+  CHECK(clip->joints.size() == 16);  // 11 joints + 5 end sites
+  CHECK(clip->channelCount == 36);
+  CHECK(clip->frameCount == 3);
+  CHECK(clip->frameTime == Approx(0.0333333));
+  CHECK(clip->find("Head_End") >= 0);
+  CHECK(clip->joints[static_cast<size_t>(clip->find("Head_End"))].endSite);
+  CHECK(clip->joints[static_cast<size_t>(clip->find("Spine"))].firstChannel == 6);
+
+  // Channels are applied in the order listed: Spine is "X Z Y", Head "Z Y X".
+  std::vector<float> values(36, 0.0f);
+  values[6] = 30, values[7] = 40, values[8] = 50;     // Spine X, Z, Y
+  values[9] = 30, values[10] = 40, values[11] = 50;   // Head Z, Y, X
+  std::vector<avatar::BvhGlobal> g;
+  avatar::bvhGlobals(*clip, values, g);
+  const glm::dquat spine = rot('X', 30) * rot('Z', 40) * rot('Y', 50);
+  const glm::dquat head = spine * rot('Z', 30) * rot('Y', 40) * rot('X', 50);
+  CHECK(std::abs(glm::dot(g[1].rotation, spine)) == Approx(1.0).margin(1e-9));
+  CHECK(std::abs(glm::dot(g[2].rotation, head)) == Approx(1.0).margin(1e-9));
+  CHECK(glm::length(g[2].position - spine * glm::dvec3(0, 10, 0) - glm::dvec3(0, 10, 0)) < 1e-9);
+  // Root position channels add to the offset.
+  avatar::bvhGlobals(*clip, clip->frame(2), g);
+  CHECK(g[0].position.z == Approx(20.0));
+}
+
+TEST_CASE("broken BVH files give an error with the line, never a crash") {
+  const std::string good = figure("cmu");
+  struct Case {
+    std::string text, expect;
+  };
+  auto replace = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  const Case cases[] = {
+      {"", "empty file"},
+      {"HIERARCHI\n", "fig.bvh:1: expected HIERARCHY"},
+      {replace("OFFSET 0 10 0", "OFFSET 0 ten 0"), "fig.bvh:8: OFFSET value 'ten'"},
+      {replace("CHANNELS 3 Xrotation Zrotation", "CHANNELS 3 Wrotation Zrotation"), "fig.bvh:9: unknown channel 'Wrotation'"},
+      {replace("CHANNELS 3 Xrotation Zrotation Yrotation", "CHANNELS 7 Xrotation"), "fig.bvh:9: CHANNELS needs a count"},
+      {replace("CHANNELS 3 Xrotation Zrotation Yrotation", "CHANNELS 3 Xrotation"), "fig.bvh:9: CHANNELS declares 3"},
+      {replace("Frames: 3", "Frames: 99999999999"), "more than this loader accepts"},
+      {replace("Frame Time: 0.0333333", "Frame Time: 0"), "'Frame Time:' needs a positive"},
+      {replace("0 20 10", "0 20 10 0"), "fig.bvh:81: frame 1 has 37 values, expected 36"},
+      {replace("0 20 20", "0 20 nan"), "fig.bvh:82: frame value 'nan'"},
+      {replace("MOTION", "MOTIONS"), "fig.bvh:77: expected ROOT, found 'MOTIONS'"},
+      {good.substr(0, good.find("MOTION")), "unexpected end of file in HIERARCHY"},
+      {replace("  JOINT Spine\n  {", "  JOINT Spine\n  ("), "fig.bvh:7: expected '{'"},
+  };
+  for (const auto& c : cases) {
+    INFO(c.expect);
+    auto clip = avatar::parseBvh(c.text, "fig.bvh");
+    REQUIRE_FALSE(clip.ok());
+    CHECK_THAT(clip.error(), Catch::Contains(c.expect));
+  }
+  // Every truncation of a valid file parses or fails cleanly.
+  for (size_t n = 0; n < good.size(); n += 3) {
+    auto clip = avatar::parseBvh(good.substr(0, n), "cut.bvh");
+    if (!clip.ok()) CHECK(clip.error().rfind("cut.bvh:", 0) == 0);
+  }
+  // Declared frames missing at the end: a warning, the frames present are used.
+  auto fewer = avatar::parseBvh(replace("Frames: 3", "Frames: 5"), "fig.bvh");
+  REQUIRE(fewer.ok());
+  CHECK(fewer->frameCount == 3);
+  CHECK(fewer->warnings.size() == 1);
+  // Joint limits bound the allocation.
+  avatar::BvhLimits tiny;
+  tiny.maxJoints = 4;
+  auto limited = avatar::parseBvh(good, "fig.bvh", tiny);
+  REQUIRE_FALSE(limited.ok());
+  CHECK_THAT(limited.error(), Catch::Contains("more than 4 joints"));
+}
+
+TEST_CASE("BVH trackers in OpenXR conventions from CMU, Mixamo and Bandai-Namco namings") {
+  for (const std::string style : {"cmu", "mixamo", "bandai"}) {
+    INFO(style);
+    auto clip = avatar::parseBvh(figure(style), "fig.bvh");
+    REQUIRE(clip.ok());
+    BvhMapping map;
+    auto trace = bvhToTrace(*clip, {}, &map);
+    REQUIRE(trace.ok());
+    CHECK(trace->trackers == TrackerMask::all());
+    for (int j : map.joint) CHECK(j >= 0);
+    CHECK(map.upAxis == "+Y");
+    CHECK(map.facingAxis == "+Z");
+    CHECK(map.restHeightUnits == Approx(45.0));
+    CHECK(map.scale == Approx(1.75 / 45.0));
+    const PoseSample& s0 = trace->samples[0];
+    // Rotated 180 deg about Y: the performer's left is -X, forward -Z; the lowest point (the toe
+    // end site) on the floor; the hips over the origin.
+    CHECK(s0[TrackerId::LeftHand].position.x < -0.3f);
+    CHECK(s0[TrackerId::RightHand].position.x > 0.3f);
+    CHECK(s0[TrackerId::Hips].position.x == Approx(0.0f).margin(1e-6));
+    CHECK(s0[TrackerId::Hips].position.z == Approx(0.0f).margin(1e-6));
+    CHECK(s0[TrackerId::LeftFoot].position.y == Approx(2.0f * 1.75f / 45.0f).margin(1e-4));
+    CHECK(s0[TrackerId::Head].position.y == Approx(0.936f * 1.75f).margin(0.01));
+    CHECK(s0[TrackerId::Head].position.z < s0[TrackerId::Hips].position.z);  // eyes ahead
+    CHECK(std::abs(glm::angle(s0[TrackerId::Head].orientation)) < 1e-4f);   // rest = identity
+    // T-pose hands: thumbs (grip -Z) forward.
+    CHECK(glm::length(s0[TrackerId::LeftHand].orientation * glm::vec3(0, 0, -1) - glm::vec3(0, 0, -1)) < 1e-4f);
+    // Walking along the file's +Z is walking forward: -Z in OpenXR.
+    CHECK(trace->samples[2][TrackerId::Hips].position.z == Approx(-20.0f * 1.75f / 45.0f).margin(1e-4));
+  }
+}
+
+TEST_CASE("a BVH tracker whose joint is missing is absent and reported") {
+  auto clip = avatar::parseBvh(figure("cmu", 2, false), "nofeet.bvh");
+  REQUIRE(clip.ok());
+  BvhMapping map;
+  auto trace = bvhToTrace(*clip, {}, &map);
+  REQUIRE(trace.ok());
+  CHECK_FALSE(trace->trackers.has(TrackerId::LeftFoot));
+  CHECK_FALSE(trace->samples[0][TrackerId::LeftFoot].valid);
+  bool reported = false;
+  for (const auto& n : map.notes) reported = reported || n.rfind("left_foot: no joint", 0) == 0;
+  CHECK(reported);
+}
+
+TEST_CASE("a Z-up BVH is turned upright") {
+  // The same figure with every offset and position rotated into Z-up (y -> z, z -> -y).
+  auto clip = avatar::parseBvh(figure("cmu"), "fig.bvh");
+  REQUIRE(clip.ok());
+  for (auto& j : clip->joints) j.offset = glm::dvec3(j.offset.x, -j.offset.z, j.offset.y);
+  for (size_t f = 0; f < clip->frameCount; ++f) {
+    float* v = clip->values.data() + f * 36;
+    const float y = v[1], z = v[2];
+    v[1] = -z;
+    v[2] = y;
+  }
+  BvhMapping map;
+  auto trace = bvhToTrace(*clip, {}, &map);
+  REQUIRE(trace.ok());
+  CHECK(map.upAxis == "+Z");
+  const PoseSample& s = trace->samples[0];
+  CHECK(s[TrackerId::Head].position.y == Approx(0.936f * 1.75f).margin(0.01));
+  CHECK(s[TrackerId::LeftHand].position.x < -0.3f);
+}
+
+TEST_CASE("the CMU walk: 524 frames at 120 Hz, a plausible head height, about 3.8 m walked") {
+  EMBODY_REQUIRE_SHARED_ASSET(path, "cmu_12_01_walk.bvh");
+  BvhMapping map;
+  auto src = openBvhSource(path, {}, &map);
+  REQUIRE(src.ok());
+  auto& s = **src;
+  auto clip = avatar::loadBvh(path);
+  REQUIRE(clip.ok());
+  CHECK(clip->frameCount == 524);
+  CHECK(clip->frameTime == Approx(1.0 / 120.0).epsilon(0.001));
+  // Frame 0 of CMU's conversions is a T-pose reference, skipped with a note.
+  CHECK(s.frameCount() == 523);
+  bool noted = false;
+  for (const auto& n : s.notes()) noted = noted || n.rfind("frame 0 is a reference pose", 0) == 0;
+  CHECK(noted);
+  CHECK(s.nativeRate() == Approx(120.0).epsilon(0.001));
+  CHECK(s.duration() == Approx(522.0 / 120.0).epsilon(0.001));
+  CHECK(s.trackers() == TrackerMask::all());
+  // Standing height 25 units (the rest skeleton with its splayed legs straightened), fitted to 1.75 m.
+  CHECK(map.restHeightUnits == Approx(25.0).margin(0.1));
+  float minHead = 10, maxHead = 0, minFoot = 10, maxSpeed = 0;
+  float forward = 0;
+  glm::vec3 prevHand = s.trace().samples[0][TrackerId::RightHand].position;
+  for (const auto& f : s.trace().samples) {
+    minHead = std::min(minHead, f[TrackerId::Head].position.y);
+    maxHead = std::max(maxHead, f[TrackerId::Head].position.y);
+    minFoot = std::min({minFoot, f[TrackerId::LeftFoot].position.y, f[TrackerId::RightFoot].position.y});
+    forward += -(f[TrackerId::Head].orientation * glm::vec3(0, 0, -1)).z;
+    CHECK(f[TrackerId::LeftHand].position.x < f[TrackerId::RightHand].position.x);
+    maxSpeed = std::max(maxSpeed, glm::length(f[TrackerId::RightHand].position - prevHand) * 120.0f);
+    prevHand = f[TrackerId::RightHand].position;
+  }
+  CHECK(maxSpeed < 3.0f);  // no reference-pose jump left
+  CHECK(minHead > 1.5f);
+  CHECK(maxHead < 1.8f);
+  CHECK(minFoot > 0.02f);
+  CHECK(minFoot < 0.15f);
+  CHECK(forward / 523.0f > 0.9f);  // looking where it walks: along -Z
+  const auto& samples = s.trace().samples;
+  const glm::vec3 walked = samples.back()[TrackerId::Hips].position - samples.front()[TrackerId::Hips].position;
+  CHECK(walked.z < 0.0f);
+  // In CMU's own units (5.64 cm per unit) the walk is about 3.8 m.
+  BvhTrackerOptions cmuUnits;
+  cmuUnits.scale = 0.0564;
+  auto real = openBvhSource(path, cmuUnits);
+  REQUIRE(real.ok());
+  const auto& rs = (*real)->trace().samples;
+  const glm::vec3 d = rs.back()[TrackerId::Hips].position - rs.front()[TrackerId::Hips].position;
+  CHECK(std::hypot(d.x, d.z) == Approx(3.85).margin(0.1));
+  // Fitted to 1.75 m the same walk is proportionally longer.
+  CHECK(std::hypot(walked.x, walked.z) == Approx(3.85 * map.scale / 0.0564).margin(0.15));
+}
