@@ -474,6 +474,14 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
     com.level = 1;
     body.comTask = b.addTask(com);
     body.headTask = pose("head", body.head, 2);
+    // A waist tracker, when there is one (off until the runtime binds and enables it).
+    ik::TaskDesc waist;
+    waist.name = "hips";
+    waist.type = ik::TaskType::Pose;
+    waist.joint = body.hips;
+    waist.level = 2;
+    waist.enabled = false;
+    body.hipsTask = b.addTask(waist);
     body.leftHandTask = pose("left_hand", body.leftHand, 3);
     body.rightHandTask = pose("right_hand", body.rightHand, 3);
   }
