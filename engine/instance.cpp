@@ -151,26 +151,28 @@ uint32_t Instance::messageCount() const {
   return shared_ ? shared_->count.load(std::memory_order_relaxed) : 0;
 }
 
+PhysicalDeviceInfo describePhysicalDevice(VkPhysicalDevice d) {
+  VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
+  VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+  props.pNext = &driver;
+  vkGetPhysicalDeviceProperties2(d, &props);
+  PhysicalDeviceInfo info;
+  info.handle = d;
+  info.name = props.properties.deviceName;
+  info.driverName = driver.driverName;
+  info.driverInfo = driver.driverInfo;
+  info.type = props.properties.deviceType;
+  info.apiVersion = props.properties.apiVersion;
+  return info;
+}
+
 std::vector<PhysicalDeviceInfo> Instance::physicalDevices() const {
   uint32_t n = 0;
   vkEnumeratePhysicalDevices(instance_, &n, nullptr);
   std::vector<VkPhysicalDevice> devs(n);
   vkEnumeratePhysicalDevices(instance_, &n, devs.data());
   std::vector<PhysicalDeviceInfo> out;
-  for (VkPhysicalDevice d : devs) {
-    VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
-    VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
-    props.pNext = &driver;
-    vkGetPhysicalDeviceProperties2(d, &props);
-    PhysicalDeviceInfo info;
-    info.handle = d;
-    info.name = props.properties.deviceName;
-    info.driverName = driver.driverName;
-    info.driverInfo = driver.driverInfo;
-    info.type = props.properties.deviceType;
-    info.apiVersion = props.properties.apiVersion;
-    out.push_back(std::move(info));
-  }
+  for (VkPhysicalDevice d : devs) out.push_back(describePhysicalDevice(d));
   return out;
 }
 

@@ -48,6 +48,9 @@ struct PhysicalDeviceInfo {
   std::string apiVersionString() const;
 };
 
+// Name, driver and type of one physical device.
+PhysicalDeviceInfo describePhysicalDevice(VkPhysicalDevice device);
+
 class Instance {
  public:
   static Result<Instance> create(const InstanceOptions& options);

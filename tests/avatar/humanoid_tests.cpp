@@ -65,3 +65,216 @@ TEST_CASE("CesiumMan maps by topology and hides its head in first person", "[hum
   CHECK(a->mesh.firstPersonIndices.size() < a->mesh.indices.size());
   checkFirstPersonHeadless(*a);
 }
+
+#include "avatar/avatar_loader.h"
+#include "humanoid_test_files.h"
+
+using embody::test::HumanoidFile;
+using embody::test::humanoidJointSpecs;
+
+namespace {
+embody::Result<AvatarAsset> loadPrepared(HumanoidFile& f, const std::string& boneMap = "") {
+  auto a = loadGltfFromMemory(f.glb(), "");
+  if (!a.ok()) return a;
+  if (auto s = prepareAvatar(a.value(), boneMap); !s.ok()) return embody::Error{s.error()};
+  return a;
+}
+
+std::map<std::string, std::string> meaninglessNames() {
+  std::map<std::string, std::string> m;
+  int i = 0;
+  for (const auto& s : humanoidJointSpecs()) m[s.bone] = "J" + std::to_string(100 + i++);
+  return m;
+}
+
+void checkAllBonesMapped(const AvatarAsset& a, HumanoidFile& f) {
+  for (const auto& s : humanoidJointSpecs()) {
+    HumanBone b;
+    REQUIRE(parseHumanBone(s.bone, b));
+    INFO(s.bone);
+    CHECK(a.humanoid.joint(b) == a.gltfNodeToJoint[static_cast<size_t>(f.nodeOfBone[s.bone])]);
+  }
+  CHECK(a.humanoid.missingRequired.empty());
+}
+}  // namespace
+
+TEST_CASE("a VRM 1.0 file written from the specification maps by VRMC_vrm and honours firstPerson", "[humanoid][vrm]") {
+  HumanoidFile f(meaninglessNames());
+  nlohmann::json bones = nlohmann::json::object();
+  for (const auto& [bone, node] : f.nodeOfBone) bones[bone] = {{"node", node}};
+  f.doc["extensionsUsed"] = {"VRMC_vrm"};
+  f.doc["extensions"]["VRMC_vrm"] = {
+      {"specVersion", "1.0"},
+      {"meta", {{"name", "test"}, {"authors", {"embody"}}, {"licenseUrl", "https://vrm.dev/licenses/1.0/"}}},
+      {"humanoid", {{"humanBones", bones}}},
+      {"firstPerson",
+       {{"meshAnnotations",
+         {{{"node", f.bodyNode}, {"type", "auto"}},
+          {{"node", f.hairNode}, {"type", "thirdPersonOnly"}},
+          {{"node", f.innerNode}, {"type", "firstPersonOnly"}}}}}}};
+  auto a = loadPrepared(f);
+  REQUIRE(a.ok());
+  CHECK(a->format == AvatarFormat::Vrm1);
+  CHECK(a->humanoid.method == MappingMethod::Vrm);
+  checkAllBonesMapped(*a, f);
+  CHECK(a->humanoid.forward.z > 0.99f);
+  // spine.md §5: spine L5-S1..L1-L2, chest T12-L1..T7-T8, upperChest T6-T7..T1-T2, neck C7-T1..C1-C2.
+  REQUIRE(a->humanoid.spine.size() == 5);
+  CHECK(a->humanoid.spine[0].firstLevel == 0);
+  CHECK(a->humanoid.spine[0].endLevel == 5);
+  CHECK(a->humanoid.spine[1].endLevel == 11);
+  CHECK(a->humanoid.spine[2].endLevel == 17);
+  CHECK(a->humanoid.spine[3].endLevel == 24);
+  CHECK(a->humanoid.spine[4].levelCount() == 1);
+  CHECK(a->firstPerson.mode == "vrm");
+  // Hair (thirdPersonOnly) is not in first person; the inner mesh (firstPersonOnly) only there.
+  auto hasMesh = [](const std::vector<Primitive>& prims, int mesh) {
+    for (const auto& p : prims)
+      if (p.sourceMesh == mesh) return true;
+    return false;
+  };
+  CHECK(hasMesh(a->mesh.primitives, f.hairMesh));
+  CHECK_FALSE(hasMesh(a->mesh.firstPersonPrimitives, f.hairMesh));
+  CHECK(hasMesh(a->mesh.firstPersonPrimitives, f.innerMesh));
+  CHECK_FALSE(hasMesh(a->mesh.primitives, f.innerMesh));
+  CHECK(hasMesh(a->mesh.firstPersonPrimitives, f.bodyMesh));
+  // The neck box blends into the head: its upper triangles are gone, the rest of the body stays.
+  CHECK(a->firstPerson.removedTriangles > 12);
+  checkFirstPersonHeadless(*a);
+}
+
+TEST_CASE("a VRM 0.x file maps by its humanBones array and faces -Z", "[humanoid][vrm]") {
+  HumanoidFile f(meaninglessNames(), /*facesMinusZ=*/true);
+  nlohmann::json bones = nlohmann::json::array();
+  for (const auto& [bone, node] : f.nodeOfBone) bones.push_back({{"bone", bone}, {"node", node}});
+  f.doc["extensionsUsed"] = {"VRM"};
+  f.doc["extensions"]["VRM"] = {{"humanoid", {{"humanBones", bones}}},
+                                {"firstPerson", {{"firstPersonBone", f.nodeOfBone["head"]},
+                                                 {"meshAnnotations", {{{"mesh", f.hairMesh}, {"firstPersonFlag", "ThirdPersonOnly"}}}}}}};
+  auto a = loadPrepared(f);
+  REQUIRE(a.ok());
+  CHECK(a->format == AvatarFormat::Vrm0);
+  CHECK(a->humanoid.method == MappingMethod::Vrm);
+  checkAllBonesMapped(*a, f);
+  CHECK(a->humanoid.forward.z < -0.99f);
+  checkFirstPersonHeadless(*a);
+}
+
+TEST_CASE("a Mixamo-named skeleton maps by names", "[humanoid]") {
+  std::map<std::string, std::string> mixamo = {
+      {"hips", "Hips"}, {"spine", "Spine"}, {"chest", "Spine1"}, {"upperChest", "Spine2"}, {"neck", "Neck"},
+      {"head", "Head"}, {"leftShoulder", "LeftShoulder"}, {"leftUpperArm", "LeftArm"}, {"leftLowerArm", "LeftForeArm"},
+      {"leftHand", "LeftHand"}, {"rightShoulder", "RightShoulder"}, {"rightUpperArm", "RightArm"},
+      {"rightLowerArm", "RightForeArm"}, {"rightHand", "RightHand"}, {"leftUpperLeg", "LeftUpLeg"},
+      {"leftLowerLeg", "LeftLeg"}, {"leftFoot", "LeftFoot"}, {"leftToes", "LeftToeBase"}, {"rightUpperLeg", "RightUpLeg"},
+      {"rightLowerLeg", "RightLeg"}, {"rightFoot", "RightFoot"}, {"rightToes", "RightToeBase"}};
+  for (auto& [bone, name] : mixamo) name = "mixamorig:" + name;
+  HumanoidFile f(mixamo);
+  auto a = loadPrepared(f);
+  REQUIRE(a.ok());
+  CHECK(a->format == AvatarFormat::Gltf);
+  CHECK(a->humanoid.method == MappingMethod::Names);
+  checkAllBonesMapped(*a, f);
+  CHECK(a->firstPerson.mode == "auto");
+  checkFirstPersonHeadless(*a);
+}
+
+TEST_CASE("meaningless names without VRM data map by topology", "[humanoid]") {
+  HumanoidFile f(meaninglessNames());
+  auto a = loadPrepared(f);
+  REQUIRE(a.ok());
+  CHECK(a->humanoid.method == MappingMethod::Topology);
+  CHECK(a->humanoid.missingRequired.empty());
+  for (const char* bone : {"hips", "head", "leftUpperArm", "leftHand", "rightLowerArm", "leftUpperLeg", "rightFoot", "leftToes"}) {
+    HumanBone b;
+    REQUIRE(parseHumanBone(bone, b));
+    INFO(bone);
+    CHECK(a->humanoid.joint(b) == a->gltfNodeToJoint[static_cast<size_t>(f.nodeOfBone[bone])]);
+  }
+}
+
+TEST_CASE("a user bone map wins, and a bad one is a clear error", "[humanoid]") {
+  HumanoidFile f(meaninglessNames());
+  // Swap the hands on purpose: the user's word is final.
+  auto a = loadPrepared(f, R"({"leftHand": "J113", "rightHand": "J109"})");
+  REQUIRE(a.ok());
+  CHECK(a->humanoid.method == MappingMethod::BoneMap);
+  CHECK(a->skeleton.joints[a->humanoid.joint(HumanBone::leftHand)].name == "J113");
+  CHECK(a->skeleton.joints[a->humanoid.joint(HumanBone::rightHand)].name == "J109");
+  HumanoidFile g(meaninglessNames());
+  auto bad = loadPrepared(g, R"({"leftHnd": "J113"})");
+  REQUIRE_FALSE(bad.ok());
+  CHECK_THAT(bad.error(), Catch::Contains("leftHnd"));
+  HumanoidFile h(meaninglessNames());
+  auto missing = loadPrepared(h, R"({"leftHand": "nope"})");
+  REQUIRE_FALSE(missing.ok());
+  CHECK_THAT(missing.error(), Catch::Contains("nope"));
+}
+
+TEST_CASE("a skeleton that is not a humanoid lists the missing required bones", "[humanoid]") {
+  embody::test::TriangleFile t;
+  auto a = loadGltfFromMemory(t.glb(), "");
+  REQUIRE(a.ok());
+  REQUIRE(prepareAvatar(a.value(), "").ok());
+  CHECK(a->humanoid.method == MappingMethod::None);
+  CHECK(a->humanoid.missingRequired.size() == requiredHumanBones().size());
+  CHECK(a->firstPerson.mode == "none");
+  CHECK(a->mesh.firstPersonIndices == a->mesh.indices);
+}
+
+#include <random>
+
+TEST_CASE("randomly corrupted humanoid files load or fail cleanly, never crash", "[humanoid][fuzz]") {
+  HumanoidFile f(meaninglessNames());
+  nlohmann::json bones = nlohmann::json::object();
+  for (const auto& [bone, node] : f.nodeOfBone) bones[bone] = {{"node", node}};
+  f.doc["extensionsUsed"] = {"VRMC_vrm"};
+  f.doc["extensions"]["VRMC_vrm"] = {{"humanoid", {{"humanBones", bones}}},
+                                     {"firstPerson", {{"meshAnnotations", {{{"node", f.bodyNode}, {"type", "auto"}}}}}}};
+  const std::vector<uint8_t> good = f.glb();
+  std::mt19937 rng(1234);
+  int loaded = 0, failed = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::vector<uint8_t> bytes = good;
+    const int flips = 1 + static_cast<int>(rng() % 8);
+    for (int k = 0; k < flips; ++k) {
+      const size_t at = rng() % bytes.size();
+      switch (rng() % 3) {
+        case 0: bytes[at] = static_cast<uint8_t>(rng()); break;            // random byte
+        case 1: bytes[at] = static_cast<uint8_t>('0' + rng() % 10); break;  // a digit (JSON numbers)
+        default: bytes[at] ^= 0x80; break;
+      }
+    }
+    auto a = loadGltfFromMemory(bytes, "");
+    if (a.ok()) {
+      REQUIRE(prepareAvatar(a.value(), "").ok());
+      REQUIRE(a->skeleton.validate().empty());
+      for (uint32_t i : a->mesh.indices) REQUIRE(i < a->mesh.vertices.size());
+      for (uint32_t i : a->mesh.firstPersonIndices) REQUIRE(i < a->mesh.vertices.size());
+      ++loaded;
+    } else {
+      REQUIRE_FALSE(a.error().empty());
+      ++failed;
+    }
+  }
+  INFO(loaded << " loaded, " << failed << " refused");
+  CHECK(loaded + failed == 300);
+}
+
+TEST_CASE("a humanoid skeleton without any mesh still maps (names and topology)", "[humanoid]") {
+  for (bool meaningless : {false, true}) {
+    HumanoidFile f(meaningless ? meaninglessNames() : std::map<std::string, std::string>{});
+    for (auto& node : f.doc["nodes"]) {
+      node.erase("mesh");
+      node.erase("skin");
+    }
+    f.doc.erase("meshes");
+    f.doc.erase("skins");
+    auto a = loadPrepared(f);
+    REQUIRE(a.ok());
+    CHECK(a->skinJointCount == 0);
+    CHECK(a->mesh.triangleCount() == 0);
+    CHECK(a->humanoid.method == (meaningless ? MappingMethod::Topology : MappingMethod::Names));
+    CHECK(a->humanoid.missingRequired.empty());
+  }
+}

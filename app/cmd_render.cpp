@@ -1,0 +1,180 @@
+// embody render: one frame of an avatar in its rest pose, written as PNG. A thin front end over
+// gfx::AvatarRenderer (engine/avatar_renderer.h); the runtime extends this command with motions.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <glm/gtc/constants.hpp>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+
+#include "app/args.h"
+#include "avatar/gltf/gltf_loader.h"
+#include "engine/avatar_renderer.h"
+#include "engine/device.h"
+#include "engine/image_io.h"
+#include "engine/instance.h"
+#include "engine/test_avatar.h"
+
+namespace {
+
+using namespace embody;
+
+// Prints the validation count when the instance goes away, on every exit path.
+struct ValidationReport {
+  const gfx::Instance* instance = nullptr;
+  ~ValidationReport() {
+    if (instance && instance->validationEnabled())
+      std::fprintf(stderr, "validation messages: %u\n", instance->messageCount());
+  }
+};
+
+int runRender(cli::Argv argv) {
+  cli::Args args("embody render",
+                 "Renders one frame of an avatar (rest pose) offscreen and writes it as PNG into --out.");
+  args.option("avatar", "FILE|default", "a .gltf/.glb/.vrm file, or 'default' (the built-in procedural avatar)",
+              "default");
+  args.option("out", "DIR", "output folder (created if missing)");
+  args.option("width", "PIXELS", "frame width", "1280");
+  args.option("height", "PIXELS", "frame height", "720");
+  args.option("view", "KIND", "third-person (orbit camera), first-person (at the eyes) or stereo (two eyes)",
+              "third-person");
+  args.option("yaw", "DEGREES", "orbit camera yaw around the avatar (0 = from the front)", "30");
+  args.option("pitch", "DEGREES", "orbit camera pitch (positive looks down)", "10");
+  args.option("device", "SELECTOR", "Vulkan device: auto, an index, 'lavapipe', or part of its name", "auto");
+  args.option("stereo-mode", "MODE", "stereo pair as one 'multiview' pass or 'two-pass'", "default");
+  args.flag("msaa", "4x multisampling");
+  args.flag("skeleton", "draw the skeleton overlay");
+  args.flag("gizmos", "draw the tracking-target gizmos (head, hands)");
+  args.flag("no-grid", "hide the ground grid");
+  args.flag("validate", "enable the Khronos validation layer and print the message count at exit");
+  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+
+  if (!args.has("out")) {
+    std::fprintf(stderr, "error: --out DIR is required\n\n%s", args.usage().c_str());
+    return 2;
+  }
+  int width = 0, height = 0;
+  float yaw = 0.0f, pitch = 0.0f;
+  try {
+    width = args.integer("width");
+    height = args.integer("height");
+    yaw = glm::radians(float(args.number("yaw")));
+    pitch = glm::radians(float(args.number("pitch")));
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
+  if (width < 16 || height < 16 || width > 8192 || height > 8192) {
+    std::fprintf(stderr, "error: --width/--height must be between 16 and 8192\n");
+    return 2;
+  }
+  const std::string view = args.get("view");
+  if (view != "third-person" && view != "first-person" && view != "stereo") {
+    std::fprintf(stderr, "error: --view must be third-person, first-person or stereo\n");
+    return 2;
+  }
+
+  // The avatar first: a bad file is the most likely error and needs no GPU to report.
+  avatar::AvatarAsset asset;
+  const std::string avatarArg = args.get("avatar");
+  if (avatarArg == "default") {
+    // The avatar library's default avatar is not there yet: the renderer's procedural test avatar.
+    asset = gfx::makeTestAvatar();
+  } else {
+    auto loaded = avatar::loadAvatarFile(avatarArg);
+    if (!loaded) {
+      std::fprintf(stderr, "error: %s\n", loaded.error().c_str());
+      return 1;
+    }
+    asset = std::move(loaded).value();
+  }
+
+  gfx::InstanceOptions io;
+#ifdef NDEBUG
+  io.validation = args.has("validate") ? gfx::Validation::IfPresent : gfx::Validation::Off;
+#else
+  io.validation = gfx::Validation::IfPresent;  // debug builds always validate when the layer exists
+#endif
+  auto instance = gfx::Instance::create(io);
+  if (!instance) {
+    std::fprintf(stderr, "error: %s\n", instance.error().c_str());
+    return 1;
+  }
+  ValidationReport report{&instance.value()};
+  if (args.has("validate") && !instance->validationEnabled())
+    std::fprintf(stderr, "warning: the validation layer is not installed (vulkan-validationlayers)\n");
+  auto device = gfx::Device::create(*instance, args.get("device"));
+  if (!device) {
+    std::fprintf(stderr, "error: %s\n", device.error().c_str());
+    return 1;
+  }
+
+  gfx::AvatarRendererOptions ro;
+  ro.width = uint32_t(width);
+  ro.height = uint32_t(height);
+  ro.samples = args.has("msaa") ? VK_SAMPLE_COUNT_4_BIT : VK_SAMPLE_COUNT_1_BIT;
+  ro.stereo = view == "stereo";
+  if (const std::string m = args.get("stereo-mode"); m == "multiview" || m == "two-pass") {
+    ro.stereoMode = m == "multiview" ? gfx::StereoMode::Multiview : gfx::StereoMode::TwoPass;
+  } else if (m != "default") {
+    std::fprintf(stderr, "error: --stereo-mode must be multiview, two-pass or default\n");
+    return 2;
+  }
+  auto renderer = gfx::AvatarRenderer::create(**device, asset, ro);
+  if (!renderer) {
+    std::fprintf(stderr, "error: %s\n", renderer.error().c_str());
+    return 1;
+  }
+  auto& r = **renderer;
+  const auto pose = avatar::SkeletonPose::rest(asset.skeleton);
+  gfx::FrameOptions fo;
+  fo.grid = !args.has("no-grid");
+  fo.skeleton = args.has("skeleton");
+  if (args.has("gizmos")) fo.gizmos = r.trackingGizmos(pose);
+
+  std::error_code ec;
+  const std::filesystem::path out = args.get("out");
+  std::filesystem::create_directories(out, ec);
+  if (ec) {
+    std::fprintf(stderr, "error: cannot create %s: %s\n", out.c_str(), ec.message().c_str());
+    return 1;
+  }
+  std::vector<std::pair<std::filesystem::path, avatar::Image>> frames;
+  const float aspect = float(width) / float(height);
+  if (view == "third-person") {
+    auto img = r.render(pose, r.orbitAround(pose, yaw, pitch), fo);
+    if (!img) return std::fprintf(stderr, "error: %s\n", img.error().c_str()), 1;
+    frames.emplace_back(out / "frame_0000.png", std::move(img).value());
+  } else if (view == "first-person") {
+    fo.view = gfx::ViewKind::FirstPerson;
+    // Look a little down at the own body, as a person in a headset does.
+    const glm::mat4 eye = r.eyePose(pose) * glm::mat4_cast(glm::angleAxis(glm::radians(-60.0f), glm::vec3(1, 0, 0)));
+    auto img = r.render(pose, gfx::cameraFromPose(eye, gfx::FovAngles::symmetric(glm::radians(90.0f), aspect), 0.02f), fo);
+    if (!img) return std::fprintf(stderr, "error: %s\n", img.error().c_str()), 1;
+    frames.emplace_back(out / "frame_0000.png", std::move(img).value());
+  } else {
+    // Third-person stereo pair from the orbit camera's position, with headset-like asymmetric fovs.
+    const gfx::Camera orbit = r.orbitAround(pose, yaw, pitch);
+    const gfx::FovAngles left{-0.82f, 0.70f, 0.75f, -0.80f}, right{-0.70f, 0.82f, 0.75f, -0.80f};
+    auto pair = r.renderStereo(pose, gfx::stereoCameras(glm::inverse(orbit.view), 0.064f, left, right), fo);
+    if (!pair) return std::fprintf(stderr, "error: %s\n", pair.error().c_str()), 1;
+    frames.emplace_back(out / "frame_0000_left.png", std::move((*pair)[0]));
+    frames.emplace_back(out / "frame_0000_right.png", std::move((*pair)[1]));
+  }
+  for (const auto& [path, img] : frames) {
+    if (auto s = gfx::writePng(path.string(), img); !s) {
+      std::fprintf(stderr, "error: %s\n", s.error().c_str());
+      return 1;
+    }
+    std::printf("wrote %s\n", path.c_str());
+  }
+  std::printf("device: %s\n", (*device)->driverString().c_str());
+  std::printf("avatar: %s, %zu triangles, %zu joints\n", avatarArg.c_str(), asset.mesh.triangleCount(),
+              asset.skeleton.joints.size());
+  return 0;
+}
+
+}  // namespace
+
+EMBODY_COMMAND("render", "render one frame of an avatar (rest pose) to PNG", runRender);

@@ -1,0 +1,215 @@
+#include "avatar/gltf/glb_writer.h"
+
+#include <stb_image_write.h>
+
+#include <algorithm>
+#include <cstring>
+#include <fstream>
+#include <glm/gtc/type_ptr.hpp>
+#include <nlohmann/json.hpp>
+
+namespace embody::avatar {
+namespace {
+
+using nlohmann::json;
+
+constexpr int kFloat = 5126, kUShort = 5123, kUInt = 5125;
+constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
+
+class BinBuilder {
+ public:
+  // Appends raw bytes as a new bufferView (4-byte aligned) and returns its index.
+  int view(const void* data, size_t bytes, int target, json& doc) {
+    while (bin_.size() % 4) bin_.push_back(0);
+    const size_t at = bin_.size();
+    bin_.resize(at + bytes);
+    if (bytes) std::memcpy(bin_.data() + at, data, bytes);
+    json v = {{"buffer", 0}, {"byteOffset", at}, {"byteLength", bytes}};
+    if (target) v["target"] = target;
+    doc["bufferViews"].push_back(v);
+    return static_cast<int>(doc["bufferViews"].size() - 1);
+  }
+  std::vector<uint8_t>& bytes() { return bin_; }
+
+ private:
+  std::vector<uint8_t> bin_;
+};
+
+int accessor(json& doc, int view, size_t byteOffset, int componentType, size_t count, const char* type) {
+  json a = {{"bufferView", view}, {"componentType", componentType}, {"count", count}, {"type", type}};
+  if (byteOffset) a["byteOffset"] = byteOffset;
+  doc["accessors"].push_back(a);
+  return static_cast<int>(doc["accessors"].size() - 1);
+}
+
+void appendU32(std::vector<uint8_t>& out, uint32_t v) {
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
+}
+
+void pngSink(void* context, void* data, int size) {
+  auto* out = static_cast<std::vector<uint8_t>*>(context);
+  const auto* p = static_cast<const uint8_t*>(data);
+  out->insert(out->end(), p, p + size);
+}
+
+}  // namespace
+
+Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
+  const Skeleton& sk = asset.skeleton;
+  const SkinnedMesh& mesh = asset.mesh;
+  const size_t n = sk.joints.size();
+  if (n == 0) return Error{"cannot write a glTF without joints"};
+  if (auto why = sk.validate(); !why.empty()) return Error{why};
+  if (std::count_if(sk.joints.begin(), sk.joints.end(), [](const Joint& j) { return j.parent < 0; }) != 1)
+    return Error{"cannot write a skin: the skeleton must have exactly one root joint"};
+  if (mesh.inverseBind.size() != n) return Error{"inverseBind must have one matrix per joint"};
+  if (n > 65535) return Error{"too many joints for unsigned-short JOINTS"};
+
+  json doc = {{"asset", {{"version", "2.0"}, {"generator", "Embody"}}},
+              {"scene", 0},
+              {"nodes", json::array()},
+              {"bufferViews", json::array()},
+              {"accessors", json::array()}};
+  BinBuilder bin;
+  for (size_t i = 0; i < n; ++i) {
+    const Joint& j = sk.joints[i];
+    json node = {{"name", j.name}};
+    if (j.rest.translation != glm::vec3(0.0f))
+      node["translation"] = {j.rest.translation.x, j.rest.translation.y, j.rest.translation.z};
+    if (j.rest.rotation != glm::quat(1.0f, 0.0f, 0.0f, 0.0f))
+      node["rotation"] = {j.rest.rotation.x, j.rest.rotation.y, j.rest.rotation.z, j.rest.rotation.w};
+    if (j.rest.scale != glm::vec3(1.0f)) node["scale"] = {j.rest.scale.x, j.rest.scale.y, j.rest.scale.z};
+    doc["nodes"].push_back(node);
+  }
+  for (size_t i = 0; i < n; ++i)
+    if (sk.joints[i].parent >= 0) doc["nodes"][static_cast<size_t>(sk.joints[i].parent)]["children"].push_back(i);
+
+  // Vertex streams, one bufferView each (tightly packed).
+  const size_t vc = mesh.vertices.size();
+  std::vector<float> positions, normals, uvs, weights0, weights1;
+  std::vector<uint16_t> joints0, joints1;
+  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  bool eight = false;
+  for (const auto& v : mesh.vertices) eight |= v.weights1 != glm::vec4(0.0f);
+  for (const auto& v : mesh.vertices) {
+    positions.insert(positions.end(), {v.position.x, v.position.y, v.position.z});
+    lo = glm::min(lo, v.position);
+    hi = glm::max(hi, v.position);
+    const glm::vec3 nn = glm::length(v.normal) > 0.0f ? glm::normalize(v.normal) : glm::vec3(0, 1, 0);
+    normals.insert(normals.end(), {nn.x, nn.y, nn.z});
+    uvs.insert(uvs.end(), {v.uv.x, v.uv.y});
+    for (int k = 0; k < 4; ++k) {
+      // Unused influences are (joint 0, weight 0), as the specification asks.
+      joints0.push_back(static_cast<uint16_t>(v.weights0[k] > 0.0f ? v.joints0[k] : 0u));
+      weights0.push_back(v.weights0[k]);
+      if (eight) {
+        joints1.push_back(static_cast<uint16_t>(v.weights1[k] > 0.0f ? v.joints1[k] : 0u));
+        weights1.push_back(v.weights1[k]);
+      }
+    }
+  }
+  json attributes;
+  if (vc > 0) {
+    int a = accessor(doc, bin.view(positions.data(), positions.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC3");
+    doc["accessors"][static_cast<size_t>(a)]["min"] = {lo.x, lo.y, lo.z};
+    doc["accessors"][static_cast<size_t>(a)]["max"] = {hi.x, hi.y, hi.z};
+    attributes["POSITION"] = a;
+    attributes["NORMAL"] = accessor(doc, bin.view(normals.data(), normals.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC3");
+    attributes["TEXCOORD_0"] = accessor(doc, bin.view(uvs.data(), uvs.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC2");
+    attributes["JOINTS_0"] = accessor(doc, bin.view(joints0.data(), joints0.size() * 2, kArrayBuffer, doc), 0, kUShort, vc, "VEC4");
+    attributes["WEIGHTS_0"] = accessor(doc, bin.view(weights0.data(), weights0.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC4");
+    if (eight) {
+      attributes["JOINTS_1"] = accessor(doc, bin.view(joints1.data(), joints1.size() * 2, kArrayBuffer, doc), 0, kUShort, vc, "VEC4");
+      attributes["WEIGHTS_1"] = accessor(doc, bin.view(weights1.data(), weights1.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC4");
+    }
+  }
+  const int indexView = bin.view(mesh.indices.data(), mesh.indices.size() * 4, kElementArrayBuffer, doc);
+  json primitives = json::array();
+  for (const Primitive& p : mesh.primitives) {
+    if (p.indexCount == 0) continue;
+    if (static_cast<size_t>(p.firstIndex) + p.indexCount > mesh.indices.size()) return Error{"primitive runs past the index buffer"};
+    json prim = {{"attributes", attributes},
+                 {"indices", accessor(doc, indexView, size_t{p.firstIndex} * 4, kUInt, p.indexCount, "SCALAR")},
+                 {"mode", 4}};
+    if (p.material >= 0 && static_cast<size_t>(p.material) < asset.materials.size()) prim["material"] = p.material;
+    primitives.push_back(prim);
+  }
+
+  std::vector<float> ibm;
+  for (const auto& m : mesh.inverseBind) ibm.insert(ibm.end(), glm::value_ptr(m), glm::value_ptr(m) + 16);
+  const int ibmAccessor = accessor(doc, bin.view(ibm.data(), ibm.size() * 4, 0, doc), 0, kFloat, n, "MAT4");
+  json skinJoints = json::array();
+  for (size_t i = 0; i < n; ++i) skinJoints.push_back(i);
+  int root = 0;
+  while (sk.joints[static_cast<size_t>(root)].parent >= 0) ++root;
+
+  // Images as PNG, then textures and materials.
+  for (size_t i = 0; i < asset.images.size(); ++i) {
+    const Image& im = asset.images[i];
+    std::vector<uint8_t> png;
+    if (im.width > 0 && im.height > 0 && im.rgba.size() == size_t(im.width) * size_t(im.height) * 4)
+      stbi_write_png_to_func(pngSink, &png, im.width, im.height, 4, im.rgba.data(), im.width * 4);
+    if (png.empty()) {  // keep indices stable: a 1x1 white pixel stands in
+      const uint8_t white[4] = {255, 255, 255, 255};
+      stbi_write_png_to_func(pngSink, &png, 1, 1, 4, white, 4);
+    }
+    doc["images"].push_back({{"bufferView", bin.view(png.data(), png.size(), 0, doc)}, {"mimeType", "image/png"}});
+    doc["textures"].push_back({{"source", i}});
+  }
+  for (const Material& m : asset.materials) {
+    json pbr = {{"baseColorFactor", {m.baseColorFactor.r, m.baseColorFactor.g, m.baseColorFactor.b, m.baseColorFactor.a}},
+                {"metallicFactor", 0.0},
+                {"roughnessFactor", 0.8}};
+    if (m.baseColorImage >= 0 && static_cast<size_t>(m.baseColorImage) < asset.images.size())
+      pbr["baseColorTexture"] = {{"index", m.baseColorImage}};
+    json mat = {{"name", m.name.empty() ? std::string("material") : m.name}, {"pbrMetallicRoughness", pbr}};
+    if (m.alphaMode == AlphaMode::Mask) {
+      mat["alphaMode"] = "MASK";
+      mat["alphaCutoff"] = m.alphaCutoff;
+    } else if (m.alphaMode == AlphaMode::Blend) {
+      mat["alphaMode"] = "BLEND";
+    }
+    if (m.doubleSided) mat["doubleSided"] = true;
+    doc["materials"].push_back(mat);
+  }
+
+  json sceneNodes = json::array({root});
+  if (!primitives.empty()) {
+    doc["meshes"] = json::array({{{"name", "body"}, {"primitives", primitives}}});
+    doc["skins"] = json::array({{{"inverseBindMatrices", ibmAccessor}, {"joints", skinJoints}, {"skeleton", root}}});
+    doc["nodes"].push_back({{"name", "body"}, {"mesh", 0}, {"skin", 0}});
+    sceneNodes.push_back(n);
+  }
+  doc["scenes"] = json::array({{{"nodes", sceneNodes}}});
+  while (bin.bytes().size() % 4) bin.bytes().push_back(0);
+  doc["buffers"] = json::array({{{"byteLength", bin.bytes().size()}}});
+
+  std::string text = doc.dump();
+  while (text.size() % 4) text.push_back(' ');
+  const uint64_t total = 12 + 8 + text.size() + 8 + bin.bytes().size();
+  if (total > 0xFFFFFFFFull) return Error{"GLB larger than 4 GiB"};
+  std::vector<uint8_t> out;
+  out.reserve(total);
+  for (char c : std::string("glTF")) out.push_back(static_cast<uint8_t>(c));
+  appendU32(out, 2);
+  appendU32(out, static_cast<uint32_t>(total));
+  appendU32(out, static_cast<uint32_t>(text.size()));
+  appendU32(out, 0x4E4F534Au);  // "JSON"
+  for (char c : text) out.push_back(static_cast<uint8_t>(c));
+  appendU32(out, static_cast<uint32_t>(bin.bytes().size()));
+  appendU32(out, 0x004E4942u);  // "BIN\0"
+  for (uint8_t b : bin.bytes()) out.push_back(b);
+  return out;
+}
+
+Status writeGlbFile(const AvatarAsset& asset, const std::string& path) {
+  auto bytes = encodeGlb(asset);
+  if (!bytes.ok()) return Error{bytes.error()};
+  std::ofstream f(path, std::ios::binary);
+  if (!f) return Error{"cannot write '" + path + "'"};
+  f.write(reinterpret_cast<const char*>(bytes->data()), static_cast<std::streamsize>(bytes->size()));
+  if (!f) return Error{"cannot write '" + path + "'"};
+  return {};
+}
+
+}  // namespace embody::avatar

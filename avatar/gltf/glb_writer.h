@@ -1,0 +1,20 @@
+#pragma once
+// Writes an AvatarAsset as a standard glTF 2.0 binary (GLB): one node per skeleton joint (TRS),
+// one skinned mesh node at the scene root, one skin over every joint with the asset's inverse
+// bind matrices, POSITION/NORMAL/TEXCOORD_0/JOINTS_0/WEIGHTS_0 (+ JOINTS_1/WEIGHTS_1 when some
+// vertex has more than four influences), one primitive per draw-list primitive, materials with
+// base colour factor and alpha mode. Images are embedded as PNG. The skeleton must have a single
+// root (glTF requires the joints of a skin to share one).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "avatar/avatar_asset.h"
+#include "core/result.h"
+
+namespace embody::avatar {
+
+Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset);
+Status writeGlbFile(const AvatarAsset& asset, const std::string& path);
+
+}  // namespace embody::avatar

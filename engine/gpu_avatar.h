@@ -1,0 +1,65 @@
+#pragma once
+// An AvatarAsset uploaded to the GPU: one vertex buffer (avatar::SkinnedVertex as is), one index
+// buffer holding the third-person and first-person lists back to back, a texture + descriptor
+// set per material, and the draw lists split by alpha mode. Created by Renderer::upload.
+#include <glm/glm.hpp>
+#include <vector>
+
+#include "avatar/avatar_asset.h"
+#include "engine/resources.h"
+
+namespace embody::gfx {
+
+struct GpuMaterial {
+  glm::vec4 baseColorFactor{1.0f};
+  avatar::AlphaMode alphaMode = avatar::AlphaMode::Opaque;
+  float alphaCutoff = 0.5f;
+  bool doubleSided = false;
+  VkDescriptorSet descriptorSet = VK_NULL_HANDLE;  // set 1: the base-colour texture
+};
+
+struct GpuDraw {
+  uint32_t firstIndex = 0;  // into the shared index buffer
+  uint32_t indexCount = 0;
+  uint32_t material = 0;  // into GpuAvatar::materials() (the default material is appended last)
+};
+
+// Draws of one view kind (third- or first-person), grouped by pipeline.
+struct GpuDrawList {
+  std::vector<GpuDraw> opaque, mask, blend;
+};
+
+class GpuAvatar {
+ public:
+  GpuAvatar(GpuAvatar&&) noexcept = default;
+  GpuAvatar& operator=(GpuAvatar&&) noexcept = default;
+
+  VkBuffer vertexBuffer() const { return vertices_.handle(); }
+  VkBuffer indexBuffer() const { return indices_.handle(); }
+  uint32_t vertexCount() const { return vertexCount_; }
+  uint32_t jointCount() const { return jointCount_; }
+  const std::vector<GpuMaterial>& materials() const { return materials_; }
+  const GpuDrawList& thirdPerson() const { return thirdPerson_; }
+  // The head-less list, or the full mesh when the asset has no first-person list.
+  const GpuDrawList& firstPerson() const { return hasFirstPerson_ ? firstPerson_ : thirdPerson_; }
+  size_t triangleCount() const { return triangles_; }
+
+  // Checks what the GPU would otherwise read out of bounds: joint indices against the skeleton,
+  // vertex indices against the vertex count, primitive ranges, material and image indices.
+  static std::string validate(const avatar::AvatarAsset& asset);
+
+ private:
+  friend class Renderer;
+  GpuAvatar() = default;
+  Buffer vertices_, indices_;
+  std::vector<Image> textures_;
+  UniqueSampler sampler_;
+  UniqueDescriptorPool pool_;
+  std::vector<GpuMaterial> materials_;
+  GpuDrawList thirdPerson_, firstPerson_;
+  bool hasFirstPerson_ = false;
+  uint32_t vertexCount_ = 0, jointCount_ = 0;
+  size_t triangles_ = 0;
+};
+
+}  // namespace embody::gfx

@@ -1,0 +1,441 @@
+#include "engine/renderer.h"
+
+#include <cstring>
+#include <string>
+
+namespace embody::gfx {
+
+namespace {
+
+// std140 mirror of `Scene` in shaders/common.glsl.
+struct SceneBlock {
+  struct View {
+    glm::mat4 viewProj;
+    glm::vec4 eye;
+  } views[kMaxViewsPerFrame];
+  glm::vec4 lightDirection, lightColor, skyColor, groundColor;
+};
+
+// Mirror of `Push` in shaders/common.glsl.
+struct PushBlock {
+  glm::vec4 baseColorFactor{1.0f};
+  uint32_t viewBase = 0;
+  float alphaCutoff = 0.5f;
+};
+
+constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+
+// A 10 m x 10 m grid on y = 0, a line every 0.5 m, the X (red) and Z (blue) axes through the origin.
+std::vector<LineVertex> makeGrid() {
+  std::vector<LineVertex> v;
+  const float half = 5.0f, step = 0.5f;
+  const glm::vec4 minor(0.42f, 0.44f, 0.48f, 1.0f), major(0.60f, 0.62f, 0.66f, 1.0f);
+  for (int i = -10; i <= 10; ++i) {
+    const float t = float(i) * step;
+    const glm::vec4 cx = i == 0 ? glm::vec4(0.75f, 0.2f, 0.2f, 1.0f) : (i % 2 == 0 ? major : minor);
+    const glm::vec4 cz = i == 0 ? glm::vec4(0.2f, 0.3f, 0.8f, 1.0f) : (i % 2 == 0 ? major : minor);
+    v.push_back({{-half, 0.0f, t}, cx});  // lines parallel to X
+    v.push_back({{half, 0.0f, t}, cx});
+    v.push_back({{t, 0.0f, -half}, cz});  // lines parallel to Z
+    v.push_back({{t, 0.0f, half}, cz});
+  }
+  return v;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Renderer>> Renderer::create(const Device& device) {
+  std::unique_ptr<Renderer> r(new Renderer(device));
+  if (auto s = r->init(); !s) return Error{s.error()};
+  const VkDevice dev = device.handle();
+
+  VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pci.queueFamilyIndex = device.queueFamily();
+  VkCommandPool pool = VK_NULL_HANDLE;
+  if (vkCreateCommandPool(dev, &pci, nullptr, &pool) != VK_SUCCESS) return Error{"vkCreateCommandPool failed"};
+  r->commandPool_ = UniqueCommandPool(dev, pool);
+
+  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, kFramesInFlight},
+                                   {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kFramesInFlight}};
+  VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  dpci.maxSets = kFramesInFlight;
+  dpci.poolSizeCount = 2;
+  dpci.pPoolSizes = sizes;
+  VkDescriptorPool dpool = VK_NULL_HANDLE;
+  if (vkCreateDescriptorPool(dev, &dpci, nullptr, &dpool) != VK_SUCCESS) return Error{"vkCreateDescriptorPool failed"};
+  r->framePool_ = UniqueDescriptorPool(dev, dpool);
+
+  for (auto& f : r->frames_) {
+    VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    ai.commandPool = pool;
+    ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    ai.commandBufferCount = 1;
+    if (vkAllocateCommandBuffers(dev, &ai, &f.cmd) != VK_SUCCESS) return Error{"vkAllocateCommandBuffers failed"};
+    VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    fci.flags = VK_FENCE_CREATE_SIGNALED_BIT;
+    VkFence fence = VK_NULL_HANDLE;
+    vkCreateFence(dev, &fci, nullptr, &fence);
+    f.fence = UniqueFence(dev, fence);
+    auto set = allocateDescriptorSet(dev, dpool, r->sceneLayout_.get());
+    if (!set) return Error{set.error()};
+    f.set = *set;
+    auto block = Buffer::create(device, sizeof(SceneBlock), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, MemoryUse::HostUpload);
+    auto palette = Buffer::create(device, sizeof(glm::mat4) * 64, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                  MemoryUse::HostUpload);
+    auto lines = Buffer::create(device, sizeof(LineVertex) * 256, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT,
+                                MemoryUse::HostUpload);
+    if (!block || !palette || !lines) return Error{"could not allocate per-frame buffers"};
+    f.sceneBlock = std::move(block).value();
+    f.palette = std::move(palette).value();
+    f.lines = std::move(lines).value();
+    r->writeFrameDescriptors(f);
+  }
+
+  const auto grid = makeGrid();
+  auto gridBuffer = Buffer::create(device, grid.size() * sizeof(LineVertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT,
+                                   MemoryUse::DeviceLocal);
+  if (!gridBuffer) return Error{gridBuffer.error()};
+  r->grid_ = std::move(gridBuffer).value();
+  r->gridVertexCount_ = static_cast<uint32_t>(grid.size());
+  Uploader up(device);
+  if (auto s = up.upload(r->grid_, asBytes(grid)); !s) return Error{s.error()};
+  if (auto s = up.flush(); !s) return Error{s.error()};
+  return r;
+}
+
+Renderer::~Renderer() {
+  device_.waitIdle();
+  for (auto& f : frames_) f.retired.releaseAll();
+}
+
+void Renderer::writeFrameDescriptors(FrameSlot& f) {
+  VkDescriptorBufferInfo ubo{f.sceneBlock.handle(), 0, VK_WHOLE_SIZE};
+  VkDescriptorBufferInfo ssbo{f.palette.handle(), 0, VK_WHOLE_SIZE};
+  VkWriteDescriptorSet w[2] = {{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}, {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}};
+  w[0].dstSet = f.set;
+  w[0].dstBinding = 0;
+  w[0].descriptorCount = 1;
+  w[0].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+  w[0].pBufferInfo = &ubo;
+  w[1].dstSet = f.set;
+  w[1].dstBinding = 1;
+  w[1].descriptorCount = 1;
+  w[1].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  w[1].pBufferInfo = &ssbo;
+  vkUpdateDescriptorSets(device_.handle(), 2, w, 0, nullptr);
+}
+
+Status Renderer::ensureCapacity(Buffer& buffer, VkDeviceSize bytes, VkBufferUsageFlags usage, FrameSlot& slot) {
+  if (buffer.size() >= bytes) return {};
+  auto grown = Buffer::create(device_, std::max<VkDeviceSize>(bytes, buffer.size() * 2), usage, MemoryUse::HostUpload);
+  if (!grown) return Error{grown.error()};
+  // This slot's previous frame has retired (beginFrame waited), so the old buffer is free; it
+  // still goes through the retire queue so that the rule has one path.
+  slot.retired.retire(std::move(buffer));
+  buffer = std::move(grown).value();
+  return {};
+}
+
+Status Renderer::beginFrame() {
+  FrameSlot& f = frames_[current_];
+  if (f.recording) return Error{"beginFrame called twice without endFrame"};
+  VkFence fence = f.fence.get();
+  if (VkResult r = vkWaitForFences(device_.handle(), 1, &fence, VK_TRUE, UINT64_MAX); r != VK_SUCCESS)
+    return Error{std::string("waiting for a frame in flight: ") + vkResultName(r)};
+  f.retired.releaseAll();
+  vkResetCommandBuffer(f.cmd, 0);
+  VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  vkBeginCommandBuffer(f.cmd, &bi);
+  f.recording = true;
+  f.viewsUsed = 0;
+  f.lineCount = f.overlayCount = 0;
+  f.avatar = nullptr;
+  stats_.drawCalls = 0;
+  return {};
+}
+
+Status Renderer::setScene(const SceneFrame& scene) {
+  FrameSlot& f = frames_[current_];
+  if (!f.recording) return Error{"setScene outside beginFrame/endFrame"};
+  if (scene.avatar && scene.palette.size() < scene.avatar->jointCount())
+    return Error{"the palette has " + std::to_string(scene.palette.size()) + " matrices; the avatar needs " +
+                 std::to_string(scene.avatar->jointCount())};
+  const bool paletteGrows = f.palette.size() < scene.palette.size_bytes();
+  if (auto s = ensureCapacity(f.palette, scene.palette.size_bytes(), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, f); !s)
+    return s;
+  if (paletteGrows) writeFrameDescriptors(f);
+  if (!scene.palette.empty()) std::memcpy(f.palette.mapped(), scene.palette.data(), scene.palette.size_bytes());
+  const size_t lineBytes = (scene.lines.size() + scene.overlayLines.size()) * sizeof(LineVertex);
+  if (auto s = ensureCapacity(f.lines, lineBytes, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, f); !s) return s;
+  auto* dst = static_cast<LineVertex*>(f.lines.mapped());
+  std::copy(scene.lines.begin(), scene.lines.end(), dst);
+  std::copy(scene.overlayLines.begin(), scene.overlayLines.end(), dst + scene.lines.size());
+  f.lineCount = static_cast<uint32_t>(scene.lines.size());
+  f.overlayCount = static_cast<uint32_t>(scene.overlayLines.size());
+  f.palette.flush();
+  f.lines.flush();
+
+  auto* block = static_cast<SceneBlock*>(f.sceneBlock.mapped());
+  block->lightDirection = glm::vec4(glm::normalize(scene.lighting.directionToLight), 0.0f);
+  block->lightColor = glm::vec4(scene.lighting.lightColor, 1.0f);
+  block->skyColor = glm::vec4(scene.lighting.skyColor, 1.0f);
+  block->groundColor = glm::vec4(scene.lighting.groundColor, 1.0f);
+  f.avatar = scene.avatar;
+  f.firstPerson = scene.firstPerson;
+  f.grid = scene.grid;
+  return {};
+}
+
+Result<const Image*> Renderer::transient(VkFormat format, VkExtent2D extent, uint32_t layers,
+                                         VkSampleCountFlagBits samples) {
+  for (auto& t : transients_) {
+    if (t.format == format && t.extent.width == extent.width && t.extent.height == extent.height &&
+        t.layers == layers && t.samples == samples) {
+      t.lastFrame = stats_.frames;
+      return &t.image;
+    }
+  }
+  // Drop shapes unused for a few frames (a resized window, a changed MSAA setting): they may
+  // still be in use by frames in flight, so they retire with the current frame.
+  for (size_t i = 0; i < transients_.size();) {
+    if (transients_[i].lastFrame + kFramesInFlight < stats_.frames) {
+      retire(std::move(transients_[i].image));
+      transients_.erase(transients_.begin() + long(i));
+    } else {
+      ++i;
+    }
+  }
+  ImageDesc d;
+  d.extent = extent;
+  d.format = format;
+  d.layers = layers;
+  d.samples = samples;
+  d.usage = isDepthFormat(format) ? VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT : VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+  d.usage |= VK_IMAGE_USAGE_TRANSIENT_ATTACHMENT_BIT;
+  auto img = Image::create(device_, d);
+  if (!img) return Error{img.error()};
+  transients_.push_back({format, extent, layers, samples, std::move(img).value(), stats_.frames});
+  return &transients_.back().image;
+}
+
+Status Renderer::prepare(VkFormat color, std::optional<VkFormat> depth, VkSampleCountFlagBits samples,
+                         uint32_t viewMask) {
+  auto p = pipelines({color, depth.value_or(kDepthFormat), samples, viewMask});
+  if (!p) return Error{p.error()};
+  return {};
+}
+
+void Renderer::drawAvatarList(VkCommandBuffer cmd, const PipelineSet&, const GpuAvatar& a,
+                              const std::vector<GpuDraw>& draws, VkPipeline pipeline, uint32_t viewBase) {
+  if (draws.empty()) return;
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+  for (const GpuDraw& d : draws) {
+    const GpuMaterial& m = a.materials()[d.material];
+    vkCmdSetCullMode(cmd, m.doubleSided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout_.get(), 1, 1, &m.descriptorSet, 0,
+                            nullptr);
+    PushBlock push{m.baseColorFactor, viewBase, m.alphaCutoff};
+    vkCmdPushConstants(cmd, pipelineLayout_.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                       sizeof(push), &push);
+    vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, 0, 0);
+    ++stats_.drawCalls;
+  }
+}
+
+Status Renderer::drawPass(std::span<const Camera> cameras, const PassTarget& target) {
+  FrameSlot& f = frames_[current_];
+  if (!f.recording) return Error{"drawPass outside beginFrame/endFrame"};
+  const uint32_t layers = target.color.layerCount;
+  const bool multiview = cameras.size() == 2 && layers == 2;
+  if (cameras.empty() || (cameras.size() != 1 && !multiview))
+    return Error{"drawPass takes one camera, or two cameras with a 2-layer target (multiview)"};
+  if (f.viewsUsed + cameras.size() > kMaxViewsPerFrame) return Error{"too many views in one frame"};
+  if (target.samples != VK_SAMPLE_COUNT_1_BIT && !device_.supportsSamples(target.samples))
+    return Error{"the device does not support this MSAA sample count"};
+  if (target.color.extent.width == 0 || target.color.extent.height == 0) return Error{"empty colour target"};
+  const uint32_t viewMask = multiview ? 0b11u : 0u;
+  const bool msaa = target.samples != VK_SAMPLE_COUNT_1_BIT;
+  const VkFormat depthFormat = target.depth && !msaa ? target.depth->format : kDepthFormat;
+  auto pset = pipelines({target.color.format, depthFormat, target.samples, viewMask});
+  if (!pset) return Error{pset.error()};
+  const PipelineSet& p = **pset;
+
+  const uint32_t viewBase = f.viewsUsed;
+  auto* block = static_cast<SceneBlock*>(f.sceneBlock.mapped());
+  for (size_t i = 0; i < cameras.size(); ++i)
+    block->views[viewBase + i] = {cameras[i].viewProjection(), glm::vec4(cameras[i].position(), 1.0f)};
+  f.viewsUsed += static_cast<uint32_t>(cameras.size());
+  f.sceneBlock.flush();
+
+  // Attachments: the caller's colour (resolve target under MSAA) and depth, or transients.
+  const VkExtent2D extent = target.color.extent;
+  VkImage depthImage = VK_NULL_HANDLE;
+  VkImageView depthView = VK_NULL_HANDLE;
+  const bool ownDepth = !target.depth || msaa;
+  if (ownDepth) {
+    auto d = transient(kDepthFormat, extent, layers, target.samples);
+    if (!d) return Error{d.error()};
+    depthImage = (*d)->handle();
+    depthView = (*d)->view();
+  } else {
+    depthImage = target.depth->image;
+    depthView = target.depth->view;
+  }
+  VkImage msaaImage = VK_NULL_HANDLE;
+  VkImageView msaaView = VK_NULL_HANDLE;
+  if (msaa) {
+    auto c = transient(target.color.format, extent, layers, target.samples);
+    if (!c) return Error{c.error()};
+    msaaImage = (*c)->handle();
+    msaaView = (*c)->view();
+  }
+
+  const VkCommandBuffer cmd = f.cmd;
+  const TargetImage& color = target.color;
+  // Always a barrier, even without a layout change: an earlier pass of this frame may have
+  // written the same image (a mirror view after the eyes), and that write must come first.
+  transitionImage(cmd, color.image, VK_IMAGE_ASPECT_COLOR_BIT, color.initialLayout,
+                  VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, color.baseLayer, layers);
+  const VkImageAspectFlags depthAspect = aspectOf(depthFormat);
+  const uint32_t depthBase = ownDepth ? 0 : target.depth->baseLayer;
+  // Depth is cleared every pass, so its previous contents never matter: start from UNDEFINED.
+  transitionImage(cmd, depthImage, depthAspect, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                  depthBase, layers);
+  if (msaa)
+    transitionImage(cmd, msaaImage, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, 0, layers);
+
+  VkRenderingAttachmentInfo colorAtt{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  colorAtt.imageView = msaa ? msaaView : color.view;
+  colorAtt.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  colorAtt.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  colorAtt.storeOp = msaa ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE;
+  colorAtt.clearValue.color = {{target.clearColor.r, target.clearColor.g, target.clearColor.b, target.clearColor.a}};
+  if (msaa) {
+    colorAtt.resolveMode = VK_RESOLVE_MODE_AVERAGE_BIT;
+    colorAtt.resolveImageView = color.view;
+    colorAtt.resolveImageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  }
+  VkRenderingAttachmentInfo depthAtt{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  depthAtt.imageView = depthView;
+  depthAtt.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+  depthAtt.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  depthAtt.storeOp = ownDepth ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE;
+  depthAtt.clearValue.depthStencil = {1.0f, 0};
+  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+  ri.renderArea = {{0, 0}, extent};
+  ri.layerCount = 1;  // under multiview the view mask picks the layers
+  ri.viewMask = viewMask;
+  ri.colorAttachmentCount = 1;
+  ri.pColorAttachments = &colorAtt;
+  ri.pDepthAttachment = &depthAtt;
+  vkCmdBeginRendering(cmd, &ri);
+
+  const VkViewport viewport{0.0f, 0.0f, float(extent.width), float(extent.height), 0.0f, 1.0f};
+  const VkRect2D scissor{{0, 0}, extent};
+  vkCmdSetViewport(cmd, 0, 1, &viewport);
+  vkCmdSetScissor(cmd, 0, 1, &scissor);
+  vkCmdSetDepthTestEnable(cmd, VK_TRUE);
+  vkCmdSetDepthWriteEnable(cmd, VK_TRUE);
+  vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout_.get(), 0, 1, &f.set, 0, nullptr);
+  const PushBlock linePush{glm::vec4(1.0f), viewBase, 0.0f};
+  const VkShaderStageFlags pushStages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+
+  // Opaque and alpha-tested avatar first: it occludes most of what follows, so the grid and
+  // gizmos behind it are rejected by the depth test before shading.
+  const GpuAvatar* a = f.avatar;
+  const GpuDrawList* list = a ? (f.firstPerson ? &a->firstPerson() : &a->thirdPerson()) : nullptr;
+  if (a) {
+    const VkDeviceSize zero = 0;
+    const VkBuffer vb = a->vertexBuffer();
+    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &zero);
+    vkCmdBindIndexBuffer(cmd, a->indexBuffer(), 0, VK_INDEX_TYPE_UINT32);
+    drawAvatarList(cmd, p, *a, list->opaque, p.opaque.get(), viewBase);
+    drawAvatarList(cmd, p, *a, list->mask, p.mask.get(), viewBase);
+  }
+  if (f.grid || f.lineCount > 0) {
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.lines.get());
+    vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+    vkCmdPushConstants(cmd, pipelineLayout_.get(), pushStages, 0, sizeof(linePush), &linePush);
+    const VkDeviceSize zero = 0;
+    if (f.grid) {
+      const VkBuffer gb = grid_.handle();
+      vkCmdBindVertexBuffers(cmd, 0, 1, &gb, &zero);
+      vkCmdDraw(cmd, gridVertexCount_, 1, 0, 0);
+      ++stats_.drawCalls;
+    }
+    if (f.lineCount > 0) {
+      const VkBuffer lb = f.lines.handle();
+      vkCmdBindVertexBuffers(cmd, 0, 1, &lb, &zero);
+      vkCmdDraw(cmd, f.lineCount, 1, 0, 0);
+      ++stats_.drawCalls;
+    }
+  }
+  if (a && !list->blend.empty()) {
+    const VkDeviceSize zero = 0;
+    const VkBuffer vb = a->vertexBuffer();
+    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &zero);
+    vkCmdSetDepthWriteEnable(cmd, VK_FALSE);  // blended surfaces test against depth but do not occlude
+    drawAvatarList(cmd, p, *a, list->blend, p.blend.get(), viewBase);
+    vkCmdSetDepthWriteEnable(cmd, VK_TRUE);
+  }
+  if (f.overlayCount > 0) {
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.lines.get());
+    vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+    vkCmdSetDepthTestEnable(cmd, VK_FALSE);
+    vkCmdPushConstants(cmd, pipelineLayout_.get(), pushStages, 0, sizeof(linePush), &linePush);
+    const VkDeviceSize offset = VkDeviceSize(f.lineCount) * sizeof(LineVertex);
+    const VkBuffer lb = f.lines.handle();
+    vkCmdBindVertexBuffers(cmd, 0, 1, &lb, &offset);
+    vkCmdDraw(cmd, f.overlayCount, 1, 0, 0);
+    ++stats_.drawCalls;
+  }
+  vkCmdEndRendering(cmd);
+
+  if (color.finalLayout != VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL)
+    transitionImage(cmd, color.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                    color.finalLayout, color.baseLayer, layers);
+  if (!ownDepth && target.depth->finalLayout != VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL)
+    transitionImage(cmd, depthImage, depthAspect, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, target.depth->finalLayout,
+                    depthBase, layers);
+  return {};
+}
+
+VkCommandBuffer Renderer::commandBuffer() const { return frames_[current_].cmd; }
+
+Status Renderer::endFrame(const SubmitSync& sync) {
+  FrameSlot& f = frames_[current_];
+  if (!f.recording) return Error{"endFrame without beginFrame"};
+  vkEndCommandBuffer(f.cmd);
+  f.recording = false;
+  VkFence fence = f.fence.get();
+  vkResetFences(device_.handle(), 1, &fence);
+  VkCommandBufferSubmitInfo cbi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO};
+  cbi.commandBuffer = f.cmd;
+  VkSubmitInfo2 si{VK_STRUCTURE_TYPE_SUBMIT_INFO_2};
+  si.waitSemaphoreInfoCount = static_cast<uint32_t>(sync.wait.size());
+  si.pWaitSemaphoreInfos = sync.wait.data();
+  si.commandBufferInfoCount = 1;
+  si.pCommandBufferInfos = &cbi;
+  si.signalSemaphoreInfoCount = static_cast<uint32_t>(sync.signal.size());
+  si.pSignalSemaphoreInfos = sync.signal.data();
+  if (VkResult r = vkQueueSubmit2(device_.queue(), 1, &si, fence); r != VK_SUCCESS)
+    return Error{std::string("vkQueueSubmit2: ") + vkResultName(r)};
+  ++stats_.frames;
+  if (sync.waitForCompletion) {
+    if (VkResult r = vkWaitForFences(device_.handle(), 1, &fence, VK_TRUE, UINT64_MAX); r != VK_SUCCESS)
+      return Error{std::string("waiting for the frame: ") + vkResultName(r)};
+  }
+  current_ = (current_ + 1) % kFramesInFlight;
+  return {};
+}
+
+void Renderer::waitIdle() {
+  device_.waitIdle();
+  for (auto& f : frames_) f.retired.releaseAll();
+}
+
+}  // namespace embody::gfx

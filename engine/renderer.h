@@ -1,0 +1,170 @@
+#pragma once
+// The renderer: frames in flight, per-frame scene data (views, light, joint palette, lines), and
+// passes that draw the scene into colour (+ depth) images with dynamic rendering. Targets are
+// plain image references, so the same code draws into its own offscreen images and into images
+// someone else owns (OpenXR swapchain images, a window's swapchain).
+//
+//   renderer.beginFrame();
+//   renderer.setScene(scene);                    // palette, lines, light: once per frame
+//   renderer.drawPass(cameras, target);          // any number of passes (mirror, left eye, ...)
+//   renderer.endFrame();                         // submit; resources retire with this frame
+#include <array>
+#include <glm/glm.hpp>
+#include <map>
+#include <memory>
+#include <optional>
+#include <span>
+#include <tuple>
+#include <vector>
+
+#include "avatar/avatar_asset.h"
+#include "engine/camera.h"
+#include "engine/device.h"
+#include "engine/gpu_avatar.h"
+#include "engine/resources.h"
+
+namespace embody::gfx {
+
+constexpr uint32_t kMaxViewsPerFrame = 8;  // matches kMaxViews in shaders/common.glsl
+constexpr uint32_t kFramesInFlight = 2;
+
+struct LineVertex {
+  glm::vec3 position{0.0f};
+  glm::vec4 color{1.0f};
+};
+
+struct Lighting {
+  glm::vec3 directionToLight = glm::normalize(glm::vec3(0.35f, 0.8f, 0.5f));
+  glm::vec3 lightColor{0.85f, 0.82f, 0.78f};
+  glm::vec3 skyColor{0.42f, 0.45f, 0.52f};
+  glm::vec3 groundColor{0.16f, 0.14f, 0.12f};
+};
+
+// What one frame shows. Spans must stay valid until setScene returns (they are copied).
+struct SceneFrame {
+  const GpuAvatar* avatar = nullptr;
+  std::span<const glm::mat4> palette;  // skinning palette, one matrix per skeleton joint
+  bool firstPerson = false;            // draw the first-person list (the user's head hidden)
+  bool grid = true;                    // the ground grid on y = 0
+  std::span<const LineVertex> lines;          // line list, depth-tested (tracking-target gizmos)
+  std::span<const LineVertex> overlayLines;   // line list, drawn on top (skeleton overlay)
+  Lighting lighting;
+};
+
+// One image a pass draws into. For multiview, `view` is a 2D-array view of layerCount layers.
+struct TargetImage {
+  VkImage image = VK_NULL_HANDLE;
+  VkImageView view = VK_NULL_HANDLE;
+  VkFormat format = VK_FORMAT_UNDEFINED;
+  VkExtent2D extent{0, 0};
+  uint32_t baseLayer = 0;   // first layer `view` covers (for barriers)
+  uint32_t layerCount = 1;  // layers `view` covers
+  // Layout the image is in when the pass starts (UNDEFINED: contents may be discarded) and the one
+  // the pass leaves it in (OpenXR wants COLOR_ATTACHMENT_OPTIMAL at xrReleaseSwapchainImage).
+  VkImageLayout initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  VkImageLayout finalLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+};
+
+struct PassTarget {
+  TargetImage color;                 // single-sampled; MSAA resolves into it
+  std::optional<TargetImage> depth;  // none: the renderer uses its own transient depth buffer
+  VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;  // 4: renders into internal MSAA images
+  glm::vec4 clearColor{0.30f, 0.33f, 0.38f, 1.0f};        // linear
+};
+
+struct SubmitSync {
+  std::vector<VkSemaphoreSubmitInfo> wait, signal;  // e.g. a window's acquire/present semaphores
+  bool waitForCompletion = false;                   // block until the GPU has finished this frame
+};
+
+struct RendererStats {
+  uint64_t frames = 0;
+  uint64_t pipelinesCreated = 0;
+  uint64_t drawCalls = 0;  // of the last frame
+};
+
+class Renderer {
+ public:
+  static Result<std::unique_ptr<Renderer>> create(const Device& device);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  const Device& device() const { return device_; }
+
+  // Uploads an avatar (validated first: bad indices give an error, never a GPU fault).
+  Result<std::unique_ptr<GpuAvatar>> upload(const avatar::AvatarAsset& asset);
+
+  // Waits until the frame slot is free (its previous use retired), releases what was retired
+  // with it, and opens its command buffer.
+  Status beginFrame();
+  Status setScene(const SceneFrame& scene);
+  // Draws into `target` with one camera, or two cameras into a 2-layer target with multiview
+  // (gl_ViewIndex picks the camera). Two-pass stereo is two calls with one camera each.
+  Status drawPass(std::span<const Camera> cameras, const PassTarget& target);
+  Status endFrame(const SubmitSync& sync = {});
+  // The open frame's command buffer, for commands around the passes (readback, transitions).
+  VkCommandBuffer commandBuffer() const;
+  // Keeps `object` alive until the current (or, outside a frame, the last submitted) frame has
+  // finished on the GPU.
+  template <class T>
+  void retire(T&& object) {
+    const uint32_t slot = frames_[current_].recording ? current_ : (current_ + kFramesInFlight - 1) % kFramesInFlight;
+    frames_[slot].retired.retire(std::forward<T>(object));
+  }
+  void waitIdle();
+  const RendererStats& stats() const { return stats_; }
+  // Pipelines are built on first use for each target format; call to pay that before timing.
+  Status prepare(VkFormat color, std::optional<VkFormat> depth, VkSampleCountFlagBits samples, uint32_t viewMask);
+
+ private:
+  struct FrameSlot {
+    VkCommandBuffer cmd = VK_NULL_HANDLE;
+    UniqueFence fence;
+    Buffer sceneBlock, palette, lines;
+    VkDescriptorSet set = VK_NULL_HANDLE;
+    RetireQueue retired;
+    uint32_t viewsUsed = 0;
+    uint32_t lineCount = 0, overlayCount = 0;
+    const GpuAvatar* avatar = nullptr;
+    bool firstPerson = false, grid = true;
+    bool recording = false;
+  };
+  struct PipelineSet {
+    UniquePipeline opaque, mask, blend, lines;
+  };
+  using PipelineKey = std::tuple<VkFormat, VkFormat, VkSampleCountFlagBits, uint32_t>;
+  struct Transient {  // renderer-owned depth / MSAA colour for a given target shape
+    VkFormat format;
+    VkExtent2D extent;
+    uint32_t layers;
+    VkSampleCountFlagBits samples;
+    Image image;
+    uint64_t lastFrame;
+  };
+
+  explicit Renderer(const Device& device) : device_(device) {}
+  Status init();
+  Result<const PipelineSet*> pipelines(const PipelineKey& key);
+  Result<const Image*> transient(VkFormat format, VkExtent2D extent, uint32_t layers, VkSampleCountFlagBits samples);
+  Status ensureCapacity(Buffer& buffer, VkDeviceSize bytes, VkBufferUsageFlags usage, FrameSlot& slot);
+  void writeFrameDescriptors(FrameSlot& slot);
+  void drawAvatarList(VkCommandBuffer cmd, const PipelineSet& p, const GpuAvatar& a,
+                      const std::vector<GpuDraw>& draws, VkPipeline pipeline, uint32_t viewBase);
+
+  const Device& device_;
+  UniqueDescriptorSetLayout sceneLayout_, materialLayout_;
+  UniquePipelineLayout pipelineLayout_;
+  UniqueShaderModule skinnedVert_, skinnedFrag_, linesVert_, linesFrag_;
+  UniqueDescriptorPool framePool_;
+  UniqueCommandPool commandPool_;
+  Buffer grid_;
+  uint32_t gridVertexCount_ = 0;
+  std::map<PipelineKey, PipelineSet> pipelines_;
+  std::vector<Transient> transients_;
+  std::array<FrameSlot, kFramesInFlight> frames_;
+  uint32_t current_ = 0;
+  RendererStats stats_;
+};
+
+}  // namespace embody::gfx

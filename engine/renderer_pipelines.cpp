@@ -1,0 +1,177 @@
+// Pipeline construction for Renderer: one skinned pipeline per alpha mode (a specialization
+// constant selects it, so OPAQUE keeps early depth testing) and one line pipeline, per target
+// format / sample count / view mask. Cull mode, depth test and depth write are dynamic state.
+#include <string>
+
+#include "engine/renderer.h"
+#include "shaders/lines_frag.spv.h"
+#include "shaders/lines_vert.spv.h"
+#include "shaders/skinned_frag.spv.h"
+#include "shaders/skinned_vert.spv.h"
+
+namespace embody::gfx {
+
+namespace {
+
+struct PipelineDesc {
+  VkShaderModule vert, frag;
+  const VkSpecializationInfo* fragSpec = nullptr;
+  bool lines = false;
+  bool blend = false;
+};
+
+}  // namespace
+
+Status Renderer::init() {
+  const VkDevice dev = device_.handle();
+  auto sv = createShaderModule(dev, skinned_vert_spv, sizeof(skinned_vert_spv));
+  auto sf = createShaderModule(dev, skinned_frag_spv, sizeof(skinned_frag_spv));
+  auto lv = createShaderModule(dev, lines_vert_spv, sizeof(lines_vert_spv));
+  auto lf = createShaderModule(dev, lines_frag_spv, sizeof(lines_frag_spv));
+  if (!sv || !sf || !lv || !lf) return Error{"could not create the renderer's shader modules"};
+  skinnedVert_ = std::move(sv).value();
+  skinnedFrag_ = std::move(sf).value();
+  linesVert_ = std::move(lv).value();
+  linesFrag_ = std::move(lf).value();
+
+  // set 0: scene block (views, light) + joint palette; set 1: a material's base-colour texture.
+  VkDescriptorSetLayoutBinding sceneBindings[2] = {
+      {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
+      {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, nullptr}};
+  VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  lci.bindingCount = 2;
+  lci.pBindings = sceneBindings;
+  VkDescriptorSetLayout layout = VK_NULL_HANDLE;
+  if (vkCreateDescriptorSetLayout(dev, &lci, nullptr, &layout) != VK_SUCCESS) return Error{"descriptor set layout"};
+  sceneLayout_ = UniqueDescriptorSetLayout(dev, layout);
+  VkDescriptorSetLayoutBinding texBinding{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1,
+                                          VK_SHADER_STAGE_FRAGMENT_BIT, nullptr};
+  lci.bindingCount = 1;
+  lci.pBindings = &texBinding;
+  if (vkCreateDescriptorSetLayout(dev, &lci, nullptr, &layout) != VK_SUCCESS) return Error{"descriptor set layout"};
+  materialLayout_ = UniqueDescriptorSetLayout(dev, layout);
+
+  VkDescriptorSetLayout sets[2] = {sceneLayout_.get(), materialLayout_.get()};
+  VkPushConstantRange push{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, 32};
+  VkPipelineLayoutCreateInfo pli{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  pli.setLayoutCount = 2;
+  pli.pSetLayouts = sets;
+  pli.pushConstantRangeCount = 1;
+  pli.pPushConstantRanges = &push;
+  VkPipelineLayout pl = VK_NULL_HANDLE;
+  if (vkCreatePipelineLayout(dev, &pli, nullptr, &pl) != VK_SUCCESS) return Error{"pipeline layout"};
+  pipelineLayout_ = UniquePipelineLayout(dev, pl);
+  return {};
+}
+
+Result<const Renderer::PipelineSet*> Renderer::pipelines(const PipelineKey& key) {
+  if (auto it = pipelines_.find(key); it != pipelines_.end()) return &it->second;
+  const auto [colorFormat, depthFormat, samples, viewMask] = key;
+
+  auto build = [&](const PipelineDesc& d) -> Result<UniquePipeline> {
+    VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},
+                                                 {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};
+    stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
+    stages[0].module = d.vert;
+    stages[0].pName = "main";
+    stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
+    stages[1].module = d.frag;
+    stages[1].pName = "main";
+    stages[1].pSpecializationInfo = d.fragSpec;
+
+    VkVertexInputBindingDescription binding{0, 0, VK_VERTEX_INPUT_RATE_VERTEX};
+    std::vector<VkVertexInputAttributeDescription> attrs;
+    if (d.lines) {
+      binding.stride = sizeof(LineVertex);
+      attrs = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(LineVertex, position)},
+               {1, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(LineVertex, color)}};
+    } else {
+      using V = avatar::SkinnedVertex;
+      binding.stride = sizeof(V);
+      attrs = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(V, position)},
+               {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(V, normal)},
+               {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(V, uv)},
+               {3, 0, VK_FORMAT_R32G32B32A32_UINT, offsetof(V, joints0)},
+               {4, 0, VK_FORMAT_R32G32B32A32_UINT, offsetof(V, joints1)},
+               {5, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(V, weights0)},
+               {6, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(V, weights1)}};
+    }
+    VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    vi.vertexBindingDescriptionCount = 1;
+    vi.pVertexBindingDescriptions = &binding;
+    vi.vertexAttributeDescriptionCount = static_cast<uint32_t>(attrs.size());
+    vi.pVertexAttributeDescriptions = attrs.data();
+    VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+    ia.topology = d.lines ? VK_PRIMITIVE_TOPOLOGY_LINE_LIST : VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+    VkPipelineViewportStateCreateInfo vp{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+    vp.viewportCount = 1;
+    vp.scissorCount = 1;
+    VkPipelineRasterizationStateCreateInfo rs{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+    rs.polygonMode = VK_POLYGON_MODE_FILL;
+    rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;  // glTF winding; the projection flips y, the viewport does not
+    rs.lineWidth = 1.0f;
+    VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+    ms.rasterizationSamples = samples;
+    VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+    ds.depthCompareOp = VK_COMPARE_OP_LESS_OR_EQUAL;
+    VkPipelineColorBlendAttachmentState blend{};
+    blend.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
+                           VK_COLOR_COMPONENT_A_BIT;
+    if (d.blend) {  // premultiplied by the shader's alpha: classic "over"
+      blend.blendEnable = VK_TRUE;
+      blend.srcColorBlendFactor = VK_BLEND_FACTOR_SRC_ALPHA;
+      blend.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+      blend.colorBlendOp = VK_BLEND_OP_ADD;
+      blend.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+      blend.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+      blend.alphaBlendOp = VK_BLEND_OP_ADD;
+    }
+    VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+    cb.attachmentCount = 1;
+    cb.pAttachments = &blend;
+    const VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_CULL_MODE,
+                                  VK_DYNAMIC_STATE_DEPTH_TEST_ENABLE, VK_DYNAMIC_STATE_DEPTH_WRITE_ENABLE};
+    VkPipelineDynamicStateCreateInfo dy{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+    dy.dynamicStateCount = static_cast<uint32_t>(std::size(dyn));
+    dy.pDynamicStates = dyn;
+    VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+    rendering.viewMask = viewMask;
+    rendering.colorAttachmentCount = 1;
+    rendering.pColorAttachmentFormats = &colorFormat;
+    rendering.depthAttachmentFormat = depthFormat;
+
+    VkGraphicsPipelineCreateInfo gci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+    gci.pNext = &rendering;
+    gci.stageCount = 2;
+    gci.pStages = stages;
+    gci.pVertexInputState = &vi;
+    gci.pInputAssemblyState = &ia;
+    gci.pViewportState = &vp;
+    gci.pRasterizationState = &rs;
+    gci.pMultisampleState = &ms;
+    gci.pDepthStencilState = &ds;
+    gci.pColorBlendState = &cb;
+    gci.pDynamicState = &dy;
+    gci.layout = pipelineLayout_.get();
+    VkPipeline p = VK_NULL_HANDLE;
+    if (VkResult r = vkCreateGraphicsPipelines(device_.handle(), VK_NULL_HANDLE, 1, &gci, nullptr, &p); r != VK_SUCCESS)
+      return Error{std::string("vkCreateGraphicsPipelines: ") + vkResultName(r)};
+    ++stats_.pipelinesCreated;
+    return UniquePipeline(device_.handle(), p);
+  };
+
+  PipelineSet set;
+  const VkSpecializationMapEntry entry{0, 0, sizeof(int32_t)};
+  for (int32_t mode = 0; mode < 3; ++mode) {
+    VkSpecializationInfo spec{1, &entry, sizeof(int32_t), &mode};
+    auto p = build({skinnedVert_.get(), skinnedFrag_.get(), &spec, false, mode == 2});
+    if (!p) return Error{p.error()};
+    (mode == 0 ? set.opaque : mode == 1 ? set.mask : set.blend) = std::move(p).value();
+  }
+  auto lines = build({linesVert_.get(), linesFrag_.get(), nullptr, true, false});
+  if (!lines) return Error{lines.error()};
+  set.lines = std::move(lines).value();
+  return &pipelines_.emplace(key, std::move(set)).first->second;
+}
+
+}  // namespace embody::gfx

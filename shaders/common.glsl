@@ -1,0 +1,26 @@
+// Shared by every graphics shader: the per-frame scene block (views, light), the push constants
+// and the view index. Included with GL_GOOGLE_include_directive; not compiled on its own.
+#extension GL_EXT_multiview : require
+
+const uint kMaxViews = 8u;
+
+struct ViewData {
+  mat4 viewProj;
+  vec4 eye;  // world-space camera position
+};
+
+layout(set = 0, binding = 0, std140) uniform Scene {
+  ViewData views[kMaxViews];
+  vec4 lightDirection;  // xyz: unit vector towards the light
+  vec4 lightColor;      // rgb: linear radiance of the directional light
+  vec4 skyColor;        // hemisphere ambient from above
+  vec4 groundColor;     // hemisphere ambient from below
+} scene;
+
+layout(push_constant) uniform Push {
+  vec4 baseColorFactor;
+  uint viewBase;      // first view of this pass; gl_ViewIndex adds 0 or 1 under multiview
+  float alphaCutoff;
+} pc;
+
+uint viewIndex() { return pc.viewBase + gl_ViewIndex; }

@@ -1,0 +1,26 @@
+#version 460
+// Skinned avatar: LBS with up to 8 influences from the joint palette (std430 storage buffer).
+#extension GL_GOOGLE_include_directive : require
+#include "common.glsl"
+
+layout(set = 0, binding = 1, std430) readonly buffer Palette { mat4 joints[]; } palette;
+#include "skinning.glsl"
+
+layout(location = 0) in vec3 inPosition;
+layout(location = 1) in vec3 inNormal;
+layout(location = 2) in vec2 inUv;
+layout(location = 3) in uvec4 inJoints0;
+layout(location = 4) in uvec4 inJoints1;
+layout(location = 5) in vec4 inWeights0;
+layout(location = 6) in vec4 inWeights1;
+
+layout(location = 0) out vec3 outNormal;
+layout(location = 1) out vec2 outUv;
+
+void main() {
+  const mat4 m = skinMatrix(inJoints0, inJoints1, inWeights0, inWeights1);
+  const vec4 world = m * vec4(inPosition, 1.0);
+  outNormal = mat3(m) * inNormal;  // normalised per fragment
+  outUv = inUv;
+  gl_Position = scene.views[viewIndex()].viewProj * world;
+}

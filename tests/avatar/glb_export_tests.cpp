@@ -1,0 +1,95 @@
+#include <catch2/catch.hpp>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+
+#include "avatar/avatar_loader.h"
+#include "avatar/gltf/glb_writer.h"
+#include "avatar/gltf/gltf_loader.h"
+#include "avatar/procedural/default_avatar.h"
+#include "test_paths.h"
+
+using namespace embody::avatar;
+
+namespace {
+std::string runCapture(const std::string& cmd, int& exitCode) {
+  std::string out;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) {
+    exitCode = -1;
+    return out;
+  }
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
+  const int status = pclose(p);
+  exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return out;
+}
+}  // namespace
+
+TEST_CASE("the exported default avatar reloads with the same skeleton, mesh and mapping", "[export]") {
+  const AvatarAsset a = buildDefaultAvatar();
+  auto bytes = encodeGlb(a);
+  REQUIRE(bytes.ok());
+  auto b = loadGltfFromMemory(bytes.value(), "");
+  REQUIRE(b.ok());
+  REQUIRE(prepareAvatar(b.value(), "").ok());
+  // One extra node carries the mesh; every joint keeps its name and rest transform.
+  REQUIRE(b->skeleton.joints.size() == a.skeleton.joints.size() + 1);
+  for (size_t j = 0; j < a.skeleton.joints.size(); ++j) {
+    const int k = b->skeleton.find(a.skeleton.joints[j].name);
+    REQUIRE(k >= 0);
+    CHECK(glm::length(b->skeleton.joints[k].rest.translation - a.skeleton.joints[j].rest.translation) < 1e-6f);
+  }
+  CHECK(b->mesh.triangleCount() == a.mesh.triangleCount());
+  CHECK(b->skinJointCount == static_cast<int>(a.skeleton.joints.size()));
+  CHECK(b->humanoid.method == MappingMethod::Names);
+  CHECK(b->humanoid.missingRequired.empty());
+  CHECK(b->humanoid.spine.size() == 25);
+  CHECK(b->mesh.firstPersonIndices.size() == a.mesh.firstPersonIndices.size());
+  // Skinned at rest, the reloaded mesh sits exactly where the original does.
+  std::vector<glm::mat4> ga, gb, pa, pb;
+  computeGlobals(a.skeleton, SkeletonPose::rest(a.skeleton), ga);
+  computeGlobals(b->skeleton, SkeletonPose::rest(b->skeleton), gb);
+  computeSkinningPalette(a, ga, pa);
+  computeSkinningPalette(b.value(), gb, pb);
+  std::vector<glm::vec3> xa, xb, na, nb;
+  skinOnCpu(a.mesh, pa, xa, na);
+  skinOnCpu(b->mesh, pb, xb, nb);
+  REQUIRE(xa.size() == xb.size());
+  float worst = 0.0f;
+  for (size_t i = 0; i < xa.size(); ++i) worst = std::max(worst, glm::length(xa[i] - xb[i]));
+  CHECK(worst < 1e-5f);
+}
+
+TEST_CASE("the exported default avatar passes the Khronos glTF validator with zero errors", "[export][validator]") {
+  int rc = 0;
+  runCapture("command -v node >/dev/null 2>&1", rc);
+  if (rc != 0) {
+    WARN("SKIPPED: node is not installed (scripts/install-deps.sh installs it)");
+    return;
+  }
+  const std::filesystem::path src = embody::test::kSourceDir;
+  const std::filesystem::path tools = src / ".tools";
+  if (!std::filesystem::exists(tools / "node_modules" / "gltf-validator" / "package.json")) {
+    WARN("SKIPPED: gltf-validator not installed under " << tools.string() << " (run scripts/install-deps.sh)");
+    return;
+  }
+  const auto file = std::filesystem::temp_directory_path() / ("embody_default_avatar_" + std::to_string(::getpid()) + ".glb");
+  REQUIRE(writeGlbFile(buildDefaultAvatar(), file.string()).ok());
+  const std::string out = runCapture("node '" + (src / "scripts" / "validate_gltf.js").string() + "' '" + file.string() +
+                                         "' '" + tools.string() + "' 2>&1",
+                                     rc);
+  std::filesystem::remove(file);
+  INFO(out);
+  REQUIRE(rc != 3);
+  const auto report = nlohmann::json::parse(out, nullptr, false);
+  REQUIRE_FALSE(report.is_discarded());
+  CHECK(report["numErrors"].get<int>() == 0);
+  CHECK(report["numWarnings"].get<int>() == 0);
+  CHECK(rc == 0);
+}

@@ -1,0 +1,80 @@
+// `embody avatar` end to end: info --json fields, export-default, usage errors.
+#include <catch2/catch.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "cli/cli_support.h"
+#include "test_paths.h"
+
+using embody::test::runEmbody;
+
+TEST_CASE("embody avatar info --json reports the default avatar's mapping and spine", "[avatar]") {
+  const auto r = runEmbody("avatar info default --json");
+  REQUIRE(r.exitCode == 0);
+  const auto j = nlohmann::json::parse(r.output);
+  CHECK(j["format"] == "procedural");
+  CHECK(j["mapping"] == "names");
+  CHECK(j["bones"]["hips"] == "humanoid_root");
+  CHECK(j["bones"]["head"] == "skullbase");
+  CHECK(j["unmapped_required"].empty());
+  CHECK(j["joints"].get<int>() == 43);
+  CHECK(j["triangles"].get<int>() >= 10000);
+  REQUIRE(j["spine"].size() == 25);
+  CHECK(j["spine"][0]["vertebrae"] == nlohmann::json::array({"vl5"}));
+  CHECK(j["first_person"]["mode"] == "auto");
+}
+
+TEST_CASE("embody avatar info maps CesiumMan by topology", "[avatar]") {
+  EMBODY_REQUIRE_SHARED_ASSET(path, "CesiumMan.glb");
+  const auto r = runEmbody("avatar info '" + path + "' --json");
+  REQUIRE(r.exitCode == 0);
+  const auto j = nlohmann::json::parse(r.output);
+  CHECK(j["format"] == "gltf");
+  CHECK(j["mapping"] == "topology");
+  CHECK(j["joints"].get<int>() == 19);
+  CHECK(j["unmapped_required"].empty());
+  CHECK(j["bones"]["leftHand"] == "Skeleton_arm_joint_L__2_");
+}
+
+TEST_CASE("embody avatar export-default writes a GLB that info reads back", "[avatar]") {
+  const auto file = std::filesystem::temp_directory_path() / ("embody_cli_default_" + std::to_string(::getpid()) + ".glb");
+  REQUIRE(runEmbody("avatar export-default '" + file.string() + "'").exitCode == 0);
+  const auto r = runEmbody("avatar info '" + file.string() + "' --json");
+  std::filesystem::remove(file);
+  REQUIRE(r.exitCode == 0);
+  const auto j = nlohmann::json::parse(r.output);
+  CHECK(j["format"] == "gltf");
+  CHECK(j["mapping"] == "names");
+  CHECK(j["joints"].get<int>() == 43);
+}
+
+TEST_CASE("embody avatar reports usage and file errors with the right exit codes", "[avatar]") {
+  CHECK(runEmbody("avatar").exitCode == 2);
+  CHECK(runEmbody("avatar frobnicate").exitCode == 2);
+  CHECK(runEmbody("avatar info").exitCode == 2);
+  const auto missing = runEmbody("avatar info /nonexistent.glb", true);
+  CHECK(missing.exitCode == 1);
+  CHECK_THAT(missing.output, Catch::Contains("cannot open"));
+  const auto badMap = runEmbody("avatar info default --bone-map /nonexistent.json", true);
+  CHECK(badMap.exitCode == 1);
+}
+
+TEST_CASE("embody avatar info reports the body model; --spine and calibration profiles apply", "[avatar]") {
+  auto j = nlohmann::json::parse(runEmbody("avatar info default --json").output);
+  CHECK(j["body_model"]["spine_model"] == "full");
+  CHECK(j["body_model"]["spine_sites"].size() == 25);
+  CHECK(j["body_model"]["mass_kg"].get<double>() == Approx(75.0));
+  j = nlohmann::json::parse(runEmbody("avatar info default --json --spine simplified").output);
+  CHECK(j["body_model"]["spine_model"] == "simplified");
+  CHECK(runEmbody("avatar info default --spine sideways").exitCode == 2);
+
+  const auto profile = std::filesystem::temp_directory_path() / ("embody_cli_profile_" + std::to_string(::getpid()) + ".json");
+  REQUIRE(runEmbody("avatar calibrate default --user-height 1.9 --profile '" + profile.string() + "'").exitCode == 0);
+  j = nlohmann::json::parse(runEmbody("avatar info default --json --profile '" + profile.string() + "'").output);
+  std::filesystem::remove(profile);
+  CHECK(j["body_model"]["scale"].get<double>() == Approx(1.9 / 1.755).epsilon(0.01));
+  CHECK(runEmbody("avatar calibrate default --profile /tmp/x.json").exitCode == 2);
+  CHECK(runEmbody("avatar calibrate default --user-height 40 --profile /tmp/x.json").exitCode == 1);
+}

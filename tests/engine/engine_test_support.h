@@ -1,0 +1,31 @@
+#pragma once
+// Shared by the engine tests: a validated lavapipe device, a deterministic non-rest pose for any
+// skeleton, and the golden-image check (tests/golden/<name>.png + <name>.driver.txt).
+#include <catch2/catch.hpp>
+#include <memory>
+#include <string>
+
+#include "avatar/avatar_asset.h"
+#include "engine/device.h"
+#include "support/vulkan_test_instance.h"
+
+namespace embody::test {
+
+// A lavapipe device on a validated instance. Members destruct device first, then the instance
+// (whose destructor fails the test on any validation message).
+struct GpuContext {
+  TestInstance vk;
+  std::unique_ptr<gfx::Device> device;
+  GpuContext();
+};
+
+// Every joint but the roots turned by a small joint-dependent rotation: a fixed non-rest pose.
+avatar::SkeletonPose wobblePose(const avatar::Skeleton& skeleton, float amount = 0.35f);
+
+// Compares `image` with tests/golden/<name>.png (per channel tolerance 5/255, at most 0.1 % of
+// pixels failing). With EMBODY_UPDATE_GOLDENS=1 it (re)writes the golden and its driver string
+// instead. On failure writes <name>.actual.png and <name>.diff.png under the build folder's
+// test-output/golden/ and prints their paths.
+void checkGolden(const std::string& name, const avatar::Image& image, const std::string& driver);
+
+}  // namespace embody::test

@@ -1,0 +1,259 @@
+// `embody xr` end to end against the headless runtime with the OpenXR core validation layer and
+// the Vulkan validation layer: the session reaches FOCUSED and ends cleanly, nothing is reported,
+// and in the captured left-eye image the hand gizmos are where the replayed controllers project.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <nlohmann/json.hpp>
+
+#include "engine/image_io.h"
+#include "xr_test_support.h"
+
+namespace fs = std::filesystem;
+using namespace embody::test;
+
+namespace {
+
+// The replayed body: head 1.6 m above the stage origin looking 30 degrees down, controllers in
+// front of the chest. Hands are invalid (tracking lost) for trace times in [lossFrom, lossTo).
+const glm::vec3 kHead{0.0f, 1.6f, 0.0f};
+const glm::quat kHeadQ = glm::angleAxis(glm::radians(-30.0f), glm::vec3(1, 0, 0));
+const glm::vec3 kLeftHand{-0.16f, 1.3f, -0.38f}, kRightHand{0.16f, 1.3f, -0.38f};
+
+std::string writeTrace(const std::string& dir, double lossFrom = -1.0, double lossTo = -1.0) {
+  const std::string path = dir + "/trace.jsonl";
+  std::ofstream out(path);
+  auto pose = [](const glm::vec3& p, const glm::quat& q, bool valid) {
+    return nlohmann::json{{"p", {p.x, p.y, p.z}}, {"q", {q.x, q.y, q.z, q.w}}, {"valid", valid}};
+  };
+  for (int i = 0; i <= 600; ++i) {  // 60 s at 10 Hz: the run never wraps around
+    const double t = 0.1 * i;
+    const bool handsValid = !(t >= lossFrom && t < lossTo);
+    const glm::quat handQ = glm::angleAxis(glm::radians(20.0f), glm::vec3(1, 0, 0));
+    nlohmann::json j = {{"t", t},
+                        {"head", pose(kHead, kHeadQ, true)},
+                        {"left", pose(kLeftHand, handQ, handsValid)},
+                        {"right", pose(kRightHand, handQ, handsValid)}};
+    out << j.dump() << "\n";
+  }
+  return path;
+}
+
+// Pixel of a world point in the runtime's left eye (its documented IPD and asymmetric fov).
+glm::vec2 projectLeftEye(const glm::vec3& world, int width, int height) {
+  const glm::vec3 eye = kHead + kHeadQ * glm::vec3(-0.032f, 0.0f, 0.0f);
+  const glm::vec3 p = glm::conjugate(kHeadQ) * (world - eye);
+  const float x = p.x / -p.z, y = p.y / -p.z;
+  const float l = std::tan(-0.90f), r = std::tan(0.76f), u = std::tan(0.82f), d = std::tan(-0.90f);
+  return {(x - l) / (r - l) * float(width), (u - y) / (u - d) * float(height)};
+}
+
+bool isCyan(const uint8_t* px) {
+  return px[0] < 150 && px[1] > 200 && px[2] > 200;
+}
+bool isMagenta(const uint8_t* px) {
+  return px[0] > 200 && px[1] < 190 && px[2] > 190 && px[0] - px[1] > 60;
+}
+
+template <typename Pred>
+int countNear(const embody::avatar::Image& img, glm::vec2 c, int radius, Pred pred) {
+  int n = 0;
+  for (int y = int(c.y) - radius; y <= int(c.y) + radius; ++y)
+    for (int x = int(c.x) - radius; x <= int(c.x) + radius; ++x)
+      if (x >= 0 && y >= 0 && x < img.width && y < img.height &&
+          pred(&img.rgba[size_t(y * img.width + x) * 4]))
+        ++n;
+  return n;
+}
+
+template <typename Pred>
+int countAll(const embody::avatar::Image& img, Pred pred) {
+  return countNear(img, {img.width / 2.0f, img.height / 2.0f}, std::max(img.width, img.height), pred);
+}
+
+struct XrRun {
+  ProcessResult process;
+  nlohmann::json stats;
+  std::string capture;
+};
+
+XrRun runEmbodyXr(const std::string& name, const std::vector<std::string>& extraArgs,
+                  std::map<std::string, std::string> extraEnv, double lossFrom = -1.0, double lossTo = -1.0) {
+  XrRun run;
+  const std::string dir = freshTestDir(name);
+  run.capture = dir + "/capture";
+  auto env = headlessRuntimeEnv();
+  env["EMBODY_XR_POSES"] = writeTrace(dir, lossFrom, lossTo);
+  env["EMBODY_XR_CAPTURE"] = run.capture;
+  env["EMBODY_XR_VIEW_SIZE"] = "256x280";
+  env["EMBODY_XR_IPD"] = "0.064";
+  for (const auto& [k, v] : extraEnv) env[k] = v;
+  std::vector<std::string> argv = {embodyBin(), "xr", "--validate", "--stats", dir + "/stats.json"};
+  argv.insert(argv.end(), extraArgs.begin(), extraArgs.end());
+  run.process = runProcess(argv, env, 90);
+  std::ifstream in(dir + "/stats.json");
+  if (in) run.stats = nlohmann::json::parse(in, nullptr, false);
+  return run;
+}
+
+void requireNoValidation(const XrRun& r) {
+  CHECK(countOccurrences(r.process.output, "Core Validation output type") == 1);  // the layer was on
+  CHECK(countOccurrences(r.process.output, "VALID_ERROR") == 0);
+  CHECK(countOccurrences(r.process.output, "VALID_WARNING") == 0);
+  CHECK(countOccurrences(r.process.output, "[vulkan]") == 0);
+  CHECK(r.stats.value("vulkan_validation_messages", 1) == 0);
+}
+
+embody::avatar::Image capture(const XrRun& r, int index) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "/left_%05d.png", index);
+  auto img = embody::gfx::readPng(r.capture + name);
+  REQUIRE(img.ok());
+  return std::move(img).value();
+}
+
+}  // namespace
+
+TEST_CASE(
+    "embody xr --frames 120 reaches FOCUSED, ends cleanly, and draws the hands where the controllers are",
+    "[xr]") {
+  const XrRun r = runEmbodyXr("frames120", {"--frames", "120"}, {});
+  INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
+  REQUIRE_FALSE(r.process.timedOut);
+  REQUIRE(r.process.exitCode == 0);
+  REQUIRE(r.stats.is_object());
+  requireNoValidation(r);
+  CHECK(r.stats["reached_focused"] == true);
+  CHECK(r.stats["ended_cleanly"] == true);
+  CHECK(r.stats["frames_submitted"] == 120);
+  CHECK(r.stats["stage"] == true);
+  const std::vector<std::string> expected = {"IDLE",    "READY",        "SYNCHRONIZED", "VISIBLE", "FOCUSED",
+                                             "VISIBLE", "SYNCHRONIZED", "STOPPING",     "IDLE",    "EXITING"};
+  CHECK(r.stats["states"].get<std::vector<std::string>>() == expected);
+  CHECK(r.stats["hand_valid_frames"][0] == 120);
+  CHECK(r.stats["hand_valid_frames"][1] == 120);
+  // Calibration from the HMD height: the avatar's eyes end up at 1.6 m.
+  CHECK(r.stats["calibrated"] == true);
+
+  size_t pngs = 0;
+  for (const auto& e : fs::directory_iterator(r.capture)) pngs += e.path().extension() == ".png";
+  CHECK(pngs == 120);
+  const auto img = capture(r, 119);
+  REQUIRE(img.width == 256);
+  REQUIRE(img.height == 280);
+  const glm::vec2 left = projectLeftEye(kLeftHand, img.width, img.height);
+  const glm::vec2 right = projectLeftEye(kRightHand, img.width, img.height);
+  INFO("left hand projects to " << left.x << "," << left.y << "; right hand to " << right.x << ","
+                                << right.y);
+  REQUIRE(left.x > 0.0f);
+  REQUIRE(right.x < float(img.width));
+  // Each hand's gizmo (cyan left, magenta right) is drawn around its projected position, and only there.
+  CHECK(countNear(img, left, 14, isCyan) >= 8);
+  CHECK(countNear(img, right, 14, isMagenta) >= 8);
+  CHECK(countNear(img, left, 14, isMagenta) == 0);
+  CHECK(countNear(img, right, 14, isCyan) == 0);
+  CHECK(countAll(img, isCyan) == countNear(img, left, 30, isCyan));
+  CHECK(countAll(img, isMagenta) == countNear(img, right, 30, isMagenta));
+}
+
+TEST_CASE("embody xr handles tracking loss mid-run: the hands disappear and come back, nothing breaks",
+          "[xr]") {
+  // Hands lost between 0.25 s and 0.9 s of trace time (the runtime's clock starts at session creation).
+  const XrRun r = runEmbodyXr("tracking_loss", {"--frames", "90"}, {}, 0.25, 0.9);
+  INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
+  REQUIRE_FALSE(r.process.timedOut);
+  REQUIRE(r.process.exitCode == 0);
+  REQUIRE(r.stats.is_object());
+  requireNoValidation(r);
+  CHECK(r.stats["ended_cleanly"] == true);
+  const uint64_t lost = r.stats["hand_lost_frames"][1], valid = r.stats["hand_valid_frames"][1];
+  CHECK(lost >= 3);
+  CHECK(valid >= 3);
+  CHECK(lost + valid >= 89);
+  // Some captured frame has no hand gizmo at all (lost) and the last one has both again.
+  bool sawLostFrame = false;
+  for (int i = 0; i < 90 && !sawLostFrame; ++i) {
+    const auto img = capture(r, i);
+    sawLostFrame = countAll(img, isCyan) == 0 && countAll(img, isMagenta) == 0;
+  }
+  CHECK(sawLostFrame);
+  const auto last = capture(r, 89);
+  CHECK(countNear(last, projectLeftEye(kRightHand, last.width, last.height), 14, isMagenta) >= 8);
+}
+
+TEST_CASE("embody xr ends cleanly when the runtime ends the session", "[xr]") {
+  // The runtime requests the exit after 25 frames; the application asked for many more.
+  const XrRun r = runEmbodyXr("runtime_end", {"--frames", "1000"}, {{"EMBODY_XR_FRAMES", "25"}});
+  INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
+  REQUIRE_FALSE(r.process.timedOut);
+  REQUIRE(r.process.exitCode == 0);
+  requireNoValidation(r);
+  CHECK(r.stats["ended_cleanly"] == true);
+  // The runtime counts xrEndFrame calls; the first frame comes before the session is visible
+  // and carries no layer.
+  CHECK(r.stats["frames_waited"] == 25);
+  CHECK(r.stats["frames_submitted"] == 24);
+  CHECK(r.stats["states"].back() == "EXITING");
+}
+
+TEST_CASE("embody xr reports a lost session with a clear error and shuts down cleanly", "[xr]") {
+  const XrRun r = runEmbodyXr("session_lost", {"--frames", "1000"}, {{"EMBODY_XR_LOSS_FRAMES", "10"}});
+  INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
+  REQUIRE_FALSE(r.process.timedOut);
+  CHECK(r.process.exitCode == 1);
+  CHECK(r.process.output.find("session was lost") != std::string::npos);
+  requireNoValidation(r);
+  CHECK(r.stats["session_lost"] == true);
+  CHECK(r.stats["states"].back() == "LOSS_PENDING");
+}
+
+TEST_CASE("embody xr without a runtime fails with a clear message", "[xr]") {
+  const auto r = runProcess({embodyBin(), "xr", "--frames", "5"},
+                            {{"XR_RUNTIME_JSON", "/nonexistent/runtime.json"}}, 60);
+  INFO(r.output);
+  CHECK(r.exitCode == 1);
+  CHECK(r.output.find("error:") != std::string::npos);
+  const auto usage = runProcess({embodyBin(), "xr", "--frames", "-3"}, {}, 30);
+  CHECK(usage.exitCode == 2);
+}
+
+TEST_CASE("embody xr --mirror shows every frame in a desktop window without validation messages", "[xr]") {
+  // Runs under its own Xvfb (xvfb-run) unless a display is already there.
+  const bool haveDisplay = std::getenv("DISPLAY") && *std::getenv("DISPLAY");
+  if (!haveDisplay && !fs::exists("/usr/bin/xvfb-run")) {
+    WARN("SKIPPED: no display and no xvfb-run (Debian package xvfb)");
+    return;
+  }
+  const std::string dir = freshTestDir("mirror");
+  auto env = headlessRuntimeEnv();
+  env["EMBODY_XR_VIEW_SIZE"] = "256x280";
+  std::vector<std::string> argv = {embodyBin(), "xr",         "--mirror", "--frames",
+                                   "30",        "--validate", "--stats",  dir + "/stats.json"};
+  if (!haveDisplay) argv.insert(argv.begin(), {"xvfb-run", "-a"});
+  const auto p = runProcess(argv, env, 90);
+  INFO(p.output.substr(p.output.size() > 4000 ? p.output.size() - 4000 : 0));
+  REQUIRE_FALSE(p.timedOut);
+  REQUIRE(p.exitCode == 0);
+  std::ifstream in(dir + "/stats.json");
+  const auto stats = nlohmann::json::parse(in, nullptr, false);
+  REQUIRE(stats.is_object());
+  CHECK(stats["ended_cleanly"] == true);
+  CHECK(stats["frames_submitted"] == 30);
+  CHECK(stats["mirror_frames"].get<int>() >= 25);  // a frame may skip the mirror, never the headset
+  CHECK(stats["vulkan_validation_messages"] == 0);
+  CHECK(countOccurrences(p.output, "VALID_ERROR") == 0);
+}
+
+TEST_CASE("embody xr --mirror without a display fails with a clear message", "[xr]") {
+  auto env = headlessRuntimeEnv();
+  env["DISPLAY"] = "";
+  env["WAYLAND_DISPLAY"] = "";
+  const auto p = runProcess({embodyBin(), "xr", "--mirror", "--frames", "5"}, env, 60);
+  INFO(p.output);
+  CHECK(p.exitCode == 1);
+  CHECK(p.output.find("needs a display") != std::string::npos);
+}

@@ -1,0 +1,282 @@
+#include "xr/openxr/xr_loop.h"
+
+#include <chrono>
+#include <cstdio>
+#include <thread>
+
+#include "engine/avatar_renderer.h"
+#include "engine/device.h"
+#include "engine/overlay.h"
+#include "xr/openxr/mirror_window.h"
+#include "xr/openxr/xr_input.h"
+#include "xr/openxr/xr_session.h"
+#include "xr/openxr/xr_system.h"
+
+namespace embody::xr {
+
+namespace {
+
+gfx::FovAngles fovOf(const XrFovf& f) {
+  return {f.angleLeft, f.angleRight, f.angleUp, f.angleDown};
+}
+
+// Midpoint of the eyes with the left eye's orientation: the head pose the body follows.
+Pose headFromViews(const Views& v) {
+  return {0.5f * (v.eyes[0].pose.position + v.eyes[1].pose.position), v.eyes[0].pose.orientation};
+}
+
+constexpr float kNear = 0.05f, kFar = 100.0f;
+constexpr glm::vec4 kHandColors[2] = {{0.1f, 0.9f, 1.0f, 1.0f}, {1.0f, 0.3f, 0.9f, 1.0f}};
+
+}  // namespace
+
+XrLoopReport runXrLoop(const XrLoopOptions& o) {
+  XrLoopReport rep;
+  auto fail = [&](const std::string& e) {
+    rep.error = e;
+    return rep;
+  };
+  if (!o.avatar) return fail("runXrLoop: no avatar");
+  XrSystemOptions so;
+  so.vulkanValidation = o.vulkanValidation;
+  if (o.mirror) {
+    auto exts = MirrorWindow::requiredInstanceExtensions();
+    if (!exts) return fail(exts.error());
+    so.vulkanInstanceExtensions = *exts;
+    so.vulkanDeviceExtensions = {VK_KHR_SWAPCHAIN_EXTENSION_NAME};
+  }
+  auto system = XrSystem::create(so);
+  if (!system) return fail(system.error());
+  XrSystem& sys = **system;
+  rep.runtime = sys.runtimeName();
+  rep.system = sys.systemName();
+
+  gfx::AdoptedDevice ad{sys.vkInstance(), sys.vkPhysicalDevice(), sys.vkDevice(), sys.queueFamily(), 0};
+  auto device = gfx::Device::adopt(ad);
+  if (!device) return fail(device.error());
+  std::unique_ptr<MirrorWindow> mirror;
+  if (o.mirror) {
+    const auto& v = sys.views()[0];
+    auto m = MirrorWindow::create(sys.vkInstance(), sys.vkPhysicalDevice(), sys.vkDevice(), sys.queueFamily(),
+                                  v.recommendedImageRectWidth, v.recommendedImageRectHeight);
+    if (!m) return fail(m.error());
+    mirror = std::move(m).value();
+  }
+  gfx::AvatarRendererOptions ro;
+  ro.width = ro.height = 16;  // its own offscreen target is unused: the eyes render into swapchains
+  auto avatarRenderer = gfx::AvatarRenderer::create(**device, *o.avatar, ro);
+  if (!avatarRenderer) return fail(avatarRenderer.error());
+  gfx::AvatarRenderer& ar = **avatarRenderer;
+
+  auto session = XrSessionRunner::create(sys);
+  if (!session) return fail(session.error());
+  XrSessionRunner& run = **session;
+  rep.usedStage = run.usingStage();
+  rep.depthSubmitted = run.submitsDepth();
+  auto input = XrInput::create(sys, run);
+  if (!input) return fail(input.error());
+  XrInput& in = **input;
+  rep.handTracking = in.handTracking();
+
+  const auto rest = avatar::SkeletonPose::rest(o.avatar->skeleton);
+  const glm::vec3 avatarEye(ar.eyePose(rest)[3]);
+  AvatarPlacement placement(avatarEye, ar.anchors().forward, o.placement);
+  avatar::SkeletonPose pose = rest;
+  std::vector<gfx::LineVertex> lines, overlay;
+  bool recentered = false;
+
+  size_t statesSeen = 0;
+  double renderSeconds = 0.0;
+  std::string error;
+  uint64_t rendererFrames = 0;
+  while (!run.finished()) {
+    if (mirror) {
+      mirror->pollEvents();
+      if (mirror->closeRequested()) run.requestExit();
+    }
+    if (auto s = run.pollEvents(); !s) {
+      error = s.error();
+      break;
+    }
+    for (; statesSeen < run.stateHistory().size(); ++statesSeen) {
+      const XrSessionState st = run.stateHistory()[statesSeen];
+      rep.states.push_back(sessionStateName(st));
+      rep.reachedFocused = rep.reachedFocused || st == XR_SESSION_STATE_FOCUSED;
+      if (o.verbose) std::printf("session state: %s\n", sessionStateName(st));
+    }
+    if (run.finished()) break;
+    if (!run.running()) {  // IDLE before READY, or between STOPPING and EXITING
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      continue;
+    }
+    auto timing = run.waitFrame();
+    if (!timing) {
+      error = timing.error();
+      break;
+    }
+    ++rep.framesWaited;
+    const auto t0 = std::chrono::steady_clock::now();
+    if (auto s = run.beginFrame(); !s) {
+      error = s.error();
+      break;
+    }
+    const XrTime t = timing->predictedDisplayTime;  // poses predicted for when the frame is shown
+    if (auto s = in.update(t); !s) {
+      error = s.error();
+      break;
+    }
+    Views views = run.locateViews(t);
+    const Pose headTracking = headFromViews(views);
+    const bool mirrorRecenter = mirror && mirror->takeRecenterRequest();
+    if (views.valid && ((o.recenterAtStart && !recentered) || in.recenterPressed() || mirrorRecenter)) {
+      placement.recenter(headTracking);
+      recentered = true;
+    }
+    if (views.valid)
+      for (auto& e : views.eyes) e.pose = placement.toWorld(e.pose);
+    const Pose head = headFromViews(views);
+    if (views.tracked) {
+      ++rep.headTrackedFrames;
+      if (!placement.calibrated()) placement.calibrate(head);
+    }
+    for (int h = 0; h < 2; ++h) {
+      if (in.hand(h).grip.valid)
+        ++rep.handValidFrames[h];
+      else if (run.focused())
+        ++rep.handLostFrames[h];
+    }
+    rep.interactionProfile = in.interactionProfile();
+
+    bool rendered = false;
+    if (timing->shouldRender && views.valid) {
+      pose = rest;
+      placement.place(o.avatar->skeleton, head, pose);
+      if (auto s = ar.computePose(pose); !s) {
+        error = s.error();
+        break;
+      }
+      lines.clear();
+      overlay.clear();
+      for (int h = 0; h < 2; ++h) {
+        const HandState& hs = in.hand(h);
+        if (!hs.grip.valid) continue;  // tracking lost: no gizmo rather than a stale one
+        gfx::Gizmo g;
+        g.pose = placement.toWorld(hs.grip.pose).matrix();
+        g.color = kHandColors[h];
+        g.size = 0.05f;
+        gfx::appendGizmo(overlay, g);
+      }
+      std::array<uint32_t, 2> color{}, depth{};
+      for (uint32_t e = 0; e < 2; ++e) {
+        auto c = run.acquire(run.color()[e].handle);
+        if (!c) {
+          error = c.error();
+          break;
+        }
+        color[e] = *c;
+        if (run.submitsDepth()) {
+          auto d = run.acquire(run.depth()[e].handle);
+          if (!d) {
+            error = d.error();
+            break;
+          }
+          depth[e] = *d;
+        }
+      }
+      if (!error.empty()) break;
+      gfx::Renderer& r = ar.renderer();
+      gfx::SceneFrame scene;
+      scene.avatar = &ar.gpuAvatar();
+      scene.palette = ar.palette();
+      scene.firstPerson = true;  // the user's own head is hidden
+      scene.lines = lines;
+      scene.overlayLines = overlay;  // hand gizmos stay visible through the avatar's hands
+      Status st = r.beginFrame();
+      if (st) st = r.setScene(scene);
+      for (uint32_t e = 0; e < 2 && st; ++e) {
+        const auto& sc = run.color()[e];
+        gfx::PassTarget target;
+        target.color = {sc.images[color[e]].image,
+                        sc.images[color[e]].view,
+                        sc.format,
+                        sc.extent,
+                        0,
+                        1,
+                        VK_IMAGE_LAYOUT_UNDEFINED,
+                        VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+        if (run.submitsDepth()) {
+          const auto& dc = run.depth()[e];
+          target.depth = gfx::TargetImage{dc.images[depth[e]].image,
+                                          dc.images[depth[e]].view,
+                                          dc.format,
+                                          dc.extent,
+                                          0,
+                                          1,
+                                          VK_IMAGE_LAYOUT_UNDEFINED,
+                                          VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL};
+        }
+        const gfx::Camera cam =
+            gfx::cameraFromPose(views.eyes[e].pose.matrix(), fovOf(views.eyes[e].fov), kNear, kFar);
+        st = r.drawPass(std::span<const gfx::Camera>(&cam, 1), target);
+      }
+      ++rendererFrames;
+      gfx::SubmitSync sync;
+      if (st && mirror) {
+        // The left eye again (its pose, the window's aspect), or the avatar from outside.
+        const float vfov = views.eyes[0].fov.angleUp - views.eyes[0].fov.angleDown;
+        const gfx::Camera cam =
+            mirror->thirdPerson()
+                ? ar.orbitAround(pose, 0.6f, 0.2f)
+                : gfx::cameraFromPose(views.eyes[0].pose.matrix(),
+                                      gfx::FovAngles::symmetric(vfov, mirror->aspect()), kNear, kFar);
+        auto shown = mirror->draw(r, rendererFrames, cam, sync);
+        if (!shown)
+          st = Status(Error{shown.error()});
+        else if (*shown)
+          ++rep.mirrorFrames;
+      }
+      if (st) st = r.endFrame(sync);  // submitted before the images are released, as OpenXR requires
+      if (st && mirror) st = mirror->present((*device)->queue());
+      for (uint32_t e = 0; e < 2; ++e) {
+        (void)run.release(run.color()[e].handle);
+        if (run.submitsDepth()) (void)run.release(run.depth()[e].handle);
+      }
+      if (!st) {
+        error = st.error();
+        break;
+      }
+      rendered = true;
+    }
+    if (auto s = run.endFrame(*timing, rendered ? &views : nullptr, kNear, kFar); !s) {
+      error = s.error();
+      break;
+    }
+    if (rendered)
+      renderSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (o.frames > 0 && run.framesSubmitted() >= o.frames) run.requestExit();
+  }
+  for (; statesSeen < run.stateHistory().size(); ++statesSeen)
+    rep.states.push_back(sessionStateName(run.stateHistory()[statesSeen]));
+  rep.framesSubmitted = run.framesSubmitted();
+  rep.sessionLost = run.lost();
+  rep.endedCleanly = !rep.states.empty() && rep.states.back() == std::string("EXITING") && error.empty();
+  rep.calibrated = placement.calibrated();
+  rep.calibratedScale = placement.scale();
+  rep.meanFrameMs = rep.framesSubmitted ? 1000.0 * renderSeconds / double(rep.framesSubmitted) : 0.0;
+  // Tear down in dependency order before reading the final validation count.
+  ar.renderer().waitIdle();
+  input->reset();
+  session->reset();
+  avatarRenderer->reset();
+  mirror.reset();
+  device->reset();
+  const auto counter = sys.validationCounter();
+  system->reset();  // destroying the device and instance can report leaks: count after
+  rep.vulkanValidationMessages = counter->load();
+  if (error.empty() && rep.sessionLost)
+    error = "the OpenXR session was lost (the runtime or the headset went away)";
+  rep.error = error;
+  return rep;
+}
+
+}  // namespace embody::xr

@@ -1,0 +1,50 @@
+#pragma once
+// The headset loop behind `embody xr`: OpenXR system + session + input, the avatar rendered in
+// first person into the runtime's swapchains (one pass per eye), gizmos at the tracked hands.
+//
+// Until the body/IK pipeline exists, the avatar stands in its rest pose under the head (scaled by
+// the HMD-height calibration, turned with the head's heading); only the gizmos follow the hands.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "avatar/avatar_asset.h"
+#include "core/result.h"
+#include "xr/openxr/avatar_placement.h"
+
+namespace embody::xr {
+
+struct XrLoopOptions {
+  const avatar::AvatarAsset* avatar = nullptr;  // required; must outlive the loop
+  uint64_t frames = 0;  // request exit after this many submitted frames (0: until the runtime ends it)
+  bool vulkanValidation = false;
+  PlacementOptions placement;
+  bool recenterAtStart = false;
+  bool verbose = false;  // print every session state change
+  bool mirror = false;   // a desktop window showing the left eye (V: third person)
+};
+
+struct XrLoopReport {
+  std::string runtime, system, interactionProfile;
+  bool usedStage = false, handTracking = false, depthSubmitted = false;
+  std::vector<std::string> states;  // session states in the order they came
+  bool reachedFocused = false;
+  bool endedCleanly = false;  // EXITING reached after xrEndSession
+  bool sessionLost = false;
+  uint64_t framesWaited = 0, framesSubmitted = 0;
+  uint64_t headTrackedFrames = 0;
+  uint64_t handValidFrames[2] = {0, 0};  // frames whose grip pose was valid, per hand
+  uint64_t handLostFrames[2] = {0, 0};   // frames (while focused) with the hand's pose not valid
+  float calibratedScale = 1.0f;
+  bool calibrated = false;
+  uint32_t vulkanValidationMessages = 0;
+  uint64_t mirrorFrames = 0;  // frames the mirror window presented
+  double meanFrameMs = 0.0;   // wall time per loop iteration while rendering
+  std::string error;          // "" when the run ended normally
+};
+
+// Runs until the session ends. Setup failures, failing calls and a lost session (sessionLost)
+// set report.error; whatever was measured until then is reported too.
+XrLoopReport runXrLoop(const XrLoopOptions& options);
+
+}  // namespace embody::xr
