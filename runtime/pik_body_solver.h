@@ -44,6 +44,13 @@ class PikBodySolver final : public BodySolver {
   PikBodySolver(std::shared_ptr<const ik::Model> model, PikBinding binding, ik::SolveOptions options = {},
                 PoseWriter writer = {});
 
+  // A warm start can lead the solver into a configuration it does not leave (a folded spine, a
+  // limb caught at its limits) while the targets stay reachable. When a bound task ends farther
+  // than this from its target, the solver restarts from the initial configuration (its root moved
+  // under the head target) within the same deadline, and keeps the better of the two.
+  double restartAboveResidual = 0.1;  // metres; <= 0 disables
+  int restarts() const { return restarts_; }
+
   SolveResult solve(const SolveRequest& request, avatar::SkeletonPose& pose) override;
   void resetWarmStart() override;
 
@@ -60,6 +67,11 @@ class PikBodySolver final : public BodySolver {
   ik::Data data_;
   Eigen::VectorXd initialQ_;
   IterationCostModel cost_;
+  int restarts_ = 0;
+
+  double worstResidual() const;
+  std::array<float, tracking::kTrackerCount> residuals() const;
+  void runSolve(const SolveRequest& request);
 };
 
 }  // namespace embody::runtime
