@@ -77,6 +77,7 @@ Result<AvatarBinding> bindBodyModel(const avatar::BodyModel& body, const avatar:
     const Eigen::Vector3d p = taskFrame(task).translation();
     bind(id, task, {toGlm(p), tracking::restGripOrientation(side, toGlm(forearm)), true});
   }
+  b.centerOfMass = body.comTask;
   // Feet: the ankles, flat.
   for (auto [id, task] : {std::pair{tracking::TrackerId::LeftFoot, body.leftFootTask},
                           std::pair{tracking::TrackerId::RightFoot, body.rightFootTask}}) {

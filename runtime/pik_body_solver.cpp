@@ -10,6 +10,7 @@ PikBinding PikBinding::byTaskNames(const ik::Model& model, const std::array<std:
   PikBinding b;
   for (size_t i = 0; i < names.size(); ++i)
     if (!names[i].empty()) b.targets[i].task = model.findTask(names[i]);
+  b.centerOfMass = model.findTask("com");
   return b;
 }
 
@@ -86,6 +87,19 @@ SolveResult PikBodySolver::solve(const SolveRequest& request, avatar::SkeletonPo
     if (b.orientationTask >= 0) (void)data_.setTarget(b.orientationTask, Eigen::Quaterniond(target.linear()));
   }
 
+  if (binding_.centerOfMass >= 0) {
+    // Balance. With tracked feet the performer's own balance is in the targets and a point
+    // target for the centre of mass would only fight them: off. Without (head and hands only)
+    // the centre of mass goes under the head, where a standing user's is.
+    bool feet = false;
+    for (auto foot : {tracking::TrackerId::LeftFoot, tracking::TrackerId::RightFoot})
+      feet = feet || (g.pose[foot].valid && g[foot] != tracking::TrackerStatus::Absent);
+    (void)data_.setEnabled(binding_.centerOfMass, !feet);
+    if (!feet) {
+      const glm::vec3 head = g.pose[tracking::TrackerId::Head].position;
+      (void)data_.setTarget(binding_.centerOfMass, binding_.modelFromTracking * Eigen::Vector3d(head.x, 0.0, head.z));
+    }
+  }
   runSolve(request);
   SolveResult r;
   r.iterations = data_.report().iterations;

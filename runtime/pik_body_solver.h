@@ -26,6 +26,9 @@ struct PikBinding {
     Eigen::Isometry3d trackerToTask = Eigen::Isometry3d::Identity();
   };
   std::array<Target, tracking::kTrackerCount> targets{};
+  // The centre-of-mass task (balance), -1 for none. Off while feet are tracked (the performer's
+  // balance is in their targets); otherwise its target is the point under the head target.
+  ik::TaskId centerOfMass = -1;
   // Tracking space (OpenXR: +Y up, -Z forward, +X right) to the model's world frame; e.g. a
   // rotation of 180 degrees about Y for a model facing +Z with +X to its left.
   Eigen::Isometry3d modelFromTracking = Eigen::Isometry3d::Identity();
