@@ -100,11 +100,20 @@ Workspace::Workspace(const Model& model)
     const Eigen::MatrixXd full = qr.householderQ();
     eq_nullspace.leftCols(n - eq_rank) = full.rightCols(n - eq_rank);
   }
+  eq_matrix.setZero(eq_rank, n);
+  eq_rhs.setZero(eq_rank);
+  for (int i = 0; i < eq_rank; ++i) {
+    eq_matrix.row(i) = a.row(eq_rows[i]);
+    eq_rhs(i) = model.equality_rhs(eq_rows[i]);
+  }
   basis.setZero(n, n);
   factor.setZero(n, n);
+  basis.leftCols(eq_rank) = eq_basis.leftCols(eq_rank);
+  factor.topLeftCorner(eq_rank, eq_rank) = eq_factor.topLeftCorner(eq_rank, eq_rank);
   active_rhs.setZero(n);
   mask.setOnes(n);
-  nullspace.setZero(n, n);
+  nullspace = eq_nullspace;
+  eq_projector0 = Eigen::MatrixXd::Identity(n, n) - eq_basis.leftCols(eq_rank) * eq_basis.leftCols(eq_rank).transpose();
   dq0.setZero(n);
   dq.setZero(n);
   tmp_n.setZero(n);
@@ -115,7 +124,7 @@ Workspace::Workspace(const Model& model)
   reduced_jacobian.setZero(rows, n);
   row_space.setZero(n, n);
   projector.setZero(n, n);
-  projector0.setZero(n, n);
+  projector0 = eq_projector0;
   for (const Model::Level& level : model.levels) {
     const int m = level.rows;
     level_j.emplace_back(Eigen::MatrixXd::Zero(m, n));
@@ -409,24 +418,26 @@ void kinematics(const Model& model, Data& data, bool jacobians) {
 
 namespace {
 
-void resetActiveSet(const Model& model, Workspace& w, Path path) {
+// Back to the equality rows only. The equality part of basis / factor is written once (in the
+// constructor) and pinned rows only append after it; the null-space basis and the reference
+// projector are restored only when pinned rows changed them.
+void resetActiveSet(Workspace& w, Path path) {
   const int r = w.eq_rank;
   w.rank = r;
   if (r > 0) {
-    w.basis.leftCols(r) = w.eq_basis.leftCols(r);
-    w.factor.topLeftCorner(r, r) = w.eq_factor.topLeftCorner(r, r);
-    for (int i = 0; i < r; ++i) {
-      const int row = w.eq_rows[i];
-      w.active_rhs(i) = model.equality_rhs(row) - model.equality_matrix.row(row).dot(w.q);
-    }
+    w.active_rhs.head(r) = w.eq_rhs;
+    w.active_rhs.head(r).noalias() -= w.eq_matrix * w.q;
   }
   w.mask_mode = r == 0;
   w.mask.setOnes();
   w.null_dim = w.n - r;
-  if (!w.mask_mode) w.nullspace.leftCols(w.null_dim) = w.eq_nullspace.leftCols(w.null_dim);
-  if (path == Path::Reference) {
-    w.projector0.setIdentity();
-    if (r > 0) w.projector0.noalias() -= w.basis.leftCols(r) * w.basis.leftCols(r).transpose();
+  if (!w.mask_mode && w.nullspace_dirty) {
+    w.nullspace.leftCols(w.null_dim) = w.eq_nullspace.leftCols(w.null_dim);
+    w.nullspace_dirty = false;
+  }
+  if (path == Path::Reference && w.projector0_dirty) {
+    w.projector0 = w.eq_projector0;
+    w.projector0_dirty = false;
   }
   std::fill(w.ineq_active.begin(), w.ineq_active.end(), 0);
   std::fill(w.ineq_reported.begin(), w.ineq_reported.end(), 0);
@@ -474,6 +485,7 @@ bool addActiveRow(Workspace& w, double rhs_delta, int single_dof, Path path, dou
   if (w.mask_mode && single_dof >= 0) {
     w.mask(single_dof) = 0.0;
   } else {
+    w.nullspace_dirty = true;
     if (w.mask_mode) {  // materialise the diagonal projector's basis: the unmasked unit vectors
       w.nullspace.setZero();
       int k = 0;
@@ -496,7 +508,10 @@ bool addActiveRow(Workspace& w, double rhs_delta, int single_dof, Path path, dou
     }
   }
   w.null_dim -= 1;
-  if (path == Path::Reference) w.projector0.noalias() -= w.basis.col(r) * w.basis.col(r).transpose();
+  if (path == Path::Reference) {
+    w.projector0.noalias() -= w.basis.col(r) * w.basis.col(r).transpose();
+    w.projector0_dirty = true;
+  }
   return true;
 }
 
@@ -520,6 +535,29 @@ bool levelActive(const Model::Level& level, const Workspace& w) {
 // Leaves the Cholesky factor of G in w.level_llt[k] (valid when gram_pd); sigma_min is eps when
 // undamped (a lower bound) and 0 when G is singular.
 constexpr int kInverseIterations = 8;
+
+// Triangular solves with the Cholesky factor (lower, column-major) for the small m x m systems of
+// one level: plain loops beat Eigen's blocked kernels at these sizes (m <= ~16).
+void solveLower(const Eigen::MatrixXd& l, double* x) {
+  const Eigen::Index m = l.rows();
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const double xj = (x[j] /= l(j, j));
+    for (Eigen::Index i = j + 1; i < m; ++i) x[i] -= l(i, j) * xj;
+  }
+}
+void solveLowerTransposed(const Eigen::MatrixXd& l, double* x) {
+  const Eigen::Index m = l.rows();
+  for (Eigen::Index j = m; j-- > 0;) {
+    double v = x[j];
+    for (Eigen::Index i = j + 1; i < m; ++i) v -= l(i, j) * x[i];
+    x[j] = v / l(j, j);
+  }
+}
+// x := G⁻¹ x with G = L Lᵀ.
+void choleskySolve(const Eigen::MatrixXd& l, double* x) {
+  solveLower(l, x);
+  solveLowerTransposed(l, x);
+}
 
 struct LevelDamping {
   double lambda2 = 0.0;
@@ -554,9 +592,10 @@ LevelDamping levelDamping(const Eigen::MatrixXd& gram, Workspace& w, size_t k, c
   for (Eigen::Index i = 0; i < m; ++i) x(i) = 1.0 + 0.1 * static_cast<double>(i);  // deterministic start
   x.normalize();
   double mu = 0.0;
+  const Eigen::MatrixXd& l = gramLlt.matrixLLT();
   for (int it = 0; it < kInverseIterations; ++it) {
     z = x;
-    gramLlt.solveInPlace(z);
+    choleskySolve(l, z.data());
     mu = x.dot(z);
     const double zn = z.norm();
     if (!(zn > 0) || !std::isfinite(zn)) break;
@@ -603,9 +642,9 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
       damped = gram;
       damped.diagonal().array() += d.lambda2;
       w.level_llt2[k].compute(damped);
-      w.level_llt2[k].solveInPlace(y);
+      choleskySolve(w.level_llt2[k].matrixLLT(), y.data());
     } else {
-      w.level_llt[k].solveInPlace(y);  // λ = 0 only when G is positive definite
+      choleskySolve(w.level_llt[k].matrixLLT(), y.data());  // λ = 0 only when G is positive definite
     }
     auto dz = w.tmp_n.head(r);
     dz.noalias() = jhr.transpose() * y;
@@ -756,7 +795,7 @@ void reparameterize(const Model& model, Workspace& w) {
 bool step(const Model& model, Workspace& w, const SolveOptions& o) {
   w.report.active_clamps.clear();
   w.report.unsatisfiable.clear();
-  resetActiveSet(model, w, o.path);
+  resetActiveSet(w, o.path);
   computeDq0(w);
   runPass(model, w, o);
   int passes = 1;
@@ -819,7 +858,7 @@ bool allSatisfied(const Workspace& w) {
 const Eigen::VectorXd& priorityPass(const Model& model, Data& data, const SolveOptions& options) {
   Workspace& w = data.workspace();
   if (!sameShape(model, w)) return w.dq;
-  resetActiveSet(model, w, options.path);
+  resetActiveSet(w, options.path);
   computeDq0(w);
   runPass(model, w, options);
   return w.dq;
