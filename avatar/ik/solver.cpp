@@ -125,6 +125,14 @@ Workspace::Workspace(const Model& model)
   row_space.setZero(n, n);
   projector.setZero(n, n);
   projector0 = eq_projector0;
+  // Reserve first: growing a vector moves its elements, and moving an Eigen decomposition that
+  // has not computed anything yet reads its uninitialised flags (UBSan reports it).
+  const size_t levels = model.levels.size();
+  level_eig.reserve(levels);
+  level_llt.reserve(levels);
+  level_llt2.reserve(levels);
+  for (auto* v : {&level_j, &level_gram, &level_jw, &level_shifted}) v->reserve(levels);
+  for (auto* v : {&level_res, &level_coef, &level_tmp}) v->reserve(levels);
   for (const Model::Level& level : model.levels) {
     const int m = level.rows;
     level_j.emplace_back(Eigen::MatrixXd::Zero(m, n));
