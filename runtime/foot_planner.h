@@ -24,10 +24,10 @@
 namespace embody::runtime {
 
 struct FootPlannerConfig {
-  double stepSeconds = 0.35;         // one swing
+  double stepSeconds = 0.3;          // one swing
   double doubleSupportSeconds = 0.04;
   double liftHeight = 0.07;          // metres at the avatar's scale (scaled by `scale` below)
-  double walkThreshold = 0.07;       // foot error that starts a step while the body moves
+  double walkThreshold = 0.05;       // foot error that starts a step while the body moves
   double standThreshold = 0.22;      // ... while it stands (leaning does not make it step)
   double movingSpeed = 0.15;         // m/s: above this the body counts as moving
   double turnRadians = 0.55;         // ~30 degrees
