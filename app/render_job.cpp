@@ -155,7 +155,10 @@ int runRenderJob(const RenderJob& job) {
   runtime::AvatarBodyOptions bo;
   bo.spine = spine;
   bo.trackers = source.trackers();
-  bo.userHeight = userHeight;
+  // Synthetic motions and BVH clips are built for (fitted to) so.userHeight; a recorded trace's
+  // user is unknown unless given: calibrate from its first head sample.
+  const bool trace = job.motion.size() > 6 && job.motion.substr(job.motion.size() - 6) == ".jsonl";
+  bo.userHeight = userHeight > 0.0f ? userHeight : (trace ? 0.0f : so.userHeight);
   auto solver = runtime::AvatarBodySolver::create(asset, bo);
   if (!solver) return fail("avatar " + job.avatar + ": " + solver.error());
 
@@ -253,12 +256,14 @@ int runRenderJob(const RenderJob& job) {
   j["view"] = job.view;
   j["size"] = {job.width, job.height};
   j["fps"] = job.fps;
-  j["trackers"]["three_point"] = body.threePoint();
   j["calibration"] = {{"scale", body.scale()},
                       {"avatar_height_m", body.avatarHeight()},
                       {"user_height_m", userHeight > 0.0f ? nlohmann::json(double(userHeight)) : nlohmann::json(nullptr)},
                       {"from_first_head_sample", body.calibratedFromHead()}};
-  j["body"] = {{"spine_model", body.body().spineModel}, {"dofs", body.body().model.dofs}, {"steps", body.feet().steps()}};
+  j["body"] = {{"spine_model", body.body().spineModel},
+               {"dofs", body.body().model.dofs},
+               {"three_point", body.threePoint()},
+               {"steps", body.feet().steps()}};
   j["ik"]["samples_skipped"] = ik.samplesSkipped();
   std::ofstream(job.out / "stats.json") << j.dump(2) << "\n";
 

@@ -338,24 +338,33 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   }
   setTargets(targets);
 
-  // Stop early enough that one more iteration (as costly as the largest recent one) and the
+  // One PIK iteration per call, each timed: the next one starts only when the largest recent
+  // iteration (iterations with many clamping passes cost several times the average) and the
   // retargeting still fit before the deadline.
   SolverClock solverClock(clock);
   ik::SolveOptions o;
-  o.max_iterations = options_.maxIterations;
+  o.max_iterations = 1;
   o.clock = &solverClock;
-  o.deadline = SolverClock::toTimePoint(request.deadline - predictedIteration_ - predictedFinish_);
-  const ik::SolveReport& report = ik::solve(body_.model, *data_, o);
-  const double solvedAt = clock.now();
-  if (report.iterations > 0) {
-    const double perIteration = std::chrono::duration<double>(report.elapsed).count() / report.iterations;
-    predictedIteration_ = std::max(perIteration, 0.9 * predictedIteration_);
+  int iterations = 0;
+  bool converged = false, broken = false;
+  while (iterations < options_.maxIterations) {
+    const double start = clock.now();
+    if (start + predictedIteration_ + predictedFinish_ > request.deadline && iterations > 0) break;
+    if (start + predictedFinish_ >= request.deadline) break;
+    const ik::SolveReport& report = ik::solve(body_.model, *data_, o);
+    const double cost = clock.now() - start;
+    predictedIteration_ = std::max(cost, 0.9 * predictedIteration_);
+    iterations += report.iterations;
+    if (report.converged()) converged = true;
+    if (report.stop == ik::StopReason::InvalidState) broken = true;
+    if (report.iterations == 0 || report.stop != ik::StopReason::IterationCap) break;
   }
-  result.iterations = report.iterations;
-  result.converged = report.converged();
+  const double solvedAt = clock.now();
+  result.iterations = iterations;
+  result.converged = converged;
 
   // Never publish a broken configuration: fall back to the last good one.
-  if (!data_->q().allFinite() || report.stop == ik::StopReason::InvalidState) {
+  if (!data_->q().allFinite() || broken) {
     (void)data_->setConfiguration(lastGoodQ_);
     ik::kinematics(body_.model, *data_, false);
   } else {
