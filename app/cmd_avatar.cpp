@@ -1,11 +1,16 @@
 // embody avatar: inspect avatars (mapping, spine, first person) and export the default avatar.
-//   embody avatar info FILE|default [--json] [--bone-map FILE]
+//   embody avatar info FILE|default [--json] [--bone-map FILE] [--spine full|simplified|auto]
+//                     [--user-height M] [--profile FILE]
+//   embody avatar calibrate FILE|default (--user-height M | --eye-height M) [--arm-span M] --profile OUT
 //   embody avatar export-default FILE.glb
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "app/args.h"
 #include "avatar/avatar_loader.h"
+#include "avatar/body/body_model.h"
+#include "avatar/body/calibration.h"
 #include "avatar/gltf/glb_writer.h"
 #include "avatar/gltf/gltf_loader.h"
 #include "avatar/procedural/default_avatar.h"
@@ -51,6 +56,24 @@ nlohmann::json describe(const AvatarAsset& a, const GltfLoadReport& report) {
   return j;
 }
 
+// The IK body model built on the avatar, or why it cannot be built.
+nlohmann::json describeBody(const AvatarAsset& a, const BodyModelOptions& options) {
+  auto body = buildBodyModel(a, options);
+  if (!body.ok()) return {{"error", body.error()}};
+  const ik::Model& m = body->model;
+  nlohmann::json j = {{"spine_model", body->spineModel}, {"scale", body->scale}, {"dofs", m.dofs},
+                      {"joints", m.joints.size()}, {"equalities", m.equalities.size()},
+                      {"inequalities", m.inequalities.size()}, {"mass_kg", m.total_mass}, {"tasks", nlohmann::json::array()}};
+  for (const auto& t : m.tasks) j["tasks"].push_back(t.desc.name + " (level " + std::to_string(t.desc.level) + ")");
+  j["spine_sites"] = nlohmann::json::array();
+  for (const SpineBone& s : body->spineSites) {
+    nlohmann::json v = nlohmann::json::array();
+    for (int l = s.firstLevel; l < s.endLevel; ++l) v.push_back(vertebralJointName(l));
+    j["spine_sites"].push_back({{"node", a.skeleton.joints[static_cast<size_t>(s.joint)].name}, {"vertebrae", v}});
+  }
+  return j;
+}
+
 void printText(const nlohmann::json& j) {
   auto s = [](const nlohmann::json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); };
   std::printf("%s\n  format: %s, %s skin joints, %s nodes, %s triangles\n", s(j["file"]).c_str(), s(j["format"]).c_str(),
@@ -69,6 +92,14 @@ void printText(const nlohmann::json& j) {
   std::printf("  first person: %s, head '%s', %s triangles hidden, %s drawn\n", s(fp["mode"]).c_str(), s(fp["head"]).c_str(),
               s(fp["removed_triangles"]).c_str(), s(fp["triangles"]).c_str());
   for (const auto& a : fp["annotations"]) std::printf("    annotation %s\n", s(a).c_str());
+  const auto& body = j["body_model"];
+  if (body.contains("error")) {
+    std::printf("  body model: not built (%s)\n", s(body["error"]).c_str());
+  } else {
+    std::printf("  body model: %s joints, %s dofs, spine %s (%zu sites), %.1f kg, scale %.3f\n", s(body["joints"]).c_str(),
+                s(body["dofs"]).c_str(), s(body["spine_model"]).c_str(), body["spine_sites"].size(),
+                body["mass_kg"].get<double>(), body["scale"].get<double>());
+  }
   for (const auto& n : j["notes"]) std::printf("  note: %s\n", s(n).c_str());
   for (const auto& w : j["warnings"]) std::printf("  warning: %s\n", s(w).c_str());
 }
@@ -79,7 +110,25 @@ int runInfo(cli::Argv argv) {
   args.positional("FILE", "avatar file, or 'default'");
   args.flag("json", "print one JSON object instead of text");
   args.option("bone-map", "FILE", "JSON object VRM-1.0-bone-name -> node name; its entries win over every other mapping");
+  args.option("spine", "MODE", "spine sites of the body model: full (one per vertebra bone), simplified (8 sites), "
+                               "auto (full when the avatar has vertebra bones, else its own spine bones)", "auto");
+  args.option("user-height", "METRES", "scale the body model to this user height");
+  args.option("profile", "FILE", "calibration profile to read (written by 'embody avatar calibrate')");
   if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  BodyModelOptions bodyOptions;
+  if (!parseSpineMode(args.get("spine"), bodyOptions.spine)) {
+    std::fprintf(stderr, "error: --spine must be full, simplified or auto\n\n%s", args.usage().c_str());
+    return 2;
+  }
+  std::optional<double> userHeight;
+  if (args.has("user-height")) {
+    try {
+      userHeight = args.number("user-height");
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 2;
+    }
+  }
   GltfLoadReport report;
   Result<AvatarAsset> asset = Error{""};
   if (args.get("FILE") == "default") {
@@ -101,9 +150,75 @@ int runInfo(cli::Argv argv) {
     std::fprintf(stderr, "error: %s\n", asset.error().c_str());
     return 1;
   }
-  const auto j = describe(asset.value(), report);
+  auto j = describe(asset.value(), report);
+  if (userHeight) {
+    CalibrationInput in;
+    in.userHeight = userHeight;
+    auto p = calibrate(asset.value(), in);
+    if (!p.ok()) {
+      std::fprintf(stderr, "error: %s\n", p.error().c_str());
+      return 1;
+    }
+    bodyOptions.scale = p->scale;
+  } else if (args.has("profile")) {
+    auto p = loadProfile(args.get("profile"));
+    if (!p.ok()) {
+      std::fprintf(stderr, "error: %s\n", p.error().c_str());
+      return 1;
+    }
+    bodyOptions.scale = p->scale;
+  }
+  j["body_model"] = describeBody(asset.value(), bodyOptions);
   if (args.has("json")) std::printf("%s\n", j.dump(2).c_str());
   else printText(j);
+  return 0;
+}
+
+int runCalibrate(cli::Argv argv) {
+  cli::Args args("embody avatar calibrate", "Scales the avatar to the user and writes the calibration profile (JSON).");
+  args.positional("FILE", "avatar file, or 'default'");
+  args.option("user-height", "METRES", "the user's height");
+  args.option("eye-height", "METRES", "the user's eye height (e.g. the HMD at calibration), when the height is unknown");
+  args.option("arm-span", "METRES", "fingertip to fingertip (stored, not applied)");
+  args.option("profile", "FILE", "where to write the profile");
+  args.option("bone-map", "FILE", "JSON bone map, as for info");
+  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (!args.has("profile") || (!args.has("user-height") && !args.has("eye-height"))) {
+    std::fprintf(stderr, "error: need --profile and --user-height or --eye-height\n\n%s", args.usage().c_str());
+    return 2;
+  }
+  CalibrationInput in;
+  try {
+    if (args.has("user-height")) in.userHeight = args.number("user-height");
+    if (args.has("eye-height")) in.eyeHeight = args.number("eye-height");
+    if (args.has("arm-span")) in.armSpan = args.number("arm-span");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
+  Result<AvatarAsset> asset = Error{""};
+  if (args.get("FILE") == "default") {
+    asset = buildDefaultAvatar();
+  } else {
+    AvatarLoadOptions options;
+    options.boneMapFile = args.get("bone-map");
+    asset = loadAvatarFile(args.get("FILE"), options);
+  }
+  if (!asset.ok()) {
+    std::fprintf(stderr, "error: %s\n", asset.error().c_str());
+    return 1;
+  }
+  auto p = calibrate(asset.value(), in);
+  if (!p.ok()) {
+    std::fprintf(stderr, "error: %s\n", p.error().c_str());
+    return 1;
+  }
+  if (auto s = saveProfile(p.value(), args.get("profile")); !s.ok()) {
+    std::fprintf(stderr, "error: %s\n", s.error().c_str());
+    return 1;
+  }
+  std::printf("user %.3f m, avatar %.3f m: scale %.4f; wrote %s\n", p->userHeight, p->avatarHeight, p->scale,
+              args.get("profile").c_str());
   return 0;
 }
 
@@ -123,7 +238,9 @@ int runExportDefault(cli::Argv argv) {
 
 int runAvatar(cli::Argv argv) {
   static const char* usage =
-      "usage: embody avatar info FILE|default [--json] [--bone-map FILE]\n"
+      "usage: embody avatar info FILE|default [--json] [--bone-map FILE] [--spine full|simplified|auto]\n"
+      "                          [--user-height M] [--profile FILE]\n"
+      "       embody avatar calibrate FILE|default (--user-height M | --eye-height M) [--arm-span M] --profile OUT\n"
       "       embody avatar export-default FILE.glb\n";
   if (argv.empty()) {
     std::fprintf(stderr, "error: missing action\n\n%s", usage);
@@ -135,6 +252,7 @@ int runAvatar(cli::Argv argv) {
   }
   if (argv[0] == "info") return runInfo(argv.subspan(1));
   if (argv[0] == "export-default") return runExportDefault(argv.subspan(1));
+  if (argv[0] == "calibrate") return runCalibrate(argv.subspan(1));
   std::fprintf(stderr, "error: unknown action '%s'\n\n%s", argv[0].c_str(), usage);
   return 2;
 }

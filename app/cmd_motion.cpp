@@ -2,10 +2,12 @@
 //   embody motion list
 //   embody motion info SOURCE [--json] [--user-height M] [--bvh-scale S]
 //   embody motion record --motion SOURCE --out FILE.jsonl [--frames N] [--fps F] [--three-point] [--filter]
+//                        [--lose left,right@2-3]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <stdexcept>
 
 #include "app/args.h"
@@ -23,6 +25,31 @@ void sourceOptions(cli::Args& args) {
   args.option("user-height", "METRES", "the user's height: synthetic motions are built for it, BVH fitted to it", "1.75");
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (e.g. 0.0564 for CMU); default: fit the rest skeleton to --user-height");
   args.flag("three-point", "keep only the head and hands (an HMD with two controllers)");
+  args.option("lose", "TRACKERS@FROM-TO", "make trackers invalid in a time window, e.g. left,right@2.0-3.0");
+}
+
+// Opens the source with the shared options; the error is printed, exit code in `code`.
+std::unique_ptr<PoseSource> openSource(const cli::Args& args, const std::string& spec, const SourceOptions& opts,
+                                       const char* command, int& code) {
+  std::optional<TrackingLossSpec> loss;
+  if (args.has("lose")) {
+    auto l = parseTrackingLoss(args.get("lose"));
+    if (!l) {
+      std::fprintf(stderr, "error: --lose: %s\n", l.error().c_str());
+      code = 2;
+      return nullptr;
+    }
+    loss = *l;
+  }
+  auto src = openPoseSource(spec, opts);
+  if (!src) {
+    std::fprintf(stderr, "%s: error: %s\n", command, src.error().c_str());
+    code = 1;
+    return nullptr;
+  }
+  std::unique_ptr<PoseSource> s = std::move(*src);
+  if (loss) s = withTrackingLoss(std::move(s), loss->lost, loss->from, loss->to);
+  return s;
 }
 
 // Reads the shared source options; throws std::invalid_argument on bad values (usage errors).
@@ -66,12 +93,10 @@ int info(cli::Argv argv) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
   }
-  auto src = openPoseSource(args.get("SOURCE"), opts);
-  if (!src) {
-    std::fprintf(stderr, "embody motion info: error: %s\n", src.error().c_str());
-    return 1;
-  }
-  PoseSource& s = **src;
+  int code = 0;
+  auto src = openSource(args, args.get("SOURCE"), opts, "embody motion info", code);
+  if (!src) return code;
+  PoseSource& s = *src;
   // Walk the motion at 90 Hz (or its native rate) and summarise each tracker.
   const double rate = s.nativeRate() > 0.0 ? s.nativeRate() : 90.0;
   const size_t n = static_cast<size_t>(std::floor(s.duration() * rate + 1e-6)) + 1;
@@ -186,12 +211,10 @@ int record(cli::Argv argv) {
     std::fprintf(stderr, "error: %s\n\n%s", e.what(), args.usage().c_str());
     return 2;
   }
-  auto src = openPoseSource(args.get("motion"), opts);
-  if (!src) {
-    std::fprintf(stderr, "embody motion record: error: %s\n", src.error().c_str());
-    return 1;
-  }
-  PoseSource& s = **src;
+  int code = 0;
+  auto src = openSource(args, args.get("motion"), opts, "embody motion record", code);
+  if (!src) return code;
+  PoseSource& s = *src;
   if (frames < 0) frames = static_cast<int>(std::floor(s.duration() * fps + 1e-6)) + (s.periodic() ? 0 : 1);
   frames = std::max(frames, 1);
   TraceWriter w;

@@ -14,18 +14,19 @@ namespace {
 using namespace embody;
 
 int runXr(cli::Argv argv) {
-  cli::Args args("embody xr",
-                 "Puts you in the avatar through the active OpenXR runtime (a headset, or the headless runtime "
-                 "selected by XR_RUNTIME_JSON). Until the body solver is connected the avatar stands in its rest "
-                 "pose under your head and gizmos follow your hands.");
-  args.option("avatar", "FILE|default", "a .gltf/.glb/.vrm file, or 'default' (the built-in procedural avatar)",
-              "default");
+  cli::Args args(
+      "embody xr",
+      "Puts you in the avatar through the active OpenXR runtime (a headset, or the headless runtime "
+      "selected by XR_RUNTIME_JSON). Until the body solver is connected the avatar stands in its rest "
+      "pose under your head and gizmos follow your hands.");
+  args.option("avatar", "FILE|default",
+              "a .gltf/.glb/.vrm file, or 'default' (the built-in procedural avatar)", "default");
   args.option("frames", "N", "end the session after N submitted frames (0: until the runtime ends it)", "0");
   args.option("height", "METRES", "your standing eye height (skips the calibration from the HMD height)");
   args.option("stats", "FILE", "write a JSON report of the run (states, frames, tracking, validation)");
   args.flag("seated", "seated mode: the avatar follows your head down instead of standing on the floor");
   args.flag("recenter", "recenter at start (your position and heading become the origin)");
-  args.flag("mirror", "show the left eye in a desktop window (not available yet: prints a notice)");
+  args.flag("mirror", "show the left eye in a desktop window (V: third-person view, R: recenter, Esc: quit)");
   args.flag("validate", "enable the Khronos validation layer on the Vulkan device and count its messages");
   args.flag("verbose", "print every session state change");
   if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
@@ -48,8 +49,7 @@ int runXr(cli::Argv argv) {
   lo.recenterAtStart = args.has("recenter");
   lo.vulkanValidation = args.has("validate");
   lo.verbose = args.has("verbose");
-  if (args.has("mirror"))
-    std::fprintf(stderr, "notice: --mirror is not available yet; the headset view is not mirrored\n");
+  lo.mirror = args.has("mirror");
 
   avatar::AvatarAsset asset;
   const std::string avatarArg = args.get("avatar");
@@ -74,12 +74,16 @@ int runXr(cli::Argv argv) {
               r.interactionProfile.empty() ? "(none)" : r.interactionProfile.c_str());
   std::printf("session states: %s\n", states.c_str());
   std::printf("frames: %llu submitted of %llu, %.2f ms each; head tracked in %llu\n",
-              static_cast<unsigned long long>(r.framesSubmitted), static_cast<unsigned long long>(r.framesWaited),
-              r.meanFrameMs, static_cast<unsigned long long>(r.headTrackedFrames));
+              static_cast<unsigned long long>(r.framesSubmitted),
+              static_cast<unsigned long long>(r.framesWaited), r.meanFrameMs,
+              static_cast<unsigned long long>(r.headTrackedFrames));
   std::printf("hands valid: left %llu, right %llu; lost: left %llu, right %llu\n",
-              static_cast<unsigned long long>(r.handValidFrames[0]), static_cast<unsigned long long>(r.handValidFrames[1]),
-              static_cast<unsigned long long>(r.handLostFrames[0]), static_cast<unsigned long long>(r.handLostFrames[1]));
+              static_cast<unsigned long long>(r.handValidFrames[0]),
+              static_cast<unsigned long long>(r.handValidFrames[1]),
+              static_cast<unsigned long long>(r.handLostFrames[0]),
+              static_cast<unsigned long long>(r.handLostFrames[1]));
   std::printf("calibration: %s, avatar scale %.3f\n", r.calibrated ? "done" : "not done", r.calibratedScale);
+  if (lo.mirror) std::printf("mirror: %llu frames shown\n", static_cast<unsigned long long>(r.mirrorFrames));
   if (lo.vulkanValidation) std::printf("validation messages: %u\n", r.vulkanValidationMessages);
 
   if (args.has("stats")) {
@@ -102,6 +106,7 @@ int runXr(cli::Argv argv) {
                         {"avatar_scale", r.calibratedScale},
                         {"vulkan_validation_messages", r.vulkanValidationMessages},
                         {"mean_frame_ms", r.meanFrameMs},
+                        {"mirror_frames", r.mirrorFrames},
                         {"error", r.error}};
     std::ofstream out(args.get("stats"));
     out << j.dump(2) << "\n";

@@ -151,8 +151,7 @@ void frame(benchmark::State& state, const std::string& avatarName, uint32_t w, u
 void registerAll() {
   const std::string device = context().device->driverString();
   benchmark::AddCustomContext("device", device);
-  std::printf("device: %s\n", device.c_str());
-  std::fflush(stdout);
+  std::fprintf(stderr, "device: %s\n", device.c_str());  // stderr: stdout may be JSON
   struct Size {
     uint32_t w, h;
   };

@@ -220,7 +220,7 @@ Status AvatarRenderer::submitFrame(const avatar::SkeletonPose& pose, std::span<c
   } else if (s) {
     s = Error{"a frame takes one camera or a stereo pair"};
   }
-  if (s && readback) target_.recordReadback(r.commandBuffer());
+  if (s && readback) target_.recordReadback(r.commandBuffer(), 0, cameras.size() == 2 ? 2 : 1);
   SubmitSync sync;
   sync.waitForCompletion = waitForCompletion || readback;
   // Always submit an opened frame, even after an error, so the frame slot stays consistent.

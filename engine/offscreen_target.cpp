@@ -1,5 +1,6 @@
 #include "engine/offscreen_target.h"
 
+#include <algorithm>
 #include <cstring>
 
 namespace embody::gfx {
@@ -54,9 +55,10 @@ PassTarget OffscreenTarget::layer(uint32_t layer) const {
   return p;
 }
 
-void OffscreenTarget::recordReadback(VkCommandBuffer cmd) const {
+void OffscreenTarget::recordReadback(VkCommandBuffer cmd, uint32_t firstLayer, uint32_t layerCount) const {
   std::vector<VkBufferImageCopy> regions;
-  for (uint32_t l = 0; l < desc_.layers; ++l) {
+  const uint32_t end = layerCount > desc_.layers ? desc_.layers : std::min(desc_.layers, firstLayer + layerCount);
+  for (uint32_t l = firstLayer; l < end; ++l) {
     VkBufferImageCopy r{};
     r.bufferOffset = VkDeviceSize(rowPitch_) * desc_.height * l;
     r.bufferRowLength = rowPitch_ / 4;  // in texels

@@ -29,8 +29,9 @@ class OffscreenTarget {
   // image ready for recordReadback (TRANSFER_SRC_OPTIMAL).
   PassTarget allLayers() const;
   PassTarget layer(uint32_t layer) const;
-  // Copies every layer into the readback buffer (after the passes, in the same frame).
-  void recordReadback(VkCommandBuffer cmd) const;
+  // Copies layers [firstLayer, firstLayer + layerCount) into the readback buffer (after the
+  // passes that drew them, in the same frame). Layers not drawn this frame must be left out.
+  void recordReadback(VkCommandBuffer cmd, uint32_t firstLayer = 0, uint32_t layerCount = UINT32_MAX) const;
   // Tight RGBA8 pixels of one layer; valid once the frame with recordReadback has completed.
   avatar::Image pixels(uint32_t layer = 0) const;
   uint32_t rowPitchBytes() const { return rowPitch_; }

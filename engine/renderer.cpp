@@ -294,9 +294,10 @@ Status Renderer::drawPass(std::span<const Camera> cameras, const PassTarget& tar
 
   const VkCommandBuffer cmd = f.cmd;
   const TargetImage& color = target.color;
-  if (color.initialLayout != VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL)
-    transitionImage(cmd, color.image, VK_IMAGE_ASPECT_COLOR_BIT, color.initialLayout,
-                    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, color.baseLayer, layers);
+  // Always a barrier, even without a layout change: an earlier pass of this frame may have
+  // written the same image (a mirror view after the eyes), and that write must come first.
+  transitionImage(cmd, color.image, VK_IMAGE_ASPECT_COLOR_BIT, color.initialLayout,
+                  VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, color.baseLayer, layers);
   const VkImageAspectFlags depthAspect = aspectOf(depthFormat);
   const uint32_t depthBase = ownDepth ? 0 : target.depth->baseLayer;
   // Depth is cleared every pass, so its previous contents never matter: start from UNDEFINED.

@@ -15,7 +15,7 @@ namespace embody::runtime {
 struct SolveRequest {
   const tracking::GuardedSample* targets = nullptr;  // never null in a request from the runtime
   const Clock* clock = nullptr;
-  double deadline = 0.0;  // clock time by which solve() must have returned (see IterationBudget)
+  TimePoint deadline{};  // by which solve() must have returned (IterationBudget, IterationCostModel)
 };
 
 struct SolveResult {

@@ -1,25 +1,26 @@
 #include "runtime/clock.h"
 
 #include <algorithm>
-#include <chrono>
 
 namespace embody::runtime {
 
-double SteadyClock::now() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+void IterationCostModel::observe(Duration cost) {
+  // Jump at once to a dearer iteration, decay by a quarter towards a cheaper one.
+  predicted_ = std::max(cost, (3 * predicted_ + cost) / 4);
 }
 
-IterationBudget::IterationBudget(const Clock& clock, double deadline, double firstIterationGuess)
-    : clock_(clock), deadline_(deadline), predicted_(std::max(0.0, firstIterationGuess)) {}
+void IterationCostModel::observe(Duration elapsed, int iterations) {
+  if (iterations > 0) observe(elapsed / iterations);
+}
+
+IterationBudget::IterationBudget(const Clock& clock, TimePoint deadline, IterationCostModel* model)
+    : clock_(clock), deadline_(deadline), model_(model ? model : &local_) {}
 
 bool IterationBudget::startIteration() {
-  const double now = clock_.now();
-  if (iterations_ > 0) {
-    const double last = now - lastStart_;
-    // Decay slowly towards cheaper iterations, jump at once to a dearer one.
-    predicted_ = std::max(last, 0.75 * predicted_ + 0.25 * last);
-  }
-  if (now + predicted_ > deadline_) return false;
+  const TimePoint now = clock_.now();
+  if (iterations_ > 0) model_->observe(now - lastStart_);
+  // The first iteration always runs: progress every frame, an overshoot of at most one iteration.
+  if (iterations_ > 0 && now + model_->predicted() > deadline_) return false;
   lastStart_ = now;
   ++iterations_;
   return true;

@@ -1,5 +1,7 @@
 #include "runtime/ik_stage.h"
 
+#include <algorithm>
+
 namespace embody::runtime {
 
 IkStage::IkStage(BodySolver& solver, const Clock& clock, const IkStageConfig& config)
@@ -13,8 +15,8 @@ void IkStage::reset() {
 }
 
 const FrameStats& IkStage::process(const tracking::PoseSample& sample, SolvedFrame& out) {
-  const double start = clock_.now();
-  const double deadline = start + config_.budgetSeconds;
+  const TimePoint start = clock_.now();
+  const TimePoint deadline = start + fromSeconds(config_.budgetSeconds);
   tracking::PoseSample clean = sample;
   tracking::sanitize(clean);
   if (config_.filter) clean = filter_.apply(clean);
@@ -23,14 +25,14 @@ const FrameStats& IkStage::process(const tracking::PoseSample& sample, SolvedFra
   SolveRequest request;
   request.targets = &out.targets;
   request.clock = &clock_;
-  request.deadline = deadline;
+  request.deadline = deadline - fromSeconds(std::min(config_.reserveSeconds, 0.5 * config_.budgetSeconds));
   const SolveResult r = solver_.solve(request, out.pose);
-  const double end = clock_.now();
+  const TimePoint end = clock_.now();
 
   FrameStats& s = out.stats;
   s.sequence = ++sequence_;
   s.sampleTime = sample.time;
-  s.ikSeconds = end - start;
+  s.ikSeconds = toSeconds(end - start);
   s.budgetSeconds = config_.budgetSeconds;
   s.iterations = r.iterations;
   s.converged = r.converged;

@@ -11,6 +11,9 @@ namespace embody::runtime {
 
 struct IkStageConfig {
   double budgetSeconds = 0.001;  // per sample (--ik-budget-ms), filter and guard included
+  // Kept back from the solver's deadline for the work after it returns (writing the pose,
+  // publishing), so the whole stage ends within the budget.
+  double reserveSeconds = 0.05e-3;
   bool filter = true;            // One Euro filter on (off for exact replays)
   tracking::TrackerFilterParams filterParams;
   tracking::TrackingGuardConfig guard;

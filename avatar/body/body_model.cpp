@@ -5,6 +5,8 @@
 #include <array>
 #include <cmath>
 
+#include "avatar/spine/spine_model.h"
+
 namespace embody::avatar {
 namespace {
 
@@ -92,8 +94,10 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
     const glm::vec3 s(glm::length(c0), glm::length(c1), glm::length(c2));
     body.avatarRestGlobalScale[j] = s;
     body.avatarRestGlobalRotation[j] = glm::normalize(glm::quat_cast(glm::mat3(c0 / s.x, c1 / s.y, c2 / s.z)));
-    pivot[j] = toEigen(glm::vec3(globals[j][3]));
+    pivot[j] = options.scale * toEigen(glm::vec3(globals[j][3]));
   }
+  if (!(options.scale > 0.05 && options.scale < 20.0)) return Error{"body scale must be between 0.05 and 20"};
+  body.scale = options.scale;
   const Eigen::Vector3d up = toEigen(map.up).normalized();
   const Eigen::Vector3d forward = toEigen(map.forward).normalized();
   const double height = std::max(0.5, pivot[static_cast<size_t>(map.joint(HumanBone::head))].dot(up) -
@@ -192,14 +196,19 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
     return 0.045 * height;  // hands and toes without a child: a typical length
   };
 
+  auto limitsOf = [](ik::JointDesc& d, std::vector<double> lo, std::vector<double> hi) {
+    d.lower = std::move(lo);
+    d.upper = std::move(hi);
+  };
+  auto& limits = limitsOf;
   ik::ModelBuilder b;
   b.setUp(up);
   body.ikJointOfAvatar.assign(n, -1);
   std::vector<Eigen::Isometry3d> world;  // per IK joint at rest
-  auto add = [&](int avatarJoint, ik::JointDesc desc, const Eigen::Matrix3d& rot) {
+  auto add = [&](int avatarJoint, ik::JointDesc desc, const Eigen::Matrix3d& rot, bool sameParent = false) {
     int parentAvatar = sk.joints[static_cast<size_t>(avatarJoint)].parent;
     int parentIk = -1;
-    if (body.ikJointOfAvatar[static_cast<size_t>(avatarJoint)] >= 0) {
+    if (sameParent || body.ikJointOfAvatar[static_cast<size_t>(avatarJoint)] >= 0) {
       parentIk = body.ikJointOfAvatar[static_cast<size_t>(avatarJoint)];  // a second joint at the same pivot
     } else {
       while (parentAvatar >= 0 && body.ikJointOfAvatar[static_cast<size_t>(parentAvatar)] < 0)
@@ -218,9 +227,108 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
     body.ikJointOfAvatar[static_cast<size_t>(avatarJoint)] = id;
     return id;
   };
-  auto limits = [](ik::JointDesc& d, std::vector<double> lo, std::vector<double> hi) {
-    d.lower = std::move(lo);
-    d.upper = std::move(hi);
+
+  // The coupled spine (Raunhardt & Boulic 2008, avatar/spine) laid onto the avatar's spine
+  // bones: one site per bone (split where a bone spans two regions, the pieces sharing its
+  // pivot), or the default full / simplified descriptions for a bone-per-vertebra avatar. Each
+  // site takes the coupling rows and ranges of the vertebrae it stands for; the head (Occ-C1) is
+  // a Ball joint on top.
+  auto addCoupledSpine = [&]() -> Status {
+    std::vector<SpineBone> vertebral;  // sites below the head
+    for (const SpineBone& sb : sites)
+      if (sb.endLevel <= kVertebralJointCount - 1) vertebral.push_back(sb);
+      else if (sb.firstLevel < kVertebralJointCount - 1) vertebral.push_back({sb.joint, sb.firstLevel, kVertebralJointCount - 1});
+    const SpineBone headSite = sites.back();
+    if (headSite.endLevel != kVertebralJointCount) return Error{"spine: the head bone does not close the spine"};
+    spine::SpineDescription desc;
+    std::vector<int> siteJoint;  // avatar joint of each description site
+    if (perVertebra && options.spine != SpineMode::Simplified) {
+      desc = spine::defaultFullSpine();
+    } else if (perVertebra) {
+      desc = spine::defaultSimplifiedSpine();
+    } else {
+      std::vector<spine::SiteSpec> specs;
+      const int regionEnd[] = {5, 17, 24};
+      for (const SpineBone& sb : vertebral)
+        for (int from = sb.firstLevel; from < sb.endLevel;) {
+          int to = sb.endLevel;
+          for (int e : regionEnd)
+            if (from < e && to > e) to = e;
+          specs.push_back({sk.joints[static_cast<size_t>(sb.joint)].name + (from == sb.firstLevel ? "" : "_" + std::string(vertebralJointName(from))),
+                           std::string(vertebralJointName(from)), std::string(vertebralJointName(to - 1)), true, true});
+          from = to;
+        }
+      auto d = spine::withSites(spine::defaultFullSpine(), specs);
+      if (!d.ok()) return Error{"spine: " + d.error()};
+      desc = std::move(d.value());
+    }
+    for (const auto& site : desc.sites) {
+      int joint = -1;
+      for (const SpineBone& sb : map.spine)
+        if (sb.standsFor(site.first)) joint = sb.joint;
+      if (joint < 0) return Error{"spine: no avatar bone stands for " + desc.vertebrae[static_cast<size_t>(site.first)].name};
+      siteJoint.push_back(joint);
+    }
+    // World rest frames: at each site's bone pivot, +Y towards the next distinct pivot.
+    std::vector<Eigen::Isometry3d> siteWorld(desc.sites.size());
+    std::vector<Eigen::Isometry3d> rests(desc.sites.size());
+    const int headJoint = headSite.joint;
+    for (size_t k = 0; k < desc.sites.size(); ++k) {
+      const Eigen::Vector3d here = pivot[static_cast<size_t>(siteJoint[k])];
+      Eigen::Vector3d next = pivot[static_cast<size_t>(headJoint)];
+      for (size_t m = k + 1; m < desc.sites.size(); ++m)
+        if ((pivot[static_cast<size_t>(siteJoint[m])] - here).norm() > 1e-6) {
+          next = pivot[static_cast<size_t>(siteJoint[m])];
+          break;
+        }
+      if ((next - here).norm() < 1e-6) return Error{"spine: two spine bones share a pivot with the head"};
+      siteWorld[k].setIdentity();
+      siteWorld[k].linear() = boneFrame(next - here, forward, up);
+      siteWorld[k].translation() = here;
+      rests[k] = (k == 0 ? world[static_cast<size_t>(body.hips)] : siteWorld[k - 1]).inverse() * siteWorld[k];
+    }
+    const size_t before = b.joints().size();
+    spine::SpineOptions so;
+    auto added = spine::appendSpine(b, desc, body.hips, rests, so);
+    if (!added.ok()) return Error{"spine: " + added.error()};
+    // Book-keeping for the joints appendSpine added: pivot, rest rotation, masses.
+    for (size_t id = before; id < b.joints().size(); ++id) {
+      size_t k = 0;
+      for (size_t m = 0; m < added->sites.size(); ++m) {
+        const auto& sj = added->sites[m];
+        if (sj.swing == static_cast<int>(id) || sj.revolute == static_cast<int>(id) || sj.ball == static_cast<int>(id)) k = m;
+      }
+      world.push_back(siteWorld[k]);
+      body.avatarJoint.push_back(siteJoint[k]);
+      body.ikRestRotation.push_back(Eigen::Quaterniond(siteWorld[k].linear()));
+    }
+    body.spineSites.clear();
+    for (size_t k = 0; k < desc.sites.size(); ++k) {
+      const auto& site = desc.sites[k];
+      const ik::JointId last = added->sites[k].last();
+      body.ikJointOfAvatar[static_cast<size_t>(siteJoint[k])] = last;  // the bone takes the composed rotation
+      double mass = 0.0;
+      for (int l = site.first; l < site.first + site.count; ++l) mass += levelMassPercent(l);
+      const Eigen::Vector3d top = k + 1 < desc.sites.size() ? Eigen::Vector3d(siteWorld[k + 1].translation())
+                                                             : pivot[static_cast<size_t>(headJoint)];
+      const double length = (top - siteWorld[k].translation()).norm();
+      b.setSegment(last, mass * massScale, Eigen::Vector3d(0, 0.5 * length, 0));
+      body.spineSites.push_back({siteJoint[k], site.first, site.first + site.count});
+    }
+    body.spineSites.push_back(headSite.firstLevel == kVertebralJointCount - 1 ? headSite
+                                                                              : SpineBone{headJoint, kVertebralJointCount - 1, kVertebralJointCount});
+    body.spineEqualities = added->equalities;
+    // The head: a Ball joint for Occ-C1 on top of the spine.
+    ik::JointDesc h;
+    h.name = sk.joints[static_cast<size_t>(headJoint)].name;
+    h.type = ik::JointType::Ball;
+    const auto& r = kLevelRangeDeg[kVertebralJointCount - 1];
+    limitsOf(h, {-(1.0 - kFlexionShare) * r[0] * kDeg, -r[2] * kDeg, -r[1] * kDeg}, {kFlexionShare * r[0] * kDeg, r[2] * kDeg, r[1] * kDeg});
+    h.mass = levelMassPercent(kVertebralJointCount - 1) * massScale;
+    h.com = Eigen::Vector3d(0, 0.06 * height / 1.75, 0);
+    body.ikJointOfAvatar[static_cast<size_t>(headJoint)] = added->top;  // parent for add()
+    body.head = add(headJoint, h, boneFrame(up, forward, up), /*sameParent=*/true);
+    return {};
   };
 
   for (size_t a = 0; a < n; ++a) {
@@ -241,9 +349,13 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
         d.com = Eigen::Vector3d(0, 0.5 * len, 0);
         const ik::JointId id = add(j, d, rot);
         body.hips = id;
+        if (options.coupledSpine) {
+          if (auto s = addCoupledSpine(); !s.ok()) return Error{s.error()};
+        }
         break;
       }
       case Spine: {
+        if (options.coupledSpine) break;  // added with the coupled spine
         const SpineBone& s = sites[static_cast<size_t>(siteIndexOf[a])];
         Eigen::Vector3d r = Eigen::Vector3d::Zero();
         double mass = 0.0;
@@ -395,7 +507,7 @@ void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& 
       const glm::quat parentRot = glm::normalize(glm::quat_cast(glm::mat3(glm::normalize(c0), glm::normalize(c1), glm::normalize(c2))));
       local.rotation = glm::normalize(glm::inverse(parentRot) * wanted);
       if (ikJoint == body.hips) {
-        const Eigen::Vector3d p = frame.translation();
+        const Eigen::Vector3d p = frame.translation() / body.scale;
         local.translation = glm::vec3(glm::inverse(parent) * glm::vec4(float(p.x()), float(p.y()), float(p.z()), 1.0f));
       }
     }

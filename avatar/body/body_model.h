@@ -12,8 +12,8 @@
 // Joints (frames: +Y along the bone towards its child, +X = +Y x forward, +Z = X x Y; at the
 // rest pose every dof is 0):
 //   hips                  Free (6)
-//   each spine site       Ball (3) carrying the summed ranges of the vertebrae it stands for
-//                         (spine.md §1, White & Panjabi; flexion 60 % / extension 40 %)
+//   each spine site       the coupled spine's swing + torsion joints with the ranges and coupling
+//                         rows of the vertebrae it stands for
 //   head                  Ball, the Occ-C1 range
 //   shoulder (clavicle)   Swing (2) about the bone axis, ±20°
 //   upperArm              Ball; lowerArm: Revolute elbow (axis from the rest geometry, 0..150°)
@@ -22,10 +22,8 @@
 // Segment masses and centres of mass: de Leva (1996) fractions scaled to the total mass,
 // centres along each segment towards its child pivot.
 //
-// Interim spine: until the coupled spine (avatar/spine, branch `spine`) is merged, each spine
-// site is an uncoupled Ball joint with its vertebrae's summed ranges (the paper's "uncoupled"
-// variant); the sites and rest frames already follow spine::appendSpine's conventions so the
-// coupled joints and rows can replace them without changing retargeting.
+// The spine sites carry the coupled spine of avatar/spine (appendSpine on the avatar's own spine
+// bones, see docs/avatars.md); `coupledSpine = false` gives one uncoupled Ball per site.
 #include <Eigen/Geometry>
 #include <string>
 #include <vector>
@@ -44,6 +42,13 @@ struct BodyModelOptions {
   SpineMode spine = SpineMode::Auto;
   double totalMass = 75.0;  // kg, distributed with de Leva's fractions
   bool addTasks = true;     // feet (0), centre of mass (1), head (2), hands (3), as in PIK
+  // Uniform scale from the avatar to the user (calibration.h): the IK model is built at the
+  // user's size; retargeting divides the hips translation back, so the renderer draws the avatar
+  // with this scale on its model matrix.
+  double scale = 1.0;
+  // true: the coupled spine (avatar/spine: swing + torsion joints per site, coupling rows);
+  // false: one uncoupled Ball joint per site with its vertebrae's summed ranges.
+  bool coupledSpine = true;
 };
 
 struct BodyModel {
@@ -58,6 +63,8 @@ struct BodyModel {
   std::vector<glm::vec3> avatarRestGlobalScale;        // per avatar joint (columns' lengths)
   // The spine sites: avatar joint of each and the vertebral joints it stands for.
   std::vector<SpineBone> spineSites;
+  double scale = 1.0;      // BodyModelOptions::scale
+  int spineEqualities = 0;  // coupling rows the spine added (0 for the uncoupled spine)
   std::string spineModel;  // "full" (every vertebra a site), "bones" (the avatar's spine bones), "simplified"
   ik::JointId hips = -1, head = -1, leftHand = -1, rightHand = -1, leftFoot = -1, rightFoot = -1;
   ik::TaskId headTask = -1, leftHandTask = -1, rightHandTask = -1, leftFootTask = -1, rightFootTask = -1, comTask = -1;
@@ -67,7 +74,8 @@ struct BodyModel {
 Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptions& options = {});
 
 // IK configuration -> local transforms of the avatar's bones. `pose` is resized to the skeleton
-// and starts from the rest pose; driven bones get rotations (and the hips a translation).
+// and starts from the rest pose; driven bones get rotations (and the hips a translation, divided
+// by BodyModel::scale: avatar model space = IK world / scale).
 // Allocation-free after the first call with a given skeleton.
 void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& data, SkeletonPose& pose);
 

@@ -68,8 +68,12 @@ void buildFirstPerson(AvatarAsset& asset) {
   if (headNode >= 0 && static_cast<size_t>(headNode) < asset.gltfNodeToJoint.size())
     info.headJoint = asset.gltfNodeToJoint[static_cast<size_t>(headNode)];
   std::vector<bool> hidden(asset.skeleton.joints.size(), false);
+  // Parents come before children: one pass marks the head's whole subtree.
   if (info.headJoint >= 0)
-    for (size_t j = 0; j < hidden.size(); ++j) hidden[j] = asset.skeleton.isAncestor(info.headJoint, static_cast<int>(j));
+    for (size_t j = 0; j < hidden.size(); ++j) {
+      const int p = asset.skeleton.joints[j].parent;
+      hidden[j] = static_cast<int>(j) == info.headJoint || (p >= 0 && hidden[static_cast<size_t>(p)]);
+    }
   info.mode = !byNode.empty() || !byMesh.empty() ? "vrm" : info.headJoint >= 0 ? "auto" : "none";
 
   // Both lists are rebuilt from every primitive the loader produced (the current third-person list).

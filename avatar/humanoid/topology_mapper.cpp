@@ -46,11 +46,17 @@ struct Shape {
   bool goesDown(int child, int from) const { return minY[child] < pos[from].y - 0.25f * height; }
   bool goesUp(int child, int from) const { return maxY[child] > pos[from].y + 0.12f * height; }
 
-  // Farthest horizontal reach of a subtree from a point.
+  // Farthest horizontal reach of a subtree from a point (iterative: hostile files can be deep).
   float reach(int j, const glm::vec3& from) const {
-    glm::vec3 d = pos[j] - from;
-    float r = std::hypot(d.x, d.z);
-    for (int c : children[j]) r = std::max(r, reach(c, from));
+    float r = 0.0f;
+    std::vector<int> stack{j};
+    while (!stack.empty()) {
+      const int k = stack.back();
+      stack.pop_back();
+      const glm::vec3 d = pos[k] - from;
+      r = std::max(r, std::hypot(d.x, d.z));
+      stack.insert(stack.end(), children[k].begin(), children[k].end());
+    }
     return r;
   }
 
@@ -94,8 +100,9 @@ int limbStart(const Shape& s, const std::vector<int>& chain, float ratio) {
 HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& jointHasWeights) {
   HumanoidMap map;
   map.method = MappingMethod::Topology;
-  if (skeleton.joints.size() < 10) {
-    map.notes.push_back("topology: fewer than 10 joints");
+  // Reach queries make this quadratic in the worst case; real rigs have well under 4096 nodes.
+  if (skeleton.joints.size() < 10 || skeleton.joints.size() > 4096) {
+    map.notes.push_back("topology: needs 10 to 4096 joints, the skeleton has " + std::to_string(skeleton.joints.size()));
     finishHumanoidMap(skeleton, map);
     return map;
   }

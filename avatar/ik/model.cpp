@@ -119,6 +119,18 @@ void ModelBuilder::setSegment(JointId joint, double mass, const Eigen::Vector3d&
   joints_[joint].com = com;
 }
 
+void ModelBuilder::setNeutral(DofRef dof, double value) {
+  if (dof.joint < 0 || dof.joint >= static_cast<JointId>(joints_.size())) return;
+  JointDesc& j = joints_[dof.joint];
+  const size_t n = static_cast<size_t>(dofCount(j.type));
+  if (j.neutral.size() != n) j.neutral.assign(n, 0.0);
+  if (dof.component < 0 || dof.component >= static_cast<int>(n)) {
+    j.neutral.push_back(value);  // build() reports the bad size
+    return;
+  }
+  j.neutral[dof.component] = value;
+}
+
 void ModelBuilder::addEquality(EqualityRow row) { equalities_.push_back(std::move(row)); }
 
 void ModelBuilder::addEquality(std::string name, DofRef a, double ca, DofRef b, double cb,
@@ -178,6 +190,10 @@ Result<Model> ModelBuilder::build() const {
       if (std::isnan(d.lower[k]) || std::isnan(d.upper[k]) || d.lower[k] > d.upper[k])
         return fail(who + ": limits of dof " + std::to_string(k) + " are not an interval");
     }
+    if (d.neutral.empty()) d.neutral.assign(n, 0.0);
+    if (d.neutral.size() != n) return fail(who + ": neutral needs " + std::to_string(n) + " entries");
+    for (size_t k = 0; k < n; ++k)
+      if (!std::isfinite(d.neutral[k])) return fail(who + ": neutral value of dof " + std::to_string(k) + " is not finite");
     if (!std::isfinite(d.mass) || d.mass < 0) return fail(who + ": mass must be finite and >= 0");
     if (!d.com.allFinite()) return fail(who + ": centre of mass is not finite");
     if (d.type == JointType::Swing) {
@@ -188,6 +204,9 @@ Result<Model> ModelBuilder::build() const {
     m.joints.push_back(std::move(j));
   }
   if (m.dofs == 0) return fail("the model has no dofs");
+  m.neutral.setZero(m.dofs);
+  for (const Model::Joint& j : m.joints)
+    for (int k = 0; k < j.dof_count; ++k) m.neutral(j.first_dof + k) = j.desc.neutral[k];
 
   auto checkTerms = [&](const std::vector<LinearTerm>& terms, const std::string& who,
                         Eigen::Ref<Eigen::RowVectorXd, 0, Eigen::InnerStride<>> dense) -> Status {

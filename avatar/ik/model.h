@@ -53,6 +53,9 @@ struct JointDesc {
   // Per-dof limits (size dofCount(type)); empty = unbounded. Use ±kUnbounded for one-sided.
   std::vector<double> lower;
   std::vector<double> upper;
+  // Neutral configuration of this joint's dofs (size dofCount(type)); empty = zeros. A fresh
+  // ik::Data starts here (keep it inside the limits and away from singular poses).
+  std::vector<double> neutral;
   // The rigid segment this joint moves: mass and centre of mass in the joint frame.
   double mass = 0.0;
   Eigen::Vector3d com = Eigen::Vector3d::Zero();
@@ -159,6 +162,7 @@ struct Model {
   std::vector<Level> levels;       // sorted, most important first
   int dofs = 0;
   int task_rows = 0;
+  Eigen::VectorXd neutral;         // neutral configuration (JointDesc::neutral), size dofs
   double total_mass = 0.0;
   Eigen::Vector3d up = Eigen::Vector3d::UnitY();
   Eigen::Matrix<double, 3, 2> ground_axes = Eigen::Matrix<double, 3, 2>::Zero();  // ⟂ up
@@ -188,6 +192,8 @@ class ModelBuilder {
   // Limits of one dof (replaces the joint's lower/upper entry for that component).
   void setLimits(DofRef dof, double lower, double upper);
   void setSegment(JointId joint, double mass, const Eigen::Vector3d& com);
+  // Neutral value of one dof (see JointDesc::neutral).
+  void setNeutral(DofRef dof, double value);
 
   void addEquality(EqualityRow row);
   // q[a] * ca + q[b] * cb = rhs, e.g. coupleDofs({j, 0}, 1.0, {i, 0}, -r) for q_j - r q_i = 0.

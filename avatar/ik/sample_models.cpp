@@ -67,6 +67,7 @@ Result<Model> sampleHumanoid() {
     const JointId elbow = b.addJoint(p + "elbow", shoulder, JointType::Revolute, at(side * 0.28, 0, 0),
                                      Eigen::Vector3d::UnitY());
     b.setLimits({elbow, 0}, side > 0 ? 0.0 : -150 * kDeg, side > 0 ? 150 * kDeg : 0.0);
+    b.setNeutral({elbow, 0}, side * 30 * kDeg);  // slightly bent: a straight arm is singular
     const JointId twist = b.addJoint(p + "forearm", elbow, JointType::Revolute, at(side * 0.12, 0, 0),
                                      Eigen::Vector3d::UnitX());
     limits(b, twist, {{-80, 80}});
@@ -87,9 +88,12 @@ Result<Model> sampleHumanoid() {
     b.setSegment(hip, 8.0, {0, -0.2, 0});
     const JointId knee = b.addJoint(p + "knee", hip, JointType::Revolute, at(0, -0.43, 0), Eigen::Vector3d::UnitX());
     limits(b, knee, {{0, 140}});
+    b.setNeutral({knee, 0}, 15 * kDeg);
+    b.setNeutral({hip, 0}, -8 * kDeg);
     b.setSegment(knee, 3.5, {0, -0.2, 0});
     const JointId ankle = b.addJoint(p + "ankle", knee, JointType::Ball, at(0, -0.42, 0));
     limits(b, ankle, {{-45, 30}, {-25, 25}, {-25, 25}});
+    b.setNeutral({ankle, 0}, -7 * kDeg);
     b.setSegment(ankle, 1.0, {0, -0.04, 0.06});
     const JointId toes = b.addJoint(p + "toes", ankle, JointType::Revolute, at(0, -0.06, 0.14), Eigen::Vector3d::UnitX());
     limits(b, toes, {{-40, 40}});

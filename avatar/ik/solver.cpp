@@ -44,7 +44,7 @@ const char* toString(StopReason reason) {
 
 Workspace::Workspace(const Model& model)
     : n(model.dofs), task_count(static_cast<int>(model.tasks.size())), rows(model.task_rows) {
-  q.setZero(n);
+  q = model.neutral;
   target_position.assign(task_count, Eigen::Vector3d::Zero());
   target_orientation.assign(task_count, Eigen::Quaterniond::Identity());
   weight.resize(task_count);
@@ -110,6 +110,7 @@ Workspace::Workspace(const Model& model)
   tmp_n.setZero(n);
   tmp_n2.setZero(n);
   y.setZero(n);
+  previous_task_step.setZero(n);
 
   reduced_jacobian.setZero(rows, n);
   row_space.setZero(n, n);
@@ -167,6 +168,8 @@ Status Data::setConfiguration(const Eigen::VectorXd& q) {
     return fail("configuration has " + std::to_string(q.size()) + " entries, the model " + std::to_string(ws_->n));
   if (!q.allFinite()) return fail("configuration is not finite");
   ws_->q = q;
+  ws_->has_previous_step = false;
+  ws_->step_scale = 1.0;
   return Status::success();
 }
 
@@ -626,13 +629,12 @@ bool pinViolations(const Model& model, Workspace& w, const SolveOptions& o) {
     w.tmp_n.setZero();
     for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) w.tmp_n(w.ineq_dof[k]) += w.ineq_coef[k];
     const int single = w.ineq_begin[i + 1] - w.ineq_begin[i] == 1 ? w.ineq_dof[w.ineq_begin[i]] : -1;
+    // A row dependent on the active set is skipped (first added wins); it is reported only if it
+    // is still violated once the loop settles (pinning its partner often satisfies it).
     if (addActiveRow(w, rhs - current, single, o.path, 1e-9)) {
       w.ineq_active[i] = 1;
       w.report.active_clamps.push_back(static_cast<int>(i));
       added = true;
-    } else if (!w.ineq_reported[i]) {
-      w.ineq_reported[i] = 1;
-      w.report.unsatisfiable.push_back(static_cast<int>(i));
     }
   }
   return added;
@@ -674,17 +676,32 @@ bool step(const Model& model, Workspace& w, const SolveOptions& o) {
   runPass(model, w, o);
   int passes = 1;
   while (o.clamping) {
-    if (!pinViolations(model, w, o)) break;
-    computeDq0(w);
-    runPass(model, w, o);
-    ++passes;
-    if (passes >= std::max(1, o.max_clamp_passes)) {
+    if (passes >= std::max(1, o.max_clamp_passes) || !pinViolations(model, w, o)) {
       reportRemainingViolations(model, w, o);
       break;
     }
+    computeDq0(w);
+    runPass(model, w, o);
+    ++passes;
   }
   w.report.clamp_passes = passes;
   if (!w.dq.allFinite()) return false;
+  if (o.oscillation_guard) {
+    // The task part of the step (Δq - Δq0) lies in the null space of the active rows, so scaling
+    // it keeps every pinned row and every priority relation exact. A step that reverses the
+    // previous one (a period-2 cycle of the Gauss-Newton map near an unreachable or singular
+    // target) halves the scale; consistent steps let it grow back to 1.
+    Eigen::VectorXd& task = w.tmp_n;
+    task = w.dq - w.dq0;
+    const double norms = task.norm() * w.previous_task_step.norm();
+    if (w.has_previous_step && norms > 0 && task.dot(w.previous_task_step) < -0.3 * norms)
+      w.step_scale = std::max(w.step_scale * 0.5, 1.0 / 64);
+    else
+      w.step_scale = std::min(1.0, w.step_scale * 1.25);
+    w.previous_task_step = task;
+    w.has_previous_step = true;
+    w.dq = w.dq0 + w.step_scale * task;
+  }
   w.q += w.dq;
   reparameterize(model, w);
   return true;

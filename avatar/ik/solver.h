@@ -44,10 +44,13 @@ struct SolveOptions {
   int max_clamp_passes = 16;    // clamping-loop cap per iteration
   bool clamping = true;         // false: inequalities are ignored (tests of the priority loop)
   // Smooth damping (iTaSC rule): for each singular value σ < eps, λ² = (1 - (σ/eps)²) λmax².
-  double damping_max = 0.05;    // λmax
-  double damping_eps = 0.05;    // eps
-  double rank_tolerance = 1e-8; // singular values below this (relative to 1) are rank-deficient
+  double damping_max = 0.1;     // λmax
+  double damping_eps = 0.3;     // eps
+  double rank_tolerance = 1e-6; // singular values below this are rank-deficient (projectors)
   double inequality_tolerance = 1e-9;  // a row counts as violated above rhs + this
+  // Scale the task part of the step down when it reverses the previous one (damps period-2
+  // cycles near unreachable targets; priorities and pinned rows stay exact). See docs/ik.md.
+  bool oscillation_guard = true;
   double min_step = 1e-12;      // |Δq| below this: stalled (e.g. an unreachable target), stop
   // Deadline: checked before each iteration, so solve() returns by the deadline plus at most one
   // iteration. `clock` defaults to steadyClock(); it must outlive the call.

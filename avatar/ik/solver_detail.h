@@ -66,6 +66,10 @@ struct Workspace {
   Eigen::MatrixXd eq_nullspace;  // equality-only null space, copied at each iteration's reset
 
   Eigen::VectorXd dq0, dq, tmp_n, tmp_n2, y;
+  // Oscillation guard: the task part of the previous step and the current step scale.
+  Eigen::VectorXd previous_task_step;
+  double step_scale = 1.0;
+  bool has_previous_step = false;
 
   // Fast path scratch.
   Eigen::MatrixXd reduced_jacobian;  // rows x null_dim (J N)

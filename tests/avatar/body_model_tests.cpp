@@ -66,9 +66,10 @@ Eigen::VectorXd randomPose(const ik::Model& model, std::mt19937& rng) {
 
 // Drives the body model to poses and checks that the retargeted avatar's head, hands and feet
 // sit where the IK model's are (position within 1 mm, orientation within 0.06 degrees).
-void checkRetargeting(const AvatarAsset& avatar, SpineMode spine = SpineMode::Auto) {
+void checkRetargeting(const AvatarAsset& avatar, SpineMode spine = SpineMode::Auto, bool coupled = true) {
   BodyModelOptions options;
   options.spine = spine;
+  options.coupledSpine = coupled;
   auto body = buildBodyModel(avatar, options);
   REQUIRE(body.ok());
   CHECK(body->model.total_mass == Approx(75.0).epsilon(1e-9));
@@ -122,7 +123,13 @@ TEST_CASE("body model: the default avatar gets one spine site per vertebra and r
   REQUIRE(body.ok());
   CHECK(body->spineModel == "full");
   CHECK(body->spineSites.size() == 25);
+  // The coupled spine: 24 vertebral sites (swing or torsion joints) with chain rows, plus the head.
+  CHECK(body->spineEqualities == 33);
+  CHECK(body->model.equalities.size() == 33);
+  for (int level = 0; level < kVertebralJointCount; ++level)
+    CHECK(a.skeleton.joints[static_cast<size_t>(body->spineSites[static_cast<size_t>(level)].joint)].name == vertebralJointName(level));
   checkRetargeting(a);
+  checkRetargeting(a, SpineMode::Auto, /*coupled=*/false);
 }
 
 TEST_CASE("body model: --spine simplified groups the default avatar's vertebrae into 8 sites", "[body]") {
@@ -137,10 +144,31 @@ TEST_CASE("body model: --spine simplified groups the default avatar's vertebrae 
 }
 
 TEST_CASE("body model: VRM 1.0 with non-identity rest rotations retargets within 1 mm", "[body]") {
-  checkRetargeting(vrm1Avatar());
+  const AvatarAsset a = vrm1Avatar();
+  auto body = buildBodyModel(a);
+  REQUIRE(body.ok());
+  CHECK(body->spineModel == "bones");
+  // spine | chest + upperChest (thoracic: coupled to each other) | neck | head.
+  REQUIRE(body->spineSites.size() == 5);
+  CHECK(body->spineEqualities > 0);
+  checkRetargeting(a);
 }
 
 TEST_CASE("body model: a Mixamo rig retargets within 1 mm", "[body]") { checkRetargeting(mixamoAvatar()); }
+
+TEST_CASE("body model: a VRM 0.x avatar facing -Z retargets within 1 mm", "[body]") {
+  std::map<std::string, std::string> names;
+  int i = 0;
+  for (const auto& s : embody::test::humanoidJointSpecs()) names[s.bone] = "J" + std::to_string(100 + i++);
+  embody::test::HumanoidFile f(names, /*facesMinusZ=*/true);
+  nlohmann::json bones = nlohmann::json::array();
+  for (const auto& [bone, node] : f.nodeOfBone) bones.push_back({{"bone", bone}, {"node", node}});
+  f.doc["extensionsUsed"] = {"VRM"};
+  f.doc["extensions"]["VRM"] = {{"humanoid", {{"humanBones", bones}}}};
+  const AvatarAsset a = fromFile(f);
+  REQUIRE(a.humanoid.forward.z < -0.99f);
+  checkRetargeting(a);
+}
 
 TEST_CASE("body model: CesiumMan retargets within 1 mm", "[body]") {
   EMBODY_REQUIRE_SHARED_ASSET(path, "CesiumMan.glb");
@@ -160,4 +188,92 @@ TEST_CASE("body model: an unmapped avatar is refused with the missing bones", "[
   auto body = buildBodyModel(a.value());
   REQUIRE_FALSE(body.ok());
   CHECK_THAT(body.error(), Catch::Contains("leftHand"));
+}
+
+#include <filesystem>
+
+#include "avatar/body/calibration.h"
+
+TEST_CASE("calibration scales the body to the user and round-trips through the profile", "[body][calibration]") {
+  const AvatarAsset a = buildDefaultAvatar();
+  CHECK(avatarHeight(a) == Approx(1.755).margin(0.01));
+  CalibrationInput in;
+  in.userHeight = 1.93;
+  in.armSpan = 1.95;
+  auto p = calibrate(a, in);
+  REQUIRE(p.ok());
+  CHECK(p->scale == Approx(1.93 / avatarHeight(a)));
+  CHECK(p->eyeHeight == Approx(kEyeHeightRatio * 1.93));
+  CHECK(p->avatarArmSpan == Approx(1.75).margin(0.15));
+  // Eye height alone (the HMD at calibration) gives the same scale.
+  CalibrationInput eyes;
+  eyes.eyeHeight = kEyeHeightRatio * 1.93;
+  CHECK(calibrate(a, eyes)->scale == Approx(p->scale));
+  CHECK_FALSE(calibrate(a, {}).ok());
+  CalibrationInput absurd;
+  absurd.userHeight = 17.0;
+  CHECK_FALSE(calibrate(a, absurd).ok());
+
+  const auto file = std::filesystem::temp_directory_path() / ("embody_profile_" + std::to_string(::getpid()) + ".json");
+  REQUIRE(saveProfile(p.value(), file.string()).ok());
+  auto back = loadProfile(file.string());
+  std::filesystem::remove(file);
+  REQUIRE(back.ok());
+  CHECK(back->scale == Approx(p->scale));
+  CHECK(back->armSpan == Approx(1.95));
+  CHECK_FALSE(loadProfile("/nonexistent/profile.json").ok());
+
+  // The scaled body model: IK pivots are the avatar's times the scale, and retargeting divides
+  // the root motion back so avatar * scale lands on the IK model.
+  BodyModelOptions o;
+  o.scale = p->scale;
+  auto body = buildBodyModel(a, o);
+  REQUIRE(body.ok());
+  ik::Data data(body->model);
+  std::mt19937 rng(7);
+  REQUIRE(data.setConfiguration(randomPose(body->model, rng)).ok());
+  ik::kinematics(body->model, data, false);
+  SkeletonPose pose;
+  retarget(body.value(), a, data, pose);
+  std::vector<glm::mat4> g;
+  computeGlobals(a.skeleton, pose, g);
+  for (ik::JointId j : {body->head, body->leftHand, body->rightHand}) {
+    const glm::vec3 av = glm::vec3(g[static_cast<size_t>(body->avatarJoint[static_cast<size_t>(j)])][3]) *
+                         static_cast<float>(p->scale);
+    CHECK((data.jointFrame(j).translation() - Eigen::Vector3d(av.x, av.y, av.z)).norm() < 1e-3);
+  }
+}
+
+TEST_CASE("body model: the solver reaches a hand target on the default avatar and retargeting follows", "[body][solve]") {
+  const AvatarAsset a = buildDefaultAvatar();
+  auto body = buildBodyModel(a);
+  REQUIRE(body.ok());
+  ik::Data data(body->model);
+  ik::kinematics(body->model, data, false);
+  // Hold feet, balance and head where they are; reach 25 cm forward and 10 cm up with the left hand.
+  for (ik::TaskId t : {body->leftFootTask, body->rightFootTask, body->headTask, body->leftHandTask, body->rightHandTask})
+    REQUIRE(data.setTarget(t, data.jointFrame(body->model.tasks[static_cast<size_t>(t)].desc.joint)).ok());
+  REQUIRE(data.setTarget(body->comTask, data.centerOfMass()).ok());
+  Eigen::Isometry3d hand = data.jointFrame(body->leftHand);
+  hand.translation() += Eigen::Vector3d(0.0, 0.10, 0.25);
+  REQUIRE(data.setTarget(body->leftHandTask, hand).ok());
+  REQUIRE(data.setEnabled(body->rightHandTask, false).ok());
+  ik::SolveOptions options;
+  options.max_iterations = 300;
+  const auto& report = ik::solve(body->model, data, options);
+  INFO("stop " << ik::toString(report.stop) << " after " << report.iterations << " iterations");
+  const auto& hr = report.tasks[static_cast<size_t>(body->leftHandTask)];
+  INFO("hand residual " << hr.position << " m, " << hr.rotation << " rad");
+  CHECK(hr.position < 0.01);
+  // The coupled spine's rows hold in the solution.
+  const Eigen::VectorXd residual = body->model.equality_matrix * data.q() - body->model.equality_rhs;
+  CHECK(residual.cwiseAbs().maxCoeff() < 1e-6);
+  CHECK(report.tasks[static_cast<size_t>(body->leftFootTask)].position < 1e-3);
+  SkeletonPose pose;
+  retarget(body.value(), a, data, pose);
+  std::vector<glm::mat4> g;
+  computeGlobals(a.skeleton, pose, g);
+  const glm::vec3 av(g[static_cast<size_t>(body->avatarJoint[static_cast<size_t>(body->leftHand)])][3]);
+  CHECK((data.jointFrame(body->leftHand).translation() - Eigen::Vector3d(av.x, av.y, av.z)).norm() < 1e-3);
+  CHECK((Eigen::Vector3d(av.x, av.y, av.z) - hand.translation()).norm() < 0.01);
 }

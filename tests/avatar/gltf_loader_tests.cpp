@@ -159,3 +159,23 @@ TEST_CASE("hostile glTF files give a clear error, never a crash or a huge alloca
     CHECK_THAT(r.error(), Catch::Contains("cannot open"));
   }
 }
+
+#include <chrono>
+
+#include "avatar/avatar_loader.h"
+
+TEST_CASE("a 60000-node chain loads and maps quickly without deep recursion", "[gltf]") {
+  TriangleFile f;
+  const int n = 60000;
+  for (int i = 1; i < n; ++i) f.doc["nodes"].push_back({{"name", "n" + std::to_string(i)}, {"translation", {0, 0.001, 0}}});
+  for (int i = 0; i + 1 < n; ++i) f.doc["nodes"][static_cast<size_t>(i)]["children"] = {i + 1};
+  const auto start = std::chrono::steady_clock::now();
+  auto a = loadGltfFromMemory(f.glb(), "");
+  REQUIRE(a.ok());
+  REQUIRE(prepareAvatar(a.value(), "").ok());
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  CHECK(a->skeleton.joints.size() == static_cast<size_t>(n));
+  CHECK(a->skeleton.joints.back().parent == n - 2);
+  CHECK(a->humanoid.method == MappingMethod::None);
+  CHECK(seconds < 10.0);
+}

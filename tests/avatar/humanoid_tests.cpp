@@ -221,3 +221,60 @@ TEST_CASE("a skeleton that is not a humanoid lists the missing required bones", 
   CHECK(a->firstPerson.mode == "none");
   CHECK(a->mesh.firstPersonIndices == a->mesh.indices);
 }
+
+#include <random>
+
+TEST_CASE("randomly corrupted humanoid files load or fail cleanly, never crash", "[humanoid][fuzz]") {
+  HumanoidFile f(meaninglessNames());
+  nlohmann::json bones = nlohmann::json::object();
+  for (const auto& [bone, node] : f.nodeOfBone) bones[bone] = {{"node", node}};
+  f.doc["extensionsUsed"] = {"VRMC_vrm"};
+  f.doc["extensions"]["VRMC_vrm"] = {{"humanoid", {{"humanBones", bones}}},
+                                     {"firstPerson", {{"meshAnnotations", {{{"node", f.bodyNode}, {"type", "auto"}}}}}}};
+  const std::vector<uint8_t> good = f.glb();
+  std::mt19937 rng(1234);
+  int loaded = 0, failed = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::vector<uint8_t> bytes = good;
+    const int flips = 1 + static_cast<int>(rng() % 8);
+    for (int k = 0; k < flips; ++k) {
+      const size_t at = rng() % bytes.size();
+      switch (rng() % 3) {
+        case 0: bytes[at] = static_cast<uint8_t>(rng()); break;            // random byte
+        case 1: bytes[at] = static_cast<uint8_t>('0' + rng() % 10); break;  // a digit (JSON numbers)
+        default: bytes[at] ^= 0x80; break;
+      }
+    }
+    auto a = loadGltfFromMemory(bytes, "");
+    if (a.ok()) {
+      REQUIRE(prepareAvatar(a.value(), "").ok());
+      REQUIRE(a->skeleton.validate().empty());
+      for (uint32_t i : a->mesh.indices) REQUIRE(i < a->mesh.vertices.size());
+      for (uint32_t i : a->mesh.firstPersonIndices) REQUIRE(i < a->mesh.vertices.size());
+      ++loaded;
+    } else {
+      REQUIRE_FALSE(a.error().empty());
+      ++failed;
+    }
+  }
+  INFO(loaded << " loaded, " << failed << " refused");
+  CHECK(loaded + failed == 300);
+}
+
+TEST_CASE("a humanoid skeleton without any mesh still maps (names and topology)", "[humanoid]") {
+  for (bool meaningless : {false, true}) {
+    HumanoidFile f(meaningless ? meaninglessNames() : std::map<std::string, std::string>{});
+    for (auto& node : f.doc["nodes"]) {
+      node.erase("mesh");
+      node.erase("skin");
+    }
+    f.doc.erase("meshes");
+    f.doc.erase("skins");
+    auto a = loadPrepared(f);
+    REQUIRE(a.ok());
+    CHECK(a->skinJointCount == 0);
+    CHECK(a->mesh.triangleCount() == 0);
+    CHECK(a->humanoid.method == (meaningless ? MappingMethod::Topology : MappingMethod::Names));
+    CHECK(a->humanoid.missingRequired.empty());
+  }
+}

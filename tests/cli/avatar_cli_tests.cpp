@@ -60,3 +60,21 @@ TEST_CASE("embody avatar reports usage and file errors with the right exit codes
   const auto badMap = runEmbody("avatar info default --bone-map /nonexistent.json", true);
   CHECK(badMap.exitCode == 1);
 }
+
+TEST_CASE("embody avatar info reports the body model; --spine and calibration profiles apply", "[avatar]") {
+  auto j = nlohmann::json::parse(runEmbody("avatar info default --json").output);
+  CHECK(j["body_model"]["spine_model"] == "full");
+  CHECK(j["body_model"]["spine_sites"].size() == 25);
+  CHECK(j["body_model"]["mass_kg"].get<double>() == Approx(75.0));
+  j = nlohmann::json::parse(runEmbody("avatar info default --json --spine simplified").output);
+  CHECK(j["body_model"]["spine_model"] == "simplified");
+  CHECK(runEmbody("avatar info default --spine sideways").exitCode == 2);
+
+  const auto profile = std::filesystem::temp_directory_path() / ("embody_cli_profile_" + std::to_string(::getpid()) + ".json");
+  REQUIRE(runEmbody("avatar calibrate default --user-height 1.9 --profile '" + profile.string() + "'").exitCode == 0);
+  j = nlohmann::json::parse(runEmbody("avatar info default --json --profile '" + profile.string() + "'").output);
+  std::filesystem::remove(profile);
+  CHECK(j["body_model"]["scale"].get<double>() == Approx(1.9 / 1.755).epsilon(0.01));
+  CHECK(runEmbody("avatar calibrate default --profile /tmp/x.json").exitCode == 2);
+  CHECK(runEmbody("avatar calibrate default --user-height 40 --profile /tmp/x.json").exitCode == 1);
+}

@@ -92,7 +92,7 @@ TEST_CASE("IK thread: each submitted sample is solved and published in order") {
 }
 
 TEST_CASE("IK thread between a tracking thread and a render thread: newest whole frames, no waiting") {
-  SteadyClock clock;
+  const Clock& clock = steadyClock();
   // Real work on the IK thread: a few microseconds per iteration, up to the 1 ms budget.
   struct Busy final : BodySolver {
     SolveResult solve(const SolveRequest& req, avatar::SkeletonPose& pose) override {
@@ -124,9 +124,9 @@ TEST_CASE("IK thread between a tracking thread and a render thread: newest whole
   uint64_t lastSeq = 0, frames = 0, torn = 0, backwards = 0;
   double maxAcquire = 0.0;
   while (!done || ik.framesSolved() + ik.samplesSkipped() < static_cast<uint32_t>(kSamples)) {
-    const double t0 = clock.now();
+    const TimePoint t0 = clock.now();
     const bool fresh = ik.acquire();
-    maxAcquire = std::max(maxAcquire, clock.now() - t0);
+    maxAcquire = std::max(maxAcquire, toSeconds(clock.now() - t0));
     if (!fresh) {
       std::this_thread::yield();
       continue;
@@ -148,7 +148,7 @@ TEST_CASE("IK thread between a tracking thread and a render thread: newest whole
   CHECK(maxAcquire < 0.05);
 }
 
-TEST_CASE("task layout: balance first, head, then hands; lower body inferred without feet") {
+TEST_CASE("task layout: balance first, head, then hands, lower body inferred without feet") {
   const TaskLayout three = taskLayoutFor(tracking::TrackerMask::threePoint());
   CHECK(three.inferLowerBody);
   CHECK(three.levels() == 4);

@@ -101,3 +101,19 @@ TEST_CASE("pose filter passes invalid trackers through and restarts them without
   CHECK(out[TrackerId::LeftHand].position == s[TrackerId::LeftHand].position);
   CHECK(out[TrackerId::Head].position == s[TrackerId::Head].position);
 }
+
+TEST_CASE("pose filter does not smear an outlier over the following samples") {
+  PoseFilter f;
+  PoseSample s;
+  s[TrackerId::RightHand] = {glm::vec3(0.2f, 1.0f, -0.3f), glm::quat(1, 0, 0, 0), true};
+  for (int i = 0; i < 20; ++i) {
+    s.time = i * kDt;
+    f.apply(s);
+  }
+  s.time = 20 * kDt;
+  s[TrackerId::RightHand].position = glm::vec3(2.2f, 1.0f, -0.3f);  // a 2 m glitch
+  CHECK(f.apply(s)[TrackerId::RightHand].position.x == Approx(2.2f));  // passed on for the guard
+  s.time = 21 * kDt;
+  s[TrackerId::RightHand].position = glm::vec3(0.2f, 1.0f, -0.3f);
+  CHECK(f.apply(s)[TrackerId::RightHand].position.x == Approx(0.2f));  // and gone at once
+}

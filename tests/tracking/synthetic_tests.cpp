@@ -133,3 +133,24 @@ TEST_CASE("grip orientation follows the OpenXR grip axes") {
   const glm::quat h = headingOf(down);
   CHECK(std::abs(glm::angle(h) - 0.5f) < 1e-3f);
 }
+
+TEST_CASE("tracking loss can be injected into any source for a time window") {
+  auto spec = parseTrackingLoss("left,right@2-3.5");
+  REQUIRE(spec.ok());
+  CHECK(spec->lost == TrackerMask({TrackerId::LeftHand, TrackerId::RightHand}));
+  CHECK(spec->from == 2.0);
+  CHECK(spec->to == 3.5);
+  for (const char* bad : {"left", "elbow@1-2", "left@2", "left@3-2", "left@a-b", "@1-2", "left@1-2x"}) {
+    INFO(bad);
+    CHECK_FALSE(parseTrackingLoss(bad).ok());
+  }
+  auto src = withTrackingLoss(SyntheticSource::create("reach").value(), spec->lost, spec->from, spec->to);
+  CHECK(src->name() == "synthetic:reach");
+  CHECK(src->sample(1.99)[TrackerId::LeftHand].valid);
+  const PoseSample lost = src->sample(2.5);
+  CHECK_FALSE(lost[TrackerId::LeftHand].valid);
+  CHECK_FALSE(lost[TrackerId::RightHand].valid);
+  CHECK(std::isnan(lost[TrackerId::LeftHand].position.x));
+  CHECK(lost[TrackerId::Head].valid);
+  CHECK(src->sample(3.5)[TrackerId::RightHand].valid);
+}

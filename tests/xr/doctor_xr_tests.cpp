@@ -1,7 +1,10 @@
 // `embody doctor` names the active OpenXR runtime when XR_RUNTIME_JSON points at one.
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
 
+#include "xr/openxr/loader_info.h"
 #include "xr_test_support.h"
 
 using namespace embody::test;
@@ -32,4 +35,18 @@ TEST_CASE("embody doctor reports a broken runtime manifest without failing", "[x
   INFO(r.output);
   REQUIRE(r.exitCode == 0);
   CHECK(r.output.find("active runtime: none") != std::string::npos);
+}
+
+TEST_CASE("probeOpenXR lists the runtime's extensions, its HMD and the installed API layers", "[xr]") {
+  setenv("XR_RUNTIME_JSON", runtimeManifest().c_str(), 1);
+  const auto info = embody::xr::probeOpenXR();
+  CHECK(info.runtimeName == "Embody headless runtime");
+  CHECK(info.systemName == "Embody headless HMD");
+  CHECK(info.vulkanEnable2);
+  CHECK(std::find(info.runtimeExtensions.begin(), info.runtimeExtensions.end(), "XR_EXT_hand_tracking") !=
+        info.runtimeExtensions.end());
+  bool coreValidation = false;
+  for (const auto& l : info.apiLayers)
+    coreValidation = coreValidation || l.rfind("XR_APILAYER_LUNARG_core_validation", 0) == 0;
+  CHECK(coreValidation);
 }

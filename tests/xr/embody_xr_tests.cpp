@@ -3,6 +3,7 @@
 // and in the captured left-eye image the hand gizmos are where the replayed controllers project.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <glm/glm.hpp>
@@ -51,15 +52,21 @@ glm::vec2 projectLeftEye(const glm::vec3& world, int width, int height) {
   return {(x - l) / (r - l) * float(width), (u - y) / (u - d) * float(height)};
 }
 
-bool isCyan(const uint8_t* px) { return px[0] < 150 && px[1] > 200 && px[2] > 200; }
-bool isMagenta(const uint8_t* px) { return px[0] > 200 && px[1] < 190 && px[2] > 190 && px[0] - px[1] > 60; }
+bool isCyan(const uint8_t* px) {
+  return px[0] < 150 && px[1] > 200 && px[2] > 200;
+}
+bool isMagenta(const uint8_t* px) {
+  return px[0] > 200 && px[1] < 190 && px[2] > 190 && px[0] - px[1] > 60;
+}
 
 template <typename Pred>
 int countNear(const embody::avatar::Image& img, glm::vec2 c, int radius, Pred pred) {
   int n = 0;
   for (int y = int(c.y) - radius; y <= int(c.y) + radius; ++y)
     for (int x = int(c.x) - radius; x <= int(c.x) + radius; ++x)
-      if (x >= 0 && y >= 0 && x < img.width && y < img.height && pred(&img.rgba[size_t(y * img.width + x) * 4])) ++n;
+      if (x >= 0 && y >= 0 && x < img.width && y < img.height &&
+          pred(&img.rgba[size_t(y * img.width + x) * 4]))
+        ++n;
   return n;
 }
 
@@ -111,7 +118,9 @@ embody::avatar::Image capture(const XrRun& r, int index) {
 
 }  // namespace
 
-TEST_CASE("embody xr --frames 120 reaches FOCUSED, ends cleanly, and draws the hands where the controllers are", "[xr]") {
+TEST_CASE(
+    "embody xr --frames 120 reaches FOCUSED, ends cleanly, and draws the hands where the controllers are",
+    "[xr]") {
   const XrRun r = runEmbodyXr("frames120", {"--frames", "120"}, {});
   INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
   REQUIRE_FALSE(r.process.timedOut);
@@ -138,7 +147,8 @@ TEST_CASE("embody xr --frames 120 reaches FOCUSED, ends cleanly, and draws the h
   REQUIRE(img.height == 280);
   const glm::vec2 left = projectLeftEye(kLeftHand, img.width, img.height);
   const glm::vec2 right = projectLeftEye(kRightHand, img.width, img.height);
-  INFO("left hand projects to " << left.x << "," << left.y << "; right hand to " << right.x << "," << right.y);
+  INFO("left hand projects to " << left.x << "," << left.y << "; right hand to " << right.x << ","
+                                << right.y);
   REQUIRE(left.x > 0.0f);
   REQUIRE(right.x < float(img.width));
   // Each hand's gizmo (cyan left, magenta right) is drawn around its projected position, and only there.
@@ -150,7 +160,8 @@ TEST_CASE("embody xr --frames 120 reaches FOCUSED, ends cleanly, and draws the h
   CHECK(countAll(img, isMagenta) == countNear(img, right, 30, isMagenta));
 }
 
-TEST_CASE("embody xr handles tracking loss mid-run: the hands disappear and come back, nothing breaks", "[xr]") {
+TEST_CASE("embody xr handles tracking loss mid-run: the hands disappear and come back, nothing breaks",
+          "[xr]") {
   // Hands lost between 0.25 s and 0.9 s of trace time (the runtime's clock starts at session creation).
   const XrRun r = runEmbodyXr("tracking_loss", {"--frames", "90"}, {}, 0.25, 0.9);
   INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
@@ -201,10 +212,48 @@ TEST_CASE("embody xr reports a lost session with a clear error and shuts down cl
 }
 
 TEST_CASE("embody xr without a runtime fails with a clear message", "[xr]") {
-  const auto r = runProcess({embodyBin(), "xr", "--frames", "5"}, {{"XR_RUNTIME_JSON", "/nonexistent/runtime.json"}}, 60);
+  const auto r = runProcess({embodyBin(), "xr", "--frames", "5"},
+                            {{"XR_RUNTIME_JSON", "/nonexistent/runtime.json"}}, 60);
   INFO(r.output);
   CHECK(r.exitCode == 1);
   CHECK(r.output.find("error:") != std::string::npos);
   const auto usage = runProcess({embodyBin(), "xr", "--frames", "-3"}, {}, 30);
   CHECK(usage.exitCode == 2);
+}
+
+TEST_CASE("embody xr --mirror shows every frame in a desktop window without validation messages", "[xr]") {
+  // Runs under its own Xvfb (xvfb-run) unless a display is already there.
+  const bool haveDisplay = std::getenv("DISPLAY") && *std::getenv("DISPLAY");
+  if (!haveDisplay && !fs::exists("/usr/bin/xvfb-run")) {
+    WARN("SKIPPED: no display and no xvfb-run (Debian package xvfb)");
+    return;
+  }
+  const std::string dir = freshTestDir("mirror");
+  auto env = headlessRuntimeEnv();
+  env["EMBODY_XR_VIEW_SIZE"] = "256x280";
+  std::vector<std::string> argv = {embodyBin(), "xr",         "--mirror", "--frames",
+                                   "30",        "--validate", "--stats",  dir + "/stats.json"};
+  if (!haveDisplay) argv.insert(argv.begin(), {"xvfb-run", "-a"});
+  const auto p = runProcess(argv, env, 90);
+  INFO(p.output.substr(p.output.size() > 4000 ? p.output.size() - 4000 : 0));
+  REQUIRE_FALSE(p.timedOut);
+  REQUIRE(p.exitCode == 0);
+  std::ifstream in(dir + "/stats.json");
+  const auto stats = nlohmann::json::parse(in, nullptr, false);
+  REQUIRE(stats.is_object());
+  CHECK(stats["ended_cleanly"] == true);
+  CHECK(stats["frames_submitted"] == 30);
+  CHECK(stats["mirror_frames"].get<int>() >= 25);  // a frame may skip the mirror, never the headset
+  CHECK(stats["vulkan_validation_messages"] == 0);
+  CHECK(countOccurrences(p.output, "VALID_ERROR") == 0);
+}
+
+TEST_CASE("embody xr --mirror without a display fails with a clear message", "[xr]") {
+  auto env = headlessRuntimeEnv();
+  env["DISPLAY"] = "";
+  env["WAYLAND_DISPLAY"] = "";
+  const auto p = runProcess({embodyBin(), "xr", "--mirror", "--frames", "5"}, env, 60);
+  INFO(p.output);
+  CHECK(p.exitCode == 1);
+  CHECK(p.output.find("needs a display") != std::string::npos);
 }

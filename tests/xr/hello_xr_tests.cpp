@@ -9,7 +9,8 @@
 namespace fs = std::filesystem;
 using namespace embody::test;
 
-TEST_CASE("hello_xr -g Vulkan2 runs against the headless runtime until the runtime ends the session", "[xr]") {
+TEST_CASE("hello_xr -g Vulkan2 runs against the headless runtime until the runtime ends the session",
+          "[xr]") {
   const std::string hello = helloXr();
   if (hello.empty()) {
     WARN("SKIPPED: hello_xr not installed (Debian package libopenxr-utils)");
@@ -30,8 +31,9 @@ TEST_CASE("hello_xr -g Vulkan2 runs against the headless runtime until the runti
   CHECK(countOccurrences(r.output, "VALID_WARNING") == 0);
   CHECK(countOccurrences(r.output, "VUID-") == 0);
   // The full state sequence, in order, ending with the runtime-initiated exit.
-  const char* states[] = {"->XR_SESSION_STATE_READY",   "->XR_SESSION_STATE_SYNCHRONIZED", "->XR_SESSION_STATE_VISIBLE",
-                          "->XR_SESSION_STATE_FOCUSED", "->XR_SESSION_STATE_STOPPING",     "->XR_SESSION_STATE_IDLE",
+  const char* states[] = {"->XR_SESSION_STATE_READY",    "->XR_SESSION_STATE_SYNCHRONIZED",
+                          "->XR_SESSION_STATE_VISIBLE",  "->XR_SESSION_STATE_FOCUSED",
+                          "->XR_SESSION_STATE_STOPPING", "->XR_SESSION_STATE_IDLE",
                           "->XR_SESSION_STATE_EXITING"};
   size_t at = 0;
   for (const char* s : states) {

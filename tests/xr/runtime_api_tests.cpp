@@ -98,7 +98,8 @@ TEST_CASE("the system is an HMD with a primary stereo view configuration of two 
   REQUIRE(n == 2);
   std::vector<XrViewConfigurationView> views(n, {XR_TYPE_VIEW_CONFIGURATION_VIEW});
   // The two-call idiom: too small a buffer is an error, the count is still reported.
-  CHECK(xrEnumerateViewConfigurationViews(inst.handle, sys, types[0], 1, &n, views.data()) == XR_ERROR_SIZE_INSUFFICIENT);
+  CHECK(xrEnumerateViewConfigurationViews(inst.handle, sys, types[0], 1, &n, views.data()) ==
+        XR_ERROR_SIZE_INSUFFICIENT);
   CHECK(n == 2);
   REQUIRE(xrEnumerateViewConfigurationViews(inst.handle, sys, types[0], n, &n, views.data()) == XR_SUCCESS);
   for (const auto& v : views) {
@@ -122,7 +123,8 @@ TEST_CASE("paths round-trip and malformed paths are rejected", "[xr]") {
   REQUIRE(xrPathToString(inst.handle, a, sizeof(buf), &n, buf) == XR_SUCCESS);
   CHECK(std::string(buf) == "/user/hand/left/input/grip/pose");
   CHECK(n == std::strlen(buf) + 1);
-  for (const char* bad : {"user/hand", "/user/hand/", "/user//hand", "/User/hand", "/user/./hand", "/user/hand left"})
+  for (const char* bad :
+       {"user/hand", "/user/hand/", "/user//hand", "/User/hand", "/user/./hand", "/user/hand left"})
     CHECK(xrStringToPath(inst.handle, bad, &a) == XR_ERROR_PATH_FORMAT_INVALID);
   CHECK(xrPathToString(inst.handle, 999999, sizeof(buf), &n, buf) == XR_ERROR_PATH_INVALID);
 }
@@ -139,11 +141,13 @@ TEST_CASE("result and structure type strings come from the registry", "[xr]") {
   CHECK(std::string(sbuf) == "XR_TYPE_HAND_JOINT_LOCATIONS_EXT");
 }
 
-TEST_CASE("unimplemented and not-enabled functions are XR_ERROR_FUNCTION_UNSUPPORTED, never a crash", "[xr]") {
+TEST_CASE("unimplemented and not-enabled functions are XR_ERROR_FUNCTION_UNSUPPORTED, never a crash",
+          "[xr]") {
   PFN_xrVoidFunction f = reinterpret_cast<PFN_xrVoidFunction>(&xrDestroyInstance);
   {
     ScopedXrInstance inst;  // no extensions enabled (the 1.0.20 loader allows one instance at a time)
-    CHECK(xrGetInstanceProcAddr(inst.handle, "xrCreateSpatialAnchorMSFT", &f) == XR_ERROR_FUNCTION_UNSUPPORTED);
+    CHECK(xrGetInstanceProcAddr(inst.handle, "xrCreateSpatialAnchorMSFT", &f) ==
+          XR_ERROR_FUNCTION_UNSUPPORTED);
     CHECK(f == nullptr);
     CHECK(xrGetInstanceProcAddr(inst.handle, "xrCreateHandTrackerEXT", &f) == XR_ERROR_FUNCTION_UNSUPPORTED);
     CHECK(xrGetInstanceProcAddr(inst.handle, "xrNotAFunctionAtAll", &f) == XR_ERROR_FUNCTION_UNSUPPORTED);
@@ -152,7 +156,8 @@ TEST_CASE("unimplemented and not-enabled functions are XR_ERROR_FUNCTION_UNSUPPO
   ScopedXrInstance withHands({"XR_EXT_hand_tracking", "XR_KHR_vulkan_enable2"});
   CHECK(xrGetInstanceProcAddr(withHands.handle, "xrCreateHandTrackerEXT", &f) == XR_SUCCESS);
   CHECK(f != nullptr);
-  auto requirements = proc<PFN_xrGetVulkanGraphicsRequirements2KHR>(withHands.handle, "xrGetVulkanGraphicsRequirements2KHR");
+  auto requirements =
+      proc<PFN_xrGetVulkanGraphicsRequirements2KHR>(withHands.handle, "xrGetVulkanGraphicsRequirements2KHR");
   XrGraphicsRequirementsVulkan2KHR req{XR_TYPE_GRAPHICS_REQUIREMENTS_VULKAN2_KHR};
   CHECK(requirements(withHands.handle, 12345, &req) == XR_ERROR_SYSTEM_INVALID);
 }

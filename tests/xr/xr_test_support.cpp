@@ -38,7 +38,8 @@ std::string helloXr() {
 }
 
 std::map<std::string, std::string> headlessRuntimeEnv() {
-  return {{"XR_RUNTIME_JSON", runtimeManifest()}, {"XR_ENABLE_API_LAYERS", "XR_APILAYER_LUNARG_core_validation"}};
+  return {{"XR_RUNTIME_JSON", runtimeManifest()},
+          {"XR_ENABLE_API_LAYERS", "XR_APILAYER_LUNARG_core_validation"}};
 }
 
 std::string freshTestDir(const std::string& name) {
@@ -85,7 +86,8 @@ ProcessResult runProcess(const std::vector<std::string>& argv, const std::map<st
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(timeoutSeconds);
   char buf[4096];
   for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) {
       r.timedOut = true;
       kill(pid, SIGKILL);

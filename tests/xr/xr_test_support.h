@@ -13,9 +13,9 @@ std::string embodyBin();        // the built CLI
 std::string helloXr();          // Debian's hello_xr, "" when not installed
 
 struct ProcessResult {
-  int exitCode = -1;      // -1 when killed or not started
+  int exitCode = -1;  // -1 when killed or not started
   bool timedOut = false;
-  std::string output;     // stdout and stderr interleaved
+  std::string output;  // stdout and stderr interleaved
 };
 
 // Runs argv[0] (searched in PATH) with `env` added to this process's environment. stdin is a

@@ -10,7 +10,8 @@ float headingOf(const Pose& p) {
   return std::atan2(-f.x, -f.z);
 }
 
-AvatarPlacement::AvatarPlacement(const glm::vec3& avatarEye, const glm::vec3& avatarForward, const PlacementOptions& o)
+AvatarPlacement::AvatarPlacement(const glm::vec3& avatarEye, const glm::vec3& avatarForward,
+                                 const PlacementOptions& o)
     : eye_(avatarEye), forward_(avatarForward), options_(o) {
   if (o.userEyeHeight > 0.0f && eye_.y > 1e-3f) {
     scale_ = o.userEyeHeight / eye_.y;
@@ -29,7 +30,8 @@ bool AvatarPlacement::calibrate(const Pose& head) {
 
 void AvatarPlacement::recenter(const Pose& head) {
   // New world = tracking moved so the head is over the origin (height kept) and turned to -Z.
-  const Pose yawOnly{{head.position.x, 0.0f, head.position.z}, glm::angleAxis(headingOf(head), glm::vec3(0, 1, 0))};
+  const Pose yawOnly{{head.position.x, 0.0f, head.position.z},
+                     glm::angleAxis(headingOf(head), glm::vec3(0, 1, 0))};
   recenter_ = yawOnly.inverse();
 }
 
@@ -45,7 +47,8 @@ glm::mat4 AvatarPlacement::root(const Pose& head) const {
   return m;
 }
 
-void AvatarPlacement::place(const avatar::Skeleton& skeleton, const Pose& head, avatar::SkeletonPose& pose) const {
+void AvatarPlacement::place(const avatar::Skeleton& skeleton, const Pose& head,
+                            avatar::SkeletonPose& pose) const {
   const glm::mat4 m = root(head);
   const glm::quat r = glm::quat_cast(glm::mat3(m) / scale_);
   for (size_t j = 0; j < skeleton.joints.size(); ++j) {

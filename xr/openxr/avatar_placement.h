@@ -23,7 +23,8 @@ class AvatarPlacement {
  public:
   // avatarEye: eye position of the avatar's rest pose in model space (root at origin, metres);
   // avatarForward: the way the rest pose faces (glTF +Z).
-  AvatarPlacement(const glm::vec3& avatarEye, const glm::vec3& avatarForward, const PlacementOptions& options);
+  AvatarPlacement(const glm::vec3& avatarEye, const glm::vec3& avatarForward,
+                  const PlacementOptions& options);
 
   // Standing calibration from a head pose in the world; ignored (returns false) when the head is
   // implausibly low or high (< 0.8 m or > 2.5 m above the floor), or in seated mode.

@@ -61,7 +61,22 @@ OpenXRLoaderInfo probeOpenXR() {
   }
   findActiveRuntime(info);
   info.runtimeName = "none";
+  uint32_t n = 0;
+  if (XR_SUCCEEDED(xrEnumerateApiLayerProperties(0, &n, nullptr)) && n > 0) {
+    std::vector<XrApiLayerProperties> layers(n, {XR_TYPE_API_LAYER_PROPERTIES});
+    if (XR_SUCCEEDED(xrEnumerateApiLayerProperties(n, &n, layers.data())))
+      for (const auto& l : layers)
+        info.apiLayers.push_back(std::string(l.layerName) + " " + versionString(l.specVersion));
+  }
   if (info.runtimeManifest.empty()) return info;
+  if (XR_SUCCEEDED(xrEnumerateInstanceExtensionProperties(nullptr, 0, &n, nullptr)) && n > 0) {
+    std::vector<XrExtensionProperties> exts(n, {XR_TYPE_EXTENSION_PROPERTIES});
+    if (XR_SUCCEEDED(xrEnumerateInstanceExtensionProperties(nullptr, n, &n, exts.data())))
+      for (const auto& e : exts) {
+        info.runtimeExtensions.push_back(e.extensionName);
+        info.vulkanEnable2 = info.vulkanEnable2 || std::strcmp(e.extensionName, "XR_KHR_vulkan_enable2") == 0;
+      }
+  }
 
   XrInstanceCreateInfo ci{XR_TYPE_INSTANCE_CREATE_INFO};
   std::strncpy(ci.applicationInfo.applicationName, "embody-doctor", XR_MAX_APPLICATION_NAME_SIZE - 1);
@@ -78,6 +93,13 @@ OpenXRLoaderInfo probeOpenXR() {
   if (XR_SUCCEEDED(xrGetInstanceProperties(instance, &props))) {
     info.runtimeName = props.runtimeName;
     info.runtimeVersion = versionString(props.runtimeVersion);
+  }
+  XrSystemGetInfo gi{XR_TYPE_SYSTEM_GET_INFO};
+  gi.formFactor = XR_FORM_FACTOR_HEAD_MOUNTED_DISPLAY;
+  XrSystemId system = XR_NULL_SYSTEM_ID;
+  if (XR_SUCCEEDED(xrGetSystem(instance, &gi, &system))) {
+    XrSystemProperties sp{XR_TYPE_SYSTEM_PROPERTIES};
+    if (XR_SUCCEEDED(xrGetSystemProperties(instance, system, &sp))) info.systemName = sp.systemName;
   }
   xrDestroyInstance(instance);
   return info;

@@ -26,7 +26,8 @@ Pose Pose::inverse() const {
 }
 
 Pose Pose::fromXr(const XrPosef& p) {
-  Pose r{{p.position.x, p.position.y, p.position.z}, glm::quat(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)};
+  Pose r{{p.position.x, p.position.y, p.position.z},
+         glm::quat(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)};
   const float n = glm::length(r.orientation);
   if (!(n > 1e-6f) || !std::isfinite(n) || !std::isfinite(r.position.x) || !std::isfinite(r.position.y) ||
       !std::isfinite(r.position.z))

@@ -36,18 +36,19 @@ Pose gripToWrist(const std::string& profile, bool leftHand) {
   // Right-hand offsets (wrist in grip space); +Z points back towards the wrist, +X into the palm.
   Pose p;
   auto rot = [](float pitchDeg, float rollDeg) {
-    return glm::angleAxis(glm::radians(pitchDeg), glm::vec3(1, 0, 0)) * glm::angleAxis(glm::radians(rollDeg), glm::vec3(0, 0, 1));
+    return glm::angleAxis(glm::radians(pitchDeg), glm::vec3(1, 0, 0)) *
+           glm::angleAxis(glm::radians(rollDeg), glm::vec3(0, 0, 1));
   };
   if (profile == "/interaction_profiles/oculus/touch_controller") {
-    p = {{0.0f, -0.015f, 0.085f}, rot(-20.0f, 0.0f)};   // handle tilted ~20 degrees forward
+    p = {{0.0f, -0.015f, 0.085f}, rot(-20.0f, 0.0f)};  // handle tilted ~20 degrees forward
   } else if (profile == "/interaction_profiles/valve/index_controller") {
-    p = {{0.0f, -0.01f, 0.08f}, rot(-15.0f, 0.0f)};     // strap holds the palm close to the grip
+    p = {{0.0f, -0.01f, 0.08f}, rot(-15.0f, 0.0f)};  // strap holds the palm close to the grip
   } else if (profile == "/interaction_profiles/htc/vive_controller") {
-    p = {{0.0f, -0.02f, 0.1f}, rot(-10.0f, 0.0f)};      // long wand, grip further from the wrist
+    p = {{0.0f, -0.02f, 0.1f}, rot(-10.0f, 0.0f)};  // long wand, grip further from the wrist
   } else if (profile == "/interaction_profiles/microsoft/motion_controller") {
     p = {{0.0f, -0.02f, 0.09f}, rot(-15.0f, 0.0f)};
   } else {
-    p = {{0.0f, 0.0f, 0.08f}, rot(0.0f, 0.0f)};          // khr/simple: no geometry known
+    p = {{0.0f, 0.0f, 0.08f}, rot(0.0f, 0.0f)};  // khr/simple: no geometry known
   }
   if (leftHand) {  // mirror across the grip's YZ plane
     p.position.x = -p.position.x;
@@ -69,7 +70,8 @@ Status XrInput::init() {
   std::strcpy(si.actionSetName, "embody");
   std::strcpy(si.localizedActionSetName, "Embody");
   if (auto s = check(system_, xrCreateActionSet(inst, &si, &set_), "xrCreateActionSet"); !s) return s;
-  auto action = [&](const char* name, const char* localized, XrActionType type, XrAction& out, uint32_t hands) {
+  auto action = [&](const char* name, const char* localized, XrActionType type, XrAction& out,
+                    uint32_t hands) {
     XrActionCreateInfo ai{XR_TYPE_ACTION_CREATE_INFO};
     std::strcpy(ai.actionName, name);
     std::strcpy(ai.localizedActionName, localized);
@@ -93,30 +95,41 @@ Status XrInput::init() {
     }
     // Recenter on the left hand's spare button (index: the right B button).
     const bool indexProfile = std::strstr(p.profile, "index") != nullptr;
-    b.push_back({recenter_, system_.path((std::string("/user/hand/") + (indexProfile ? "right/" : "left/") + p.recenter).c_str())});
+    b.push_back(
+        {recenter_,
+         system_.path(
+             (std::string("/user/hand/") + (indexProfile ? "right/" : "left/") + p.recenter).c_str())});
     XrInteractionProfileSuggestedBinding sb{XR_TYPE_INTERACTION_PROFILE_SUGGESTED_BINDING};
     sb.interactionProfile = system_.path(p.profile);
     sb.countSuggestedBindings = static_cast<uint32_t>(b.size());
     sb.suggestedBindings = b.data();
     // A runtime may not know every profile: that is not an error for the application.
-    if (XrResult r = xrSuggestInteractionProfileBindings(inst, &sb); XR_FAILED(r) && r != XR_ERROR_PATH_UNSUPPORTED)
-      return Error{std::string("xrSuggestInteractionProfileBindings(") + p.profile + ") failed: " + system_.result(r)};
+    if (XrResult r = xrSuggestInteractionProfileBindings(inst, &sb);
+        XR_FAILED(r) && r != XR_ERROR_PATH_UNSUPPORTED)
+      return Error{std::string("xrSuggestInteractionProfileBindings(") + p.profile +
+                   ") failed: " + system_.result(r)};
   }
   for (int h = 0; h < 2; ++h) {
     XrActionSpaceCreateInfo ai{XR_TYPE_ACTION_SPACE_CREATE_INFO};
     ai.poseInActionSpace = Pose{}.toXr();
     ai.subactionPath = handPaths_[h];
     ai.action = grip_;
-    if (auto s = check(system_, xrCreateActionSpace(session_.handle(), &ai, &gripSpaces_[h]), "xrCreateActionSpace"); !s)
+    if (auto s = check(system_, xrCreateActionSpace(session_.handle(), &ai, &gripSpaces_[h]),
+                       "xrCreateActionSpace");
+        !s)
       return s;
     ai.action = aim_;
-    if (auto s = check(system_, xrCreateActionSpace(session_.handle(), &ai, &aimSpaces_[h]), "xrCreateActionSpace"); !s)
+    if (auto s = check(system_, xrCreateActionSpace(session_.handle(), &ai, &aimSpaces_[h]),
+                       "xrCreateActionSpace");
+        !s)
       return s;
   }
   XrSessionActionSetsAttachInfo at{XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO};
   at.countActionSets = 1;
   at.actionSets = &set_;
-  if (auto s = check(system_, xrAttachSessionActionSets(session_.handle(), &at), "xrAttachSessionActionSets"); !s) return s;
+  if (auto s = check(system_, xrAttachSessionActionSets(session_.handle(), &at), "xrAttachSessionActionSets");
+      !s)
+    return s;
 
   if (system_.handTrackingEnabled()) {
     auto create = reinterpret_cast<PFN_xrCreateHandTrackerEXT>(system_.proc("xrCreateHandTrackerEXT"));
@@ -173,13 +186,16 @@ Status XrInput::update(XrTime time) {
     hs.active = XR_SUCCEEDED(xrGetActionStatePose(session_.handle(), &gi, &ps)) && ps.isActive;
     gi.action = trigger_;
     XrActionStateFloat fs{XR_TYPE_ACTION_STATE_FLOAT};
-    if (XR_SUCCEEDED(xrGetActionStateFloat(session_.handle(), &gi, &fs)) && fs.isActive && std::isfinite(fs.currentState))
+    if (XR_SUCCEEDED(xrGetActionStateFloat(session_.handle(), &gi, &fs)) && fs.isActive &&
+        std::isfinite(fs.currentState))
       hs.trigger = fs.currentState;
     if (hs.active) {
       XrSpaceLocation loc{XR_TYPE_SPACE_LOCATION};
-      if (XR_SUCCEEDED(xrLocateSpace(gripSpaces_[h], session_.worldSpace(), time, &loc))) hs.grip = fromSpaceLocation(loc);
+      if (XR_SUCCEEDED(xrLocateSpace(gripSpaces_[h], session_.worldSpace(), time, &loc)))
+        hs.grip = fromSpaceLocation(loc);
       loc = {XR_TYPE_SPACE_LOCATION};
-      if (XR_SUCCEEDED(xrLocateSpace(aimSpaces_[h], session_.worldSpace(), time, &loc))) hs.aim = fromSpaceLocation(loc);
+      if (XR_SUCCEEDED(xrLocateSpace(aimSpaces_[h], session_.worldSpace(), time, &loc)))
+        hs.aim = fromSpaceLocation(loc);
       if (hs.grip.valid) {
         hs.wrist = hs.grip;
         hs.wrist.pose = hs.grip.pose * gripToWrist(profile_, h == 0);

@@ -19,9 +19,9 @@ class XrSessionRunner;
 constexpr int kHandJointCount = 26;  // XR_HAND_JOINT_COUNT_EXT
 
 struct HandState {
-  bool active = false;       // the pose action is bound and the session focused
-  TrackedPose grip, aim;     // controller poses in the world space
-  TrackedPose wrist;         // where the user's wrist is (hand tracking, else grip * offset)
+  bool active = false;    // the pose action is bound and the session focused
+  TrackedPose grip, aim;  // controller poses in the world space
+  TrackedPose wrist;      // where the user's wrist is (hand tracking, else grip * offset)
   bool wristFromHandTracking = false;
   float trigger = 0.0f;
   bool jointsValid = false;  // XR_EXT_hand_tracking joints (world space)
@@ -42,9 +42,9 @@ class XrInput {
 
   // xrSyncActions and locate everything at `time` (the predicted display time) in the world space.
   Status update(XrTime time);
-  const HandState& hand(int i) const { return hands_[i]; }  // 0 left, 1 right
+  const HandState& hand(int i) const { return hands_[i]; }            // 0 left, 1 right
   const std::string& interactionProfile() const { return profile_; }  // "" until one is bound
-  bool recenterPressed() const { return recenterPressed_; }  // rising edge this update
+  bool recenterPressed() const { return recenterPressed_; }           // rising edge this update
   bool handTracking() const { return trackers_[0] != XR_NULL_HANDLE; }
 
  private:
@@ -55,7 +55,8 @@ class XrInput {
   XrSystem& system_;
   XrSessionRunner& session_;
   XrActionSet set_ = XR_NULL_HANDLE;
-  XrAction grip_ = XR_NULL_HANDLE, aim_ = XR_NULL_HANDLE, trigger_ = XR_NULL_HANDLE, recenter_ = XR_NULL_HANDLE;
+  XrAction grip_ = XR_NULL_HANDLE, aim_ = XR_NULL_HANDLE, trigger_ = XR_NULL_HANDLE,
+           recenter_ = XR_NULL_HANDLE;
   std::array<XrPath, 2> handPaths_{};
   std::array<XrSpace, 2> gripSpaces_{}, aimSpaces_{};
   std::array<XrHandTrackerEXT, 2> trackers_{};

@@ -7,6 +7,7 @@
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
 #include "engine/overlay.h"
+#include "xr/openxr/mirror_window.h"
 #include "xr/openxr/xr_input.h"
 #include "xr/openxr/xr_session.h"
 #include "xr/openxr/xr_system.h"
@@ -15,7 +16,9 @@ namespace embody::xr {
 
 namespace {
 
-gfx::FovAngles fovOf(const XrFovf& f) { return {f.angleLeft, f.angleRight, f.angleUp, f.angleDown}; }
+gfx::FovAngles fovOf(const XrFovf& f) {
+  return {f.angleLeft, f.angleRight, f.angleUp, f.angleDown};
+}
 
 // Midpoint of the eyes with the left eye's orientation: the head pose the body follows.
 Pose headFromViews(const Views& v) {
@@ -36,6 +39,12 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
   if (!o.avatar) return fail("runXrLoop: no avatar");
   XrSystemOptions so;
   so.vulkanValidation = o.vulkanValidation;
+  if (o.mirror) {
+    auto exts = MirrorWindow::requiredInstanceExtensions();
+    if (!exts) return fail(exts.error());
+    so.vulkanInstanceExtensions = *exts;
+    so.vulkanDeviceExtensions = {VK_KHR_SWAPCHAIN_EXTENSION_NAME};
+  }
   auto system = XrSystem::create(so);
   if (!system) return fail(system.error());
   XrSystem& sys = **system;
@@ -45,6 +54,14 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
   gfx::AdoptedDevice ad{sys.vkInstance(), sys.vkPhysicalDevice(), sys.vkDevice(), sys.queueFamily(), 0};
   auto device = gfx::Device::adopt(ad);
   if (!device) return fail(device.error());
+  std::unique_ptr<MirrorWindow> mirror;
+  if (o.mirror) {
+    const auto& v = sys.views()[0];
+    auto m = MirrorWindow::create(sys.vkInstance(), sys.vkPhysicalDevice(), sys.vkDevice(), sys.queueFamily(),
+                                  v.recommendedImageRectWidth, v.recommendedImageRectHeight);
+    if (!m) return fail(m.error());
+    mirror = std::move(m).value();
+  }
   gfx::AvatarRendererOptions ro;
   ro.width = ro.height = 16;  // its own offscreen target is unused: the eyes render into swapchains
   auto avatarRenderer = gfx::AvatarRenderer::create(**device, *o.avatar, ro);
@@ -71,7 +88,12 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
   size_t statesSeen = 0;
   double renderSeconds = 0.0;
   std::string error;
+  uint64_t rendererFrames = 0;
   while (!run.finished()) {
+    if (mirror) {
+      mirror->pollEvents();
+      if (mirror->closeRequested()) run.requestExit();
+    }
     if (auto s = run.pollEvents(); !s) {
       error = s.error();
       break;
@@ -105,7 +127,8 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
     }
     Views views = run.locateViews(t);
     const Pose headTracking = headFromViews(views);
-    if (views.valid && ((o.recenterAtStart && !recentered) || in.recenterPressed())) {
+    const bool mirrorRecenter = mirror && mirror->takeRecenterRequest();
+    if (views.valid && ((o.recenterAtStart && !recentered) || in.recenterPressed() || mirrorRecenter)) {
       placement.recenter(headTracking);
       recentered = true;
     }
@@ -117,8 +140,10 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
       if (!placement.calibrated()) placement.calibrate(head);
     }
     for (int h = 0; h < 2; ++h) {
-      if (in.hand(h).grip.valid) ++rep.handValidFrames[h];
-      else if (run.focused()) ++rep.handLostFrames[h];
+      if (in.hand(h).grip.valid)
+        ++rep.handValidFrames[h];
+      else if (run.focused())
+        ++rep.handLostFrames[h];
     }
     rep.interactionProfile = in.interactionProfile();
 
@@ -171,17 +196,47 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
       for (uint32_t e = 0; e < 2 && st; ++e) {
         const auto& sc = run.color()[e];
         gfx::PassTarget target;
-        target.color = {sc.images[color[e]].image, sc.images[color[e]].view, sc.format, sc.extent, 0, 1,
-                        VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+        target.color = {sc.images[color[e]].image,
+                        sc.images[color[e]].view,
+                        sc.format,
+                        sc.extent,
+                        0,
+                        1,
+                        VK_IMAGE_LAYOUT_UNDEFINED,
+                        VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
         if (run.submitsDepth()) {
           const auto& dc = run.depth()[e];
-          target.depth = gfx::TargetImage{dc.images[depth[e]].image, dc.images[depth[e]].view, dc.format, dc.extent, 0, 1,
-                                          VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL};
+          target.depth = gfx::TargetImage{dc.images[depth[e]].image,
+                                          dc.images[depth[e]].view,
+                                          dc.format,
+                                          dc.extent,
+                                          0,
+                                          1,
+                                          VK_IMAGE_LAYOUT_UNDEFINED,
+                                          VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL};
         }
-        const gfx::Camera cam = gfx::cameraFromPose(views.eyes[e].pose.matrix(), fovOf(views.eyes[e].fov), kNear, kFar);
+        const gfx::Camera cam =
+            gfx::cameraFromPose(views.eyes[e].pose.matrix(), fovOf(views.eyes[e].fov), kNear, kFar);
         st = r.drawPass(std::span<const gfx::Camera>(&cam, 1), target);
       }
-      if (st) st = r.endFrame();  // submitted before the images are released, as OpenXR requires
+      ++rendererFrames;
+      gfx::SubmitSync sync;
+      if (st && mirror) {
+        // The left eye again (its pose, the window's aspect), or the avatar from outside.
+        const float vfov = views.eyes[0].fov.angleUp - views.eyes[0].fov.angleDown;
+        const gfx::Camera cam =
+            mirror->thirdPerson()
+                ? ar.orbitAround(pose, 0.6f, 0.2f)
+                : gfx::cameraFromPose(views.eyes[0].pose.matrix(),
+                                      gfx::FovAngles::symmetric(vfov, mirror->aspect()), kNear, kFar);
+        auto shown = mirror->draw(r, rendererFrames, cam, sync);
+        if (!shown)
+          st = Status(Error{shown.error()});
+        else if (*shown)
+          ++rep.mirrorFrames;
+      }
+      if (st) st = r.endFrame(sync);  // submitted before the images are released, as OpenXR requires
+      if (st && mirror) st = mirror->present((*device)->queue());
       for (uint32_t e = 0; e < 2; ++e) {
         (void)run.release(run.color()[e].handle);
         if (run.submitsDepth()) (void)run.release(run.depth()[e].handle);
@@ -196,7 +251,8 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
       error = s.error();
       break;
     }
-    if (rendered) renderSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (rendered)
+      renderSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (o.frames > 0 && run.framesSubmitted() >= o.frames) run.requestExit();
   }
   for (; statesSeen < run.stateHistory().size(); ++statesSeen)
@@ -212,11 +268,13 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
   input->reset();
   session->reset();
   avatarRenderer->reset();
+  mirror.reset();
   device->reset();
   const auto counter = sys.validationCounter();
   system->reset();  // destroying the device and instance can report leaks: count after
   rep.vulkanValidationMessages = counter->load();
-  if (error.empty() && rep.sessionLost) error = "the OpenXR session was lost (the runtime or the headset went away)";
+  if (error.empty() && rep.sessionLost)
+    error = "the OpenXR session was lost (the runtime or the headset went away)";
   rep.error = error;
   return rep;
 }

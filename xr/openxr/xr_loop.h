@@ -16,19 +16,20 @@ namespace embody::xr {
 
 struct XrLoopOptions {
   const avatar::AvatarAsset* avatar = nullptr;  // required; must outlive the loop
-  uint64_t frames = 0;          // request exit after this many submitted frames (0: until the runtime ends it)
+  uint64_t frames = 0;  // request exit after this many submitted frames (0: until the runtime ends it)
   bool vulkanValidation = false;
   PlacementOptions placement;
   bool recenterAtStart = false;
-  bool verbose = false;         // print every session state change
+  bool verbose = false;  // print every session state change
+  bool mirror = false;   // a desktop window showing the left eye (V: third person)
 };
 
 struct XrLoopReport {
   std::string runtime, system, interactionProfile;
   bool usedStage = false, handTracking = false, depthSubmitted = false;
-  std::vector<std::string> states;     // session states in the order they came
+  std::vector<std::string> states;  // session states in the order they came
   bool reachedFocused = false;
-  bool endedCleanly = false;           // EXITING reached after xrEndSession
+  bool endedCleanly = false;  // EXITING reached after xrEndSession
   bool sessionLost = false;
   uint64_t framesWaited = 0, framesSubmitted = 0;
   uint64_t headTrackedFrames = 0;
@@ -37,8 +38,9 @@ struct XrLoopReport {
   float calibratedScale = 1.0f;
   bool calibrated = false;
   uint32_t vulkanValidationMessages = 0;
-  double meanFrameMs = 0.0;            // wall time per loop iteration while rendering
-  std::string error;                   // "" when the run ended normally
+  uint64_t mirrorFrames = 0;  // frames the mirror window presented
+  double meanFrameMs = 0.0;   // wall time per loop iteration while rendering
+  std::string error;          // "" when the run ended normally
 };
 
 // Runs until the session ends. Setup failures, failing calls and a lost session (sessionLost)

@@ -7,15 +7,24 @@ namespace embody::xr {
 
 const char* sessionStateName(XrSessionState s) {
   switch (s) {
-    case XR_SESSION_STATE_IDLE: return "IDLE";
-    case XR_SESSION_STATE_READY: return "READY";
-    case XR_SESSION_STATE_SYNCHRONIZED: return "SYNCHRONIZED";
-    case XR_SESSION_STATE_VISIBLE: return "VISIBLE";
-    case XR_SESSION_STATE_FOCUSED: return "FOCUSED";
-    case XR_SESSION_STATE_STOPPING: return "STOPPING";
-    case XR_SESSION_STATE_LOSS_PENDING: return "LOSS_PENDING";
-    case XR_SESSION_STATE_EXITING: return "EXITING";
-    default: return "UNKNOWN";
+    case XR_SESSION_STATE_IDLE:
+      return "IDLE";
+    case XR_SESSION_STATE_READY:
+      return "READY";
+    case XR_SESSION_STATE_SYNCHRONIZED:
+      return "SYNCHRONIZED";
+    case XR_SESSION_STATE_VISIBLE:
+      return "VISIBLE";
+    case XR_SESSION_STATE_FOCUSED:
+      return "FOCUSED";
+    case XR_SESSION_STATE_STOPPING:
+      return "STOPPING";
+    case XR_SESSION_STATE_LOSS_PENDING:
+      return "LOSS_PENDING";
+    case XR_SESSION_STATE_EXITING:
+      return "EXITING";
+    default:
+      return "UNKNOWN";
   }
 }
 
@@ -98,7 +107,8 @@ Status XrSessionRunner::createSwapchain(uint32_t eye, bool depth, int64_t format
   uint32_t n = 0;
   xrEnumerateSwapchainImages(out.handle, 0, &n, nullptr);
   std::vector<XrSwapchainImageVulkan2KHR> images(n, {XR_TYPE_SWAPCHAIN_IMAGE_VULKAN2_KHR});
-  if (XrResult r = xrEnumerateSwapchainImages(out.handle, n, &n, reinterpret_cast<XrSwapchainImageBaseHeader*>(images.data()));
+  if (XrResult r = xrEnumerateSwapchainImages(out.handle, n, &n,
+                                              reinterpret_cast<XrSwapchainImageBaseHeader*>(images.data()));
       XR_FAILED(r))
     return Error{"xrEnumerateSwapchainImages failed: " + system_.result(r)};
   for (const auto& img : images) {
@@ -106,8 +116,9 @@ Status XrSessionRunner::createSwapchain(uint32_t eye, bool depth, int64_t format
     vi.image = img.image;
     vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
     vi.format = out.format;
-    vi.subresourceRange = {depth ? VkImageAspectFlags(VK_IMAGE_ASPECT_DEPTH_BIT) : VkImageAspectFlags(VK_IMAGE_ASPECT_COLOR_BIT),
-                           0, 1, 0, 1};
+    vi.subresourceRange = {
+        depth ? VkImageAspectFlags(VK_IMAGE_ASPECT_DEPTH_BIT) : VkImageAspectFlags(VK_IMAGE_ASPECT_COLOR_BIT),
+        0, 1, 0, 1};
     SwapchainImage si{img.image, VK_NULL_HANDLE};
     if (vkCreateImageView(system_.vkDevice(), &vi, nullptr, &si.view) != VK_SUCCESS)
       return Error{"vkCreateImageView failed for a swapchain image"};
@@ -194,7 +205,9 @@ void XrSessionRunner::requestExit() {
   }
 }
 
-bool XrSessionRunner::takeInteractionProfileChanged() { return std::exchange(profileChanged_, false); }
+bool XrSessionRunner::takeInteractionProfileChanged() {
+  return std::exchange(profileChanged_, false);
+}
 
 Result<FrameTiming> XrSessionRunner::waitFrame() {
   XrFrameWaitInfo wi{XR_TYPE_FRAME_WAIT_INFO};
@@ -226,7 +239,8 @@ Views XrSessionRunner::locateViews(XrTime time) {
   std::array<XrView, 2> views{{{XR_TYPE_VIEW}, {XR_TYPE_VIEW}}};
   uint32_t n = 0;
   if (XR_FAILED(xrLocateViews(session_, &li, &vs, 2, &n, views.data())) || n != 2) return out;
-  out.valid = (vs.viewStateFlags & XR_VIEW_STATE_ORIENTATION_VALID_BIT) && (vs.viewStateFlags & XR_VIEW_STATE_POSITION_VALID_BIT);
+  out.valid = (vs.viewStateFlags & XR_VIEW_STATE_ORIENTATION_VALID_BIT) &&
+              (vs.viewStateFlags & XR_VIEW_STATE_POSITION_VALID_BIT);
   out.tracked = out.valid && (vs.viewStateFlags & XR_VIEW_STATE_ORIENTATION_TRACKED_BIT) &&
                 (vs.viewStateFlags & XR_VIEW_STATE_POSITION_TRACKED_BIT);
   for (int i = 0; i < 2; ++i) out.eyes[i] = {Pose::fromXr(views[i].pose), views[i].fov};
@@ -253,12 +267,13 @@ Status XrSessionRunner::release(XrSwapchain swapchain) {
 }
 
 Status XrSessionRunner::endFrame(const FrameTiming& timing, const Views* views, float nearZ, float farZ) {
-  std::array<XrCompositionLayerProjectionView, 2> pv{{{XR_TYPE_COMPOSITION_LAYER_PROJECTION_VIEW},
-                                                      {XR_TYPE_COMPOSITION_LAYER_PROJECTION_VIEW}}};
-  std::array<XrCompositionLayerDepthInfoKHR, 2> depth{{{XR_TYPE_COMPOSITION_LAYER_DEPTH_INFO_KHR},
-                                                       {XR_TYPE_COMPOSITION_LAYER_DEPTH_INFO_KHR}}};
+  std::array<XrCompositionLayerProjectionView, 2> pv{
+      {{XR_TYPE_COMPOSITION_LAYER_PROJECTION_VIEW}, {XR_TYPE_COMPOSITION_LAYER_PROJECTION_VIEW}}};
+  std::array<XrCompositionLayerDepthInfoKHR, 2> depth{
+      {{XR_TYPE_COMPOSITION_LAYER_DEPTH_INFO_KHR}, {XR_TYPE_COMPOSITION_LAYER_DEPTH_INFO_KHR}}};
   XrCompositionLayerProjection layer{XR_TYPE_COMPOSITION_LAYER_PROJECTION};
-  const XrCompositionLayerBaseHeader* layers[] = {reinterpret_cast<const XrCompositionLayerBaseHeader*>(&layer)};
+  const XrCompositionLayerBaseHeader* layers[] = {
+      reinterpret_cast<const XrCompositionLayerBaseHeader*>(&layer)};
   XrFrameEndInfo ei{XR_TYPE_FRAME_END_INFO};
   ei.displayTime = timing.predictedDisplayTime;
   ei.environmentBlendMode = XR_ENVIRONMENT_BLEND_MODE_OPAQUE;
@@ -267,7 +282,8 @@ Status XrSessionRunner::endFrame(const FrameTiming& timing, const Views* views, 
       pv[i].pose = views->eyes[i].pose.toXr();
       pv[i].fov = views->eyes[i].fov;
       pv[i].subImage.swapchain = color_[i].handle;
-      pv[i].subImage.imageRect = {{0, 0}, {int32_t(color_[i].extent.width), int32_t(color_[i].extent.height)}};
+      pv[i].subImage.imageRect = {{0, 0},
+                                  {int32_t(color_[i].extent.width), int32_t(color_[i].extent.height)}};
       if (submitsDepth()) {
         depth[i].subImage.swapchain = depth_[i].handle;
         depth[i].subImage.imageRect = pv[i].subImage.imageRect;

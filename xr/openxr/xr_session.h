@@ -29,7 +29,7 @@ struct FrameTiming {
 };
 
 struct EyeView {
-  Pose pose;       // in the world space
+  Pose pose;  // in the world space
   XrFovf fov{};
 };
 struct Views {
@@ -59,8 +59,8 @@ class XrSessionRunner {
   // Drains the event queue and reacts: READY begins the session, STOPPING ends it, EXITING and
   // LOSS_PENDING finish it. Errors only for calls that fail unexpectedly.
   Status pollEvents();
-  bool running() const { return running_; }        // between xrBeginSession and xrEndSession
-  bool finished() const { return finished_; }      // EXITING or LOSS_PENDING (or instance loss)
+  bool running() const { return running_; }    // between xrBeginSession and xrEndSession
+  bool finished() const { return finished_; }  // EXITING or LOSS_PENDING (or instance loss)
   bool lost() const { return lost_; }
   XrSessionState state() const { return state_; }
   const std::vector<XrSessionState>& stateHistory() const { return history_; }

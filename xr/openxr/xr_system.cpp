@@ -10,7 +10,8 @@ namespace embody::xr {
 namespace {
 
 // Same rule as gfx::Instance: loader notices are not validation findings.
-VKAPI_ATTR VkBool32 VKAPI_CALL countMessage(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT type,
+VKAPI_ATTR VkBool32 VKAPI_CALL countMessage(VkDebugUtilsMessageSeverityFlagBitsEXT,
+                                            VkDebugUtilsMessageTypeFlagsEXT type,
                                             const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
   if (type == VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT && data->pMessageIdName &&
       std::strcmp(data->pMessageIdName, "Loader Message") == 0)
@@ -82,18 +83,19 @@ Status XrSystem::createInstance(const XrSystemOptions& o) {
   handTracking_ = handTracking_ && hand.supportsHandTracking;
 
   uint32_t count = 0;
-  if (XrResult r = xrEnumerateViewConfigurationViews(instance_, systemId_, XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO, 0,
-                                                     &count, nullptr);
+  if (XrResult r = xrEnumerateViewConfigurationViews(
+          instance_, systemId_, XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO, 0, &count, nullptr);
       XR_FAILED(r) || count != 2)
     return Error{"the HMD has no primary stereo view configuration with two views"};
   views_.fill({XR_TYPE_VIEW_CONFIGURATION_VIEW});
-  xrEnumerateViewConfigurationViews(instance_, systemId_, XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO, 2, &count,
-                                    views_.data());
+  xrEnumerateViewConfigurationViews(instance_, systemId_, XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO, 2,
+                                    &count, views_.data());
   return {};
 }
 
 Status XrSystem::createVulkan(const XrSystemOptions& o) {
-  auto requirements = reinterpret_cast<PFN_xrGetVulkanGraphicsRequirements2KHR>(proc("xrGetVulkanGraphicsRequirements2KHR"));
+  auto requirements =
+      reinterpret_cast<PFN_xrGetVulkanGraphicsRequirements2KHR>(proc("xrGetVulkanGraphicsRequirements2KHR"));
   auto createInstance = reinterpret_cast<PFN_xrCreateVulkanInstanceKHR>(proc("xrCreateVulkanInstanceKHR"));
   auto getDevice = reinterpret_cast<PFN_xrGetVulkanGraphicsDevice2KHR>(proc("xrGetVulkanGraphicsDevice2KHR"));
   auto createDevice = reinterpret_cast<PFN_xrCreateVulkanDeviceKHR>(proc("xrCreateVulkanDeviceKHR"));
@@ -105,8 +107,9 @@ Status XrSystem::createVulkan(const XrSystemOptions& o) {
   // The renderer needs Vulkan 1.3 (dynamic rendering, synchronization2).
   if (XR_VERSION_MAJOR(req.maxApiVersionSupported) < 1 ||
       (XR_VERSION_MAJOR(req.maxApiVersionSupported) == 1 && XR_VERSION_MINOR(req.maxApiVersionSupported) < 3))
-    return Error{"the runtime supports Vulkan only up to " + std::to_string(XR_VERSION_MAJOR(req.maxApiVersionSupported)) +
-                 "." + std::to_string(XR_VERSION_MINOR(req.maxApiVersionSupported)) + "; Embody needs 1.3"};
+    return Error{"the runtime supports Vulkan only up to " +
+                 std::to_string(XR_VERSION_MAJOR(req.maxApiVersionSupported)) + "." +
+                 std::to_string(XR_VERSION_MINOR(req.maxApiVersionSupported)) + "; Embody needs 1.3"};
 
   const bool validate = o.vulkanValidation && vulkanLayerPresent("VK_LAYER_KHRONOS_validation");
   if (o.vulkanValidation && !validate)
@@ -116,8 +119,10 @@ Status XrSystem::createVulkan(const XrSystemOptions& o) {
   if (validate) exts.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
   const char* layer = "VK_LAYER_KHRONOS_validation";
   VkDebugUtilsMessengerCreateInfoEXT mci{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-  mci.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
-  mci.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+  mci.messageSeverity =
+      VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+  mci.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
+                    VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
                     VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
   mci.pfnUserCallback = countMessage;
   mci.pUserData = messages_.get();
@@ -168,8 +173,12 @@ Status XrSystem::createVulkan(const XrSystemOptions& o) {
   qci.queueCount = 1;
   qci.pQueuePriorities = &priority;
   gfx::RequiredDeviceFeatures features;
+  std::vector<const char*> deviceExts;
+  for (const auto& e : o.vulkanDeviceExtensions) deviceExts.push_back(e.c_str());
   VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
   dci.pNext = &features.features2;
+  dci.enabledExtensionCount = static_cast<uint32_t>(deviceExts.size());
+  dci.ppEnabledExtensionNames = deviceExts.data();
   dci.queueCreateInfoCount = 1;
   dci.pQueueCreateInfos = &qci;
   XrVulkanDeviceCreateInfoKHR xdi{XR_TYPE_VULKAN_DEVICE_CREATE_INFO_KHR};

@@ -20,6 +20,7 @@ struct XrSystemOptions {
   bool vulkanValidation = false;
   bool handTracking = true;  // enable XR_EXT_hand_tracking when the runtime offers it
   std::vector<std::string> vulkanInstanceExtensions;  // e.g. surface extensions for a mirror window
+  std::vector<std::string> vulkanDeviceExtensions;    // e.g. VK_KHR_swapchain for a mirror window
 };
 
 class XrSystem {

@@ -27,28 +27,31 @@ const std::vector<ProfileInfo>& profiles() {
   static const std::vector<ProfileInfo> list = {
       {"/interaction_profiles/oculus/touch_controller",
        "Oculus Touch Controller",
-       {"L:input/x/click", "L:input/x/touch", "L:input/y/click", "L:input/y/touch", "L:input/menu/click",
-        "R:input/a/click", "R:input/a/touch", "R:input/b/click", "R:input/b/touch", "R:input/system/click",
-        "input/squeeze/value", "input/trigger/value", "input/trigger/touch", "input/thumbstick/x", "input/thumbstick/y",
-        "input/thumbstick/click", "input/thumbstick/touch", "input/thumbrest/touch", "input/grip/pose",
-        "input/aim/pose", "output/haptic"}},
+       {"L:input/x/click",        "L:input/x/touch",       "L:input/y/click",     "L:input/y/touch",
+        "L:input/menu/click",     "R:input/a/click",       "R:input/a/touch",     "R:input/b/click",
+        "R:input/b/touch",        "R:input/system/click",  "input/squeeze/value", "input/trigger/value",
+        "input/trigger/touch",    "input/thumbstick/x",    "input/thumbstick/y",  "input/thumbstick/click",
+        "input/thumbstick/touch", "input/thumbrest/touch", "input/grip/pose",     "input/aim/pose",
+        "output/haptic"}},
       {"/interaction_profiles/valve/index_controller",
        "Index Controller",
-       {"input/system/click", "input/system/touch", "input/a/click", "input/a/touch", "input/b/click", "input/b/touch",
-        "input/squeeze/value", "input/squeeze/force", "input/trigger/click", "input/trigger/value",
-        "input/trigger/touch", "input/thumbstick/x", "input/thumbstick/y", "input/thumbstick/click",
-        "input/thumbstick/touch", "input/trackpad/x", "input/trackpad/y", "input/trackpad/force",
-        "input/trackpad/touch", "input/grip/pose", "input/aim/pose", "output/haptic"}},
+       {"input/system/click",  "input/system/touch",     "input/a/click",          "input/a/touch",
+        "input/b/click",       "input/b/touch",          "input/squeeze/value",    "input/squeeze/force",
+        "input/trigger/click", "input/trigger/value",    "input/trigger/touch",    "input/thumbstick/x",
+        "input/thumbstick/y",  "input/thumbstick/click", "input/thumbstick/touch", "input/trackpad/x",
+        "input/trackpad/y",    "input/trackpad/force",   "input/trackpad/touch",   "input/grip/pose",
+        "input/aim/pose",      "output/haptic"}},
       {"/interaction_profiles/htc/vive_controller",
        "Vive Controller",
-       {"input/system/click", "input/squeeze/click", "input/menu/click", "input/trigger/click", "input/trigger/value",
-        "input/trackpad/x", "input/trackpad/y", "input/trackpad/click", "input/trackpad/touch", "input/grip/pose",
-        "input/aim/pose", "output/haptic"}},
+       {"input/system/click", "input/squeeze/click", "input/menu/click", "input/trigger/click",
+        "input/trigger/value", "input/trackpad/x", "input/trackpad/y", "input/trackpad/click",
+        "input/trackpad/touch", "input/grip/pose", "input/aim/pose", "output/haptic"}},
       {"/interaction_profiles/microsoft/motion_controller",
        "Mixed Reality Motion Controller",
-       {"input/menu/click", "input/squeeze/click", "input/trigger/value", "input/thumbstick/x", "input/thumbstick/y",
-        "input/thumbstick/click", "input/trackpad/x", "input/trackpad/y", "input/trackpad/click",
-        "input/trackpad/touch", "input/grip/pose", "input/aim/pose", "output/haptic"}},
+       {"input/menu/click", "input/squeeze/click", "input/trigger/value", "input/thumbstick/x",
+        "input/thumbstick/y", "input/thumbstick/click", "input/trackpad/x", "input/trackpad/y",
+        "input/trackpad/click", "input/trackpad/touch", "input/grip/pose", "input/aim/pose",
+        "output/haptic"}},
       {"/interaction_profiles/khr/simple_controller",
        "Simple Controller",
        {"input/select/click", "input/menu/click", "input/grip/pose", "input/aim/pose", "output/haptic"}},
@@ -98,7 +101,8 @@ bool bindingSupported(const ProfileInfo& profile, int hand, const std::string& c
 bool validName(const char* s) {
   if (!s || !*s) return false;
   for (const char* c = s; *c; ++c)
-    if (!((*c >= 'a' && *c <= 'z') || (*c >= '0' && *c <= '9') || *c == '-' || *c == '_' || *c == '.')) return false;
+    if (!((*c >= 'a' && *c <= 'z') || (*c >= '0' && *c <= '9') || *c == '-' || *c == '_' || *c == '.'))
+      return false;
   return true;
 }
 
@@ -107,7 +111,9 @@ bool isTopLevelUserPath(const std::string& p) {
          p == "/user/treadmill";
 }
 
-bool sessionFocused(const Session& s) { return s.running && s.state == XR_SESSION_STATE_FOCUSED; }
+bool sessionFocused(const Session& s) {
+  return s.running && s.state == XR_SESSION_STATE_FOCUSED;
+}
 
 // Bindings of `action` in the current profile for one hand.
 std::vector<std::string> boundComponents(Instance& inst, const Session& s, const Action* action, int hand) {
@@ -130,7 +136,8 @@ float sourceValue(const std::string& component, const BodySample& body, int hand
 }
 
 bool subactionAllowed(const Action& a, XrPath p) {
-  return p == XR_NULL_PATH || std::find(a.subactionPaths.begin(), a.subactionPaths.end(), p) != a.subactionPaths.end();
+  return p == XR_NULL_PATH ||
+         std::find(a.subactionPaths.begin(), a.subactionPaths.end(), p) != a.subactionPaths.end();
 }
 
 XrResult XRAPI_CALL CreateActionSet(XrInstance instance, const XrActionSetCreateInfo* ci, XrActionSet* out) {
@@ -247,7 +254,8 @@ XrResult XRAPI_CALL SuggestInteractionProfileBindings(XrInstance instance,
       !sb->suggestedBindings)
     return XR_ERROR_VALIDATION_FAILURE;
   std::lock_guard lock(inst->mutex);
-  if (sb->interactionProfile == XR_NULL_PATH || sb->interactionProfile >= inst->paths.size()) return XR_ERROR_PATH_INVALID;
+  if (sb->interactionProfile == XR_NULL_PATH || sb->interactionProfile >= inst->paths.size())
+    return XR_ERROR_PATH_INVALID;
   const ProfileInfo* profile = findProfile(inst->pathString(sb->interactionProfile));
   if (!profile) return XR_ERROR_PATH_UNSUPPORTED;
   std::vector<std::pair<Action*, XrPath>> bindings;
@@ -272,12 +280,14 @@ XrResult XRAPI_CALL AttachSessionActionSets(XrSession session, const XrSessionAc
   Instance* inst = nullptr;
   Session* s = findSession(session, &inst);
   if (!s) return XR_ERROR_HANDLE_INVALID;
-  if (!info || info->type != XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO || info->countActionSets == 0 || !info->actionSets)
+  if (!info || info->type != XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO || info->countActionSets == 0 ||
+      !info->actionSets)
     return XR_ERROR_VALIDATION_FAILURE;
   std::lock_guard lock(inst->mutex);
   if (s->actionSetsAttached) return XR_ERROR_ACTIONSETS_ALREADY_ATTACHED;
   for (uint32_t i = 0; i < info->countActionSets; ++i)
-    if (!inst->actionSets.count(reinterpret_cast<ActionSet*>(info->actionSets[i]))) return XR_ERROR_HANDLE_INVALID;
+    if (!inst->actionSets.count(reinterpret_cast<ActionSet*>(info->actionSets[i])))
+      return XR_ERROR_HANDLE_INVALID;
   for (uint32_t i = 0; i < info->countActionSets; ++i) {
     auto* set = reinterpret_cast<ActionSet*>(info->actionSets[i]);
     set->attached = true;
@@ -286,11 +296,10 @@ XrResult XRAPI_CALL AttachSessionActionSets(XrSession session, const XrSessionAc
   }
   s->actionSetsAttached = true;
   // Pick the emulated controller.
-  std::vector<std::string> order = {"/interaction_profiles/oculus/touch_controller",
-                                    "/interaction_profiles/valve/index_controller",
-                                    "/interaction_profiles/htc/vive_controller",
-                                    "/interaction_profiles/microsoft/motion_controller",
-                                    "/interaction_profiles/khr/simple_controller"};
+  std::vector<std::string> order = {
+      "/interaction_profiles/oculus/touch_controller", "/interaction_profiles/valve/index_controller",
+      "/interaction_profiles/htc/vive_controller", "/interaction_profiles/microsoft/motion_controller",
+      "/interaction_profiles/khr/simple_controller"};
   if (const char* want = std::getenv("EMBODY_XR_PROFILE"); want && *want)
     order.insert(order.begin(), std::string("/interaction_profiles/") + want);
   s->currentProfile = XR_NULL_PATH;
@@ -298,7 +307,8 @@ XrResult XRAPI_CALL AttachSessionActionSets(XrSession session, const XrSessionAc
     auto id = inst->pathIds.find(p);
     if (id != inst->pathIds.end() && inst->suggested.count(id->second)) {
       bool usesAttached = false;
-      for (const auto& [a, path] : inst->suggested[id->second]) usesAttached = usesAttached || a->set->attached;
+      for (const auto& [a, path] : inst->suggested[id->second])
+        usesAttached = usesAttached || a->set->attached;
       if (usesAttached) {
         s->currentProfile = id->second;
         break;
@@ -322,10 +332,12 @@ XrResult XRAPI_CALL GetCurrentInteractionProfile(XrSession session, XrPath topLe
   if (!state || state->type != XR_TYPE_INTERACTION_PROFILE_STATE) return XR_ERROR_VALIDATION_FAILURE;
   std::lock_guard lock(inst->mutex);
   if (!s->actionSetsAttached) return XR_ERROR_ACTIONSET_NOT_ATTACHED;
-  if (topLevelUserPath == XR_NULL_PATH || topLevelUserPath >= inst->paths.size()) return XR_ERROR_PATH_INVALID;
+  if (topLevelUserPath == XR_NULL_PATH || topLevelUserPath >= inst->paths.size())
+    return XR_ERROR_PATH_INVALID;
   const std::string& p = inst->pathString(topLevelUserPath);
   if (!isTopLevelUserPath(p)) return XR_ERROR_PATH_UNSUPPORTED;
-  state->interactionProfile = (p == "/user/hand/left" || p == "/user/hand/right") ? s->currentProfile : XR_NULL_PATH;
+  state->interactionProfile =
+      (p == "/user/hand/left" || p == "/user/hand/right") ? s->currentProfile : XR_NULL_PATH;
   return XR_SUCCESS;
 }
 EMBODY_XR_ENTRY(GetCurrentInteractionProfile)
@@ -334,7 +346,8 @@ XrResult XRAPI_CALL SyncActions(XrSession session, const XrActionsSyncInfo* info
   Instance* inst = nullptr;
   Session* s = findSession(session, &inst);
   if (!s) return XR_ERROR_HANDLE_INVALID;
-  if (!info || info->type != XR_TYPE_ACTIONS_SYNC_INFO || (info->countActiveActionSets > 0 && !info->activeActionSets))
+  if (!info || info->type != XR_TYPE_ACTIONS_SYNC_INFO ||
+      (info->countActiveActionSets > 0 && !info->activeActionSets))
     return XR_ERROR_VALIDATION_FAILURE;
   std::lock_guard lock(inst->mutex);
   if (s->lost) return XR_ERROR_SESSION_LOST;
@@ -376,7 +389,8 @@ XrResult XRAPI_CALL SyncActions(XrSession session, const XrActionsSyncInfo* info
 EMBODY_XR_ENTRY(SyncActions)
 
 // Shared checks of the xrGetActionState* calls; combines the hands the subaction path selects.
-XrResult actionState(XrSession session, const XrActionStateGetInfo* info, XrActionType type, ActionStateData& out) {
+XrResult actionState(XrSession session, const XrActionStateGetInfo* info, XrActionType type,
+                     ActionStateData& out) {
   Instance* inst = nullptr;
   Session* s = findSession(session, &inst);
   if (!s) return XR_ERROR_HANDLE_INVALID;
@@ -416,7 +430,8 @@ XrResult XRAPI_CALL GetActionStateBoolean(XrSession session, const XrActionState
 }
 EMBODY_XR_ENTRY(GetActionStateBoolean)
 
-XrResult XRAPI_CALL GetActionStateFloat(XrSession session, const XrActionStateGetInfo* info, XrActionStateFloat* state) {
+XrResult XRAPI_CALL GetActionStateFloat(XrSession session, const XrActionStateGetInfo* info,
+                                        XrActionStateFloat* state) {
   if (!state || state->type != XR_TYPE_ACTION_STATE_FLOAT) return XR_ERROR_VALIDATION_FAILURE;
   ActionStateData d;
   if (XrResult r = actionState(session, info, XR_ACTION_TYPE_FLOAT_INPUT, d); XR_FAILED(r)) return r;
@@ -441,7 +456,8 @@ XrResult XRAPI_CALL GetActionStateVector2f(XrSession session, const XrActionStat
 }
 EMBODY_XR_ENTRY(GetActionStateVector2f)
 
-XrResult XRAPI_CALL GetActionStatePose(XrSession session, const XrActionStateGetInfo* info, XrActionStatePose* state) {
+XrResult XRAPI_CALL GetActionStatePose(XrSession session, const XrActionStateGetInfo* info,
+                                       XrActionStatePose* state) {
   if (!state || state->type != XR_TYPE_ACTION_STATE_POSE) return XR_ERROR_VALIDATION_FAILURE;
   ActionStateData d;
   if (XrResult r = actionState(session, info, XR_ACTION_TYPE_POSE_INPUT, d); XR_FAILED(r)) return r;
@@ -465,13 +481,16 @@ XrResult haptic(XrSession session, const XrHapticActionInfo* info) {
   return sessionFocused(*s) ? XR_SUCCESS : XR_SESSION_NOT_FOCUSED;  // no motors to drive
 }
 
-XrResult XRAPI_CALL ApplyHapticFeedback(XrSession session, const XrHapticActionInfo* info, const XrHapticBaseHeader* h) {
+XrResult XRAPI_CALL ApplyHapticFeedback(XrSession session, const XrHapticActionInfo* info,
+                                        const XrHapticBaseHeader* h) {
   if (!h) return XR_ERROR_VALIDATION_FAILURE;
   return haptic(session, info);
 }
 EMBODY_XR_ENTRY(ApplyHapticFeedback)
 
-XrResult XRAPI_CALL StopHapticFeedback(XrSession session, const XrHapticActionInfo* info) { return haptic(session, info); }
+XrResult XRAPI_CALL StopHapticFeedback(XrSession session, const XrHapticActionInfo* info) {
+  return haptic(session, info);
+}
 EMBODY_XR_ENTRY(StopHapticFeedback)
 
 XrResult XRAPI_CALL CreateActionSpace(XrSession session, const XrActionSpaceCreateInfo* ci, XrSpace* out) {
@@ -486,7 +505,8 @@ XrResult XRAPI_CALL CreateActionSpace(XrSession session, const XrActionSpaceCrea
   if (!subactionAllowed(*a, ci->subactionPath)) return XR_ERROR_PATH_UNSUPPORTED;
   const Pose offset = fromXr(ci->poseInActionSpace);
   const auto& q = ci->poseInActionSpace.orientation;
-  if (std::fabs(std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w) - 1.0f) > 1e-3f) return XR_ERROR_POSE_INVALID;
+  if (std::fabs(std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w) - 1.0f) > 1e-3f)
+    return XR_ERROR_POSE_INVALID;
   if (s->lost) return XR_ERROR_SESSION_LOST;
   auto* sp = new Space;
   sp->session = s;
@@ -503,12 +523,14 @@ XrResult XRAPI_CALL CreateActionSpace(XrSession session, const XrActionSpaceCrea
 }
 EMBODY_XR_ENTRY(CreateActionSpace)
 
-XrResult XRAPI_CALL EnumerateBoundSourcesForAction(XrSession session, const XrBoundSourcesForActionEnumerateInfo* info,
+XrResult XRAPI_CALL EnumerateBoundSourcesForAction(XrSession session,
+                                                   const XrBoundSourcesForActionEnumerateInfo* info,
                                                    uint32_t capacity, uint32_t* count, XrPath* sources) {
   Instance* inst = nullptr;
   Session* s = findSession(session, &inst);
   if (!s) return XR_ERROR_HANDLE_INVALID;
-  if (!info || info->type != XR_TYPE_BOUND_SOURCES_FOR_ACTION_ENUMERATE_INFO) return XR_ERROR_VALIDATION_FAILURE;
+  if (!info || info->type != XR_TYPE_BOUND_SOURCES_FOR_ACTION_ENUMERATE_INFO)
+    return XR_ERROR_VALIDATION_FAILURE;
   std::lock_guard lock(inst->mutex);
   Action* a = reinterpret_cast<Action*>(info->action);
   if (!inst->actions.count(a)) return XR_ERROR_HANDLE_INVALID;
@@ -536,7 +558,8 @@ std::string titleCase(const std::string& s) {
   return out;
 }
 
-XrResult XRAPI_CALL GetInputSourceLocalizedName(XrSession session, const XrInputSourceLocalizedNameGetInfo* info,
+XrResult XRAPI_CALL GetInputSourceLocalizedName(XrSession session,
+                                                const XrInputSourceLocalizedNameGetInfo* info,
                                                 uint32_t capacity, uint32_t* count, char* buffer) {
   Instance* inst = nullptr;
   Session* s = findSession(session, &inst);
@@ -545,18 +568,21 @@ XrResult XRAPI_CALL GetInputSourceLocalizedName(XrSession session, const XrInput
     return XR_ERROR_VALIDATION_FAILURE;
   std::lock_guard lock(inst->mutex);
   if (!s->actionSetsAttached) return XR_ERROR_ACTIONSET_NOT_ATTACHED;
-  if (info->sourcePath == XR_NULL_PATH || info->sourcePath >= inst->paths.size()) return XR_ERROR_PATH_INVALID;
+  if (info->sourcePath == XR_NULL_PATH || info->sourcePath >= inst->paths.size())
+    return XR_ERROR_PATH_INVALID;
   int hand = -1;
   std::string comp;
   if (!splitBinding(inst->pathString(info->sourcePath), hand, comp)) return XR_ERROR_PATH_UNSUPPORTED;
   std::string name;
   auto add = [&](const std::string& part) { name += (name.empty() ? "" : " ") + part; };
-  if (info->whichComponents & XR_INPUT_SOURCE_LOCALIZED_NAME_USER_PATH_BIT) add(hand == 0 ? "Left Hand" : "Right Hand");
+  if (info->whichComponents & XR_INPUT_SOURCE_LOCALIZED_NAME_USER_PATH_BIT)
+    add(hand == 0 ? "Left Hand" : "Right Hand");
   if (info->whichComponents & XR_INPUT_SOURCE_LOCALIZED_NAME_INTERACTION_PROFILE_BIT)
     if (const ProfileInfo* p = findProfile(inst->pathString(s->currentProfile))) add(p->localized);
   if (info->whichComponents & XR_INPUT_SOURCE_LOCALIZED_NAME_COMPONENT_BIT)
     add(titleCase(comp.rfind("input/", 0) == 0 ? comp.substr(6) : comp));
-  return twoCall(capacity, count, buffer, name.size() + 1, [&](char* c, size_t i) { *c = i < name.size() ? name[i] : '\0'; });
+  return twoCall(capacity, count, buffer, name.size() + 1,
+                 [&](char* c, size_t i) { *c = i < name.size() ? name[i] : '\0'; });
 }
 EMBODY_XR_ENTRY(GetInputSourceLocalizedName)
 
@@ -599,7 +625,8 @@ XrResult XRAPI_CALL DestroyHandTrackerEXT(XrHandTrackerEXT tracker) {
 EMBODY_XR_ENTRY(DestroyHandTrackerEXT)
 
 // Joints of one hand relative to `base` at time t; false when the hand or the base is not located.
-bool handJointsRelative(Session& s, const Space& base, XrTime t, bool left, std::array<HandJoint, 26>& joints) {
+bool handJointsRelative(Session& s, const Space& base, XrTime t, bool left,
+                        std::array<HandJoint, 26>& joints) {
   const BodySample body = s.instance->poses.sample(traceSeconds(s, t));
   const TrackedPose& hand = left ? body.left : body.right;
   const Located b = locateInStage(s, base, t);
@@ -616,8 +643,8 @@ XrResult XRAPI_CALL LocateHandJointsEXT(XrHandTrackerEXT tracker, const XrHandJo
   HandTracker* h = findHandTracker(tracker, &inst);
   if (!h) return XR_ERROR_HANDLE_INVALID;
   if (!info || info->type != XR_TYPE_HAND_JOINTS_LOCATE_INFO_EXT || !locations ||
-      locations->type != XR_TYPE_HAND_JOINT_LOCATIONS_EXT || locations->jointCount != XR_HAND_JOINT_COUNT_EXT ||
-      !locations->jointLocations)
+      locations->type != XR_TYPE_HAND_JOINT_LOCATIONS_EXT ||
+      locations->jointCount != XR_HAND_JOINT_COUNT_EXT || !locations->jointLocations)
     return XR_ERROR_VALIDATION_FAILURE;
   if (info->time <= 0) return XR_ERROR_TIME_INVALID;
   Space* base = findSpace(info->baseSpace);
@@ -631,9 +658,10 @@ XrResult XRAPI_CALL LocateHandJointsEXT(XrHandTrackerEXT tracker, const XrHandJo
   locations->isActive = ok ? XR_TRUE : XR_FALSE;
   for (uint32_t i = 0; i < XR_HAND_JOINT_COUNT_EXT; ++i) {
     auto& loc = locations->jointLocations[i];
-    loc.locationFlags = ok ? (XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT |
-                              XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT | XR_SPACE_LOCATION_POSITION_TRACKED_BIT)
-                         : 0;
+    loc.locationFlags =
+        ok ? (XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT |
+              XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT | XR_SPACE_LOCATION_POSITION_TRACKED_BIT)
+           : 0;
     loc.pose = toXr(ok ? joints[i].pose : Pose{});
     loc.radius = ok ? joints[i].radius : 0.0f;
   }

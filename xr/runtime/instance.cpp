@@ -7,7 +7,6 @@
 #include "xr/runtime/runtime.h"
 #include "xr/runtime/two_call.h"
 
-
 namespace embody::xrrt {
 
 namespace {
@@ -17,10 +16,8 @@ struct ExtensionInfo {
   uint32_t version;
 };
 constexpr ExtensionInfo kExtensions[] = {
-    {XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME, 2},
-    {XR_KHR_VULKAN_ENABLE_EXTENSION_NAME, 8},
-    {XR_EXT_HAND_TRACKING_EXTENSION_NAME, 4},
-    {XR_KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME, 5},
+    {XR_KHR_VULKAN_ENABLE2_EXTENSION_NAME, 2},        {XR_KHR_VULKAN_ENABLE_EXTENSION_NAME, 8},
+    {XR_EXT_HAND_TRACKING_EXTENSION_NAME, 4},         {XR_KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME, 5},
     {XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME, 1},
 };
 
@@ -33,7 +30,8 @@ bool validPathString(const std::string& s) {
     const std::string part = s.substr(start, end - start);
     if (part.empty() || part == "." || part == "..") return false;
     for (char c : part)
-      if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_' || c == '.')) return false;
+      if (!((c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' || c == '_' || c == '.'))
+        return false;
     start = end + 1;
   }
   return true;
@@ -56,8 +54,8 @@ void viewSize(uint32_t& w, uint32_t& h) {
   }
 }
 
-XrResult XRAPI_CALL EnumerateInstanceExtensionProperties(const char* layerName, uint32_t capacity, uint32_t* count,
-                                                          XrExtensionProperties* props) {
+XrResult XRAPI_CALL EnumerateInstanceExtensionProperties(const char* layerName, uint32_t capacity,
+                                                         uint32_t* count, XrExtensionProperties* props) {
   if (layerName && *layerName) return XR_ERROR_API_LAYER_NOT_PRESENT;
   const size_t n = std::size(kExtensions);
   if (props)
@@ -85,7 +83,8 @@ XrResult XRAPI_CALL CreateInstance(const XrInstanceCreateInfo* ci, XrInstance* o
   inst->applicationName = ci->applicationInfo.applicationName;
   inst->poses.loadFromEnvironment();
   if (!inst->poses.error().empty())
-    std::fprintf(stderr, "embody headless runtime: %s; using the synthetic motion\n", inst->poses.error().c_str());
+    std::fprintf(stderr, "embody headless runtime: %s; using the synthetic motion\n",
+                 inst->poses.error().c_str());
   Instance* raw = inst.release();
   {
     std::lock_guard lock(registry().mutex);
@@ -143,13 +142,15 @@ XrResult XRAPI_CALL PollEvent(XrInstance instance, XrEventDataBuffer* buffer) {
 }
 EMBODY_XR_ENTRY(PollEvent)
 
-XrResult XRAPI_CALL ResultToString(XrInstance instance, XrResult value, char buffer[XR_MAX_RESULT_STRING_SIZE]) {
+XrResult XRAPI_CALL ResultToString(XrInstance instance, XrResult value,
+                                   char buffer[XR_MAX_RESULT_STRING_SIZE]) {
   if (!findInstance(instance)) return XR_ERROR_HANDLE_INVALID;
   if (!buffer) return XR_ERROR_VALIDATION_FAILURE;
-  if (const char* n = resultName(value)) copyString(buffer, XR_MAX_RESULT_STRING_SIZE, n);
+  if (const char* n = resultName(value))
+    copyString(buffer, XR_MAX_RESULT_STRING_SIZE, n);
   else
-    std::snprintf(buffer, XR_MAX_RESULT_STRING_SIZE, "XR_%s_%d", value < 0 ? "UNKNOWN_FAILURE" : "UNKNOWN_SUCCESS",
-                  static_cast<int>(value));
+    std::snprintf(buffer, XR_MAX_RESULT_STRING_SIZE, "XR_%s_%d",
+                  value < 0 ? "UNKNOWN_FAILURE" : "UNKNOWN_SUCCESS", static_cast<int>(value));
   return XR_SUCCESS;
 }
 EMBODY_XR_ENTRY(ResultToString)
@@ -158,9 +159,11 @@ XrResult XRAPI_CALL StructureTypeToString(XrInstance instance, XrStructureType v
                                           char buffer[XR_MAX_STRUCTURE_NAME_SIZE]) {
   if (!findInstance(instance)) return XR_ERROR_HANDLE_INVALID;
   if (!buffer) return XR_ERROR_VALIDATION_FAILURE;
-  if (const char* n = structureTypeName(value)) copyString(buffer, XR_MAX_STRUCTURE_NAME_SIZE, n);
+  if (const char* n = structureTypeName(value))
+    copyString(buffer, XR_MAX_STRUCTURE_NAME_SIZE, n);
   else
-    std::snprintf(buffer, XR_MAX_STRUCTURE_NAME_SIZE, "XR_UNKNOWN_STRUCTURE_TYPE_%d", static_cast<int>(value));
+    std::snprintf(buffer, XR_MAX_STRUCTURE_NAME_SIZE, "XR_UNKNOWN_STRUCTURE_TYPE_%d",
+                  static_cast<int>(value));
   return XR_SUCCESS;
 }
 EMBODY_XR_ENTRY(StructureTypeToString)
@@ -206,8 +209,10 @@ XrResult XRAPI_CALL EnumerateEnvironmentBlendModes(XrInstance instance, XrSystem
                                                    uint32_t* count, XrEnvironmentBlendMode* modes) {
   if (!findInstance(instance)) return XR_ERROR_HANDLE_INVALID;
   if (systemId != kSystemId) return XR_ERROR_SYSTEM_INVALID;
-  if (viewConfig != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO) return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
-  return twoCall(capacity, count, modes, 1, [](XrEnvironmentBlendMode* m, size_t) { *m = XR_ENVIRONMENT_BLEND_MODE_OPAQUE; });
+  if (viewConfig != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
+    return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
+  return twoCall(capacity, count, modes, 1,
+                 [](XrEnvironmentBlendMode* m, size_t) { *m = XR_ENVIRONMENT_BLEND_MODE_OPAQUE; });
 }
 EMBODY_XR_ENTRY(EnumerateEnvironmentBlendModes)
 
@@ -221,7 +226,8 @@ XrResult XRAPI_CALL EnumerateViewConfigurations(XrInstance instance, XrSystemId 
 EMBODY_XR_ENTRY(EnumerateViewConfigurations)
 
 XrResult XRAPI_CALL GetViewConfigurationProperties(XrInstance instance, XrSystemId systemId,
-                                                   XrViewConfigurationType type, XrViewConfigurationProperties* props) {
+                                                   XrViewConfigurationType type,
+                                                   XrViewConfigurationProperties* props) {
   if (!findInstance(instance)) return XR_ERROR_HANDLE_INVALID;
   if (systemId != kSystemId) return XR_ERROR_SYSTEM_INVALID;
   if (!props || props->type != XR_TYPE_VIEW_CONFIGURATION_PROPERTIES) return XR_ERROR_VALIDATION_FAILURE;
@@ -233,8 +239,8 @@ XrResult XRAPI_CALL GetViewConfigurationProperties(XrInstance instance, XrSystem
 EMBODY_XR_ENTRY(GetViewConfigurationProperties)
 
 XrResult XRAPI_CALL EnumerateViewConfigurationViews(XrInstance instance, XrSystemId systemId,
-                                                    XrViewConfigurationType type, uint32_t capacity, uint32_t* count,
-                                                    XrViewConfigurationView* views) {
+                                                    XrViewConfigurationType type, uint32_t capacity,
+                                                    uint32_t* count, XrViewConfigurationView* views) {
   if (!findInstance(instance)) return XR_ERROR_HANDLE_INVALID;
   if (systemId != kSystemId) return XR_ERROR_SYSTEM_INVALID;
   if (type != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO) return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
@@ -265,17 +271,20 @@ XrResult XRAPI_CALL StringToPath(XrInstance instance, const char* pathString, Xr
 }
 EMBODY_XR_ENTRY(StringToPath)
 
-XrResult XRAPI_CALL PathToString(XrInstance instance, XrPath path, uint32_t capacity, uint32_t* count, char* buffer) {
+XrResult XRAPI_CALL PathToString(XrInstance instance, XrPath path, uint32_t capacity, uint32_t* count,
+                                 char* buffer) {
   Instance* inst = findInstance(instance);
   if (!inst) return XR_ERROR_HANDLE_INVALID;
   std::lock_guard lock(inst->mutex);
   if (path == XR_NULL_PATH || path >= inst->paths.size()) return XR_ERROR_PATH_INVALID;
   const std::string& s = inst->paths[path];
-  return twoCall(capacity, count, buffer, s.size() + 1, [&](char* c, size_t i) { *c = i < s.size() ? s[i] : '\0'; });
+  return twoCall(capacity, count, buffer, s.size() + 1,
+                 [&](char* c, size_t i) { *c = i < s.size() ? s[i] : '\0'; });
 }
 EMBODY_XR_ENTRY(PathToString)
 
-XrResult XRAPI_CALL ConvertTimespecTimeToTimeKHR(XrInstance instance, const struct timespec* ts, XrTime* time) {
+XrResult XRAPI_CALL ConvertTimespecTimeToTimeKHR(XrInstance instance, const struct timespec* ts,
+                                                 XrTime* time) {
   if (!findInstance(instance)) return XR_ERROR_HANDLE_INVALID;
   if (!ts || !time) return XR_ERROR_VALIDATION_FAILURE;
   *time = static_cast<XrTime>(ts->tv_sec) * 1000000000 + ts->tv_nsec;

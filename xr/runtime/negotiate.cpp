@@ -119,7 +119,9 @@ T* findIn(void* handle, Instance** instOut, std::set<T*> Session::*member) {
 
 }  // namespace
 
-EntryRegistrar::EntryRegistrar(const char* name, PFN_xrVoidFunction fn) { entryTable()[name] = fn; }
+EntryRegistrar::EntryRegistrar(const char* name, PFN_xrVoidFunction fn) {
+  entryTable()[name] = fn;
+}
 
 PFN_xrVoidFunction lookupFunction(const std::string& name) {
   auto it = entryTable().find(name);
@@ -150,8 +152,12 @@ Session* findSession(XrSession h, Instance** instOut) {
   return nullptr;
 }
 
-Space* findSpace(XrSpace h, Instance** inst) { return findIn<Space>(h, inst, &Session::spaces); }
-Swapchain* findSwapchain(XrSwapchain h, Instance** inst) { return findIn<Swapchain>(h, inst, &Session::swapchains); }
+Space* findSpace(XrSpace h, Instance** inst) {
+  return findIn<Space>(h, inst, &Session::spaces);
+}
+Swapchain* findSwapchain(XrSwapchain h, Instance** inst) {
+  return findIn<Swapchain>(h, inst, &Session::swapchains);
+}
 HandTracker* findHandTracker(XrHandTrackerEXT h, Instance** inst) {
   return findIn<HandTracker>(h, inst, &Session::handTrackers);
 }
@@ -180,14 +186,13 @@ Action* findAction(XrAction h, Instance** instOut) {
   return nullptr;
 }
 
+// The registry's X-macros expand to case labels, which clang-format cannot lay out.
+// clang-format off
 const char* resultName(XrResult r) {
   switch (r) {
-#define EMBODY_XR_ENUM_CASE(name, value) \
-  case name:                             \
-    return #name;
+#define EMBODY_XR_ENUM_CASE(name, value) case name: return #name;
     XR_LIST_ENUM_XrResult(EMBODY_XR_ENUM_CASE)
-    default:
-      return nullptr;
+    default: return nullptr;
   }
 }
 
@@ -195,10 +200,10 @@ const char* structureTypeName(XrStructureType t) {
   switch (t) {
     XR_LIST_ENUM_XrStructureType(EMBODY_XR_ENUM_CASE)
 #undef EMBODY_XR_ENUM_CASE
-    default:
-      return nullptr;
+    default: return nullptr;
   }
 }
+// clang-format on
 
 }  // namespace embody::xrrt
 
@@ -206,7 +211,8 @@ extern "C" XrResult xrNegotiateLoaderRuntimeInterface(const XrNegotiateLoaderInf
                                                       XrNegotiateRuntimeRequest* runtimeRequest) {
   if (!loaderInfo || !runtimeRequest) return XR_ERROR_INITIALIZATION_FAILED;
   if (loaderInfo->structType != XR_LOADER_INTERFACE_STRUCT_LOADER_INFO ||
-      loaderInfo->structVersion != kLoaderInfoStructVersion || loaderInfo->structSize != sizeof(XrNegotiateLoaderInfo))
+      loaderInfo->structVersion != kLoaderInfoStructVersion ||
+      loaderInfo->structSize != sizeof(XrNegotiateLoaderInfo))
     return XR_ERROR_INITIALIZATION_FAILED;
   if (runtimeRequest->structType != XR_LOADER_INTERFACE_STRUCT_RUNTIME_REQUEST ||
       runtimeRequest->structVersion != kRuntimeInfoStructVersion ||

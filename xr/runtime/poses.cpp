@@ -9,7 +9,9 @@
 
 namespace embody::xrrt {
 
-Pose compose(const Pose& a, const Pose& b) { return {a.p + a.q * b.p, glm::normalize(a.q * b.q)}; }
+Pose compose(const Pose& a, const Pose& b) {
+  return {a.p + a.q * b.p, glm::normalize(a.q * b.q)};
+}
 
 Pose inverse(const Pose& a) {
   const glm::quat qi = glm::conjugate(a.q);
@@ -17,7 +19,8 @@ Pose inverse(const Pose& a) {
 }
 
 Pose fromXr(const XrPosef& p) {
-  Pose r{{p.position.x, p.position.y, p.position.z}, glm::quat(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)};
+  Pose r{{p.position.x, p.position.y, p.position.z},
+         glm::quat(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)};
   const float n = glm::length(r.q);
   r.q = n > 1e-6f && std::isfinite(n) ? r.q / n : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
   return r;
@@ -32,7 +35,9 @@ XrPosef toXr(const Pose& p) {
 
 namespace {
 
-bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite(const glm::vec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 // {"p": [x,y,z], "q": [x,y,z,w], "valid": bool}; anything malformed or non-finite is invalid.
 TrackedPose readTracked(const nlohmann::json& j) {
@@ -68,6 +73,16 @@ glm::quat yawPitch(float yaw, float pitch) {
 void PoseProvider::loadFromEnvironment() {
   const char* path = std::getenv("EMBODY_XR_POSES");
   if (!path || !*path) return;
+  const std::string p = path;
+  if (p.size() > 4 && (p.substr(p.size() - 4) == ".bvh" || p.substr(p.size() - 4) == ".BVH")) {
+    std::vector<BodySample> samples;
+    error_ = loadBvhSamples(p, samples);
+    if (error_.empty()) {
+      samples_ = std::move(samples);
+      source_ = p;
+    }
+    return;
+  }
   std::ifstream in(path);
   if (!in) {
     error_ = std::string("cannot open EMBODY_XR_POSES file ") + path;
@@ -81,7 +96,8 @@ void PoseProvider::loadFromEnvironment() {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     const auto j = nlohmann::json::parse(line, nullptr, false);
     if (j.is_discarded() || !j.is_object() || !j.contains("t") || !j["t"].is_number()) {
-      error_ = std::string(path) + ":" + std::to_string(lineNo) + ": not a trace sample ({\"t\": seconds, ...})";
+      error_ =
+          std::string(path) + ":" + std::to_string(lineNo) + ": not a trace sample ({\"t\": seconds, ...})";
       return;
     }
     BodySample s;
@@ -116,14 +132,17 @@ BodySample PoseProvider::sample(double seconds) const {
                yawPitch(0.25f * std::sin(0.5f * t), -0.1f + 0.05f * std::sin(0.8f * t))},
               true};
     const float a = 1.3f * t;
-    s.left = {{{-0.22f + 0.05f * std::cos(a), 1.25f + 0.05f * std::sin(a), -0.35f}, yawPitch(0.2f, 0.3f)}, true};
-    s.right = {{{0.22f + 0.05f * std::cos(-a), 1.25f + 0.05f * std::sin(-a), -0.35f}, yawPitch(-0.2f, 0.3f)}, true};
+    s.left = {{{-0.22f + 0.05f * std::cos(a), 1.25f + 0.05f * std::sin(a), -0.35f}, yawPitch(0.2f, 0.3f)},
+              true};
+    s.right = {{{0.22f + 0.05f * std::cos(-a), 1.25f + 0.05f * std::sin(-a), -0.35f}, yawPitch(-0.2f, 0.3f)},
+               true};
     return s;
   }
   // Looped trace, linear/spherical interpolation between neighbouring samples.
   const double duration = samples_.back().t - samples_.front().t;
   double t = samples_.front().t + (duration > 0.0 ? std::fmod(std::max(seconds, 0.0), duration + 1e-9) : 0.0);
-  auto hi = std::lower_bound(samples_.begin(), samples_.end(), t, [](const BodySample& s, double v) { return s.t < v; });
+  auto hi = std::lower_bound(samples_.begin(), samples_.end(), t,
+                             [](const BodySample& s, double v) { return s.t < v; });
   if (hi == samples_.begin()) return *hi;
   if (hi == samples_.end()) return samples_.back();
   const auto lo = hi - 1;
@@ -150,7 +169,9 @@ void handJointsFromGrip(const Pose& grip, bool leftHand, float curl, std::array<
   // Grip frame: -Z along the straightened index finger, +X normal to the palm (into the palm for
   // the right hand, away from it for the left). So palm = grip * Rz(-90 deg) (right), Rz(+90)
   // (left); with this the right thumb lies at palm -X.
-  const Pose palm = compose(grip, {{0.0f, 0.0f, 0.0f}, glm::angleAxis(glm::radians(leftHand ? 90.0f : -90.0f), glm::vec3(0, 0, 1))});
+  const Pose palm = compose(
+      grip,
+      {{0.0f, 0.0f, 0.0f}, glm::angleAxis(glm::radians(leftHand ? 90.0f : -90.0f), glm::vec3(0, 0, 1))});
   auto local = [&](int index, const glm::vec3& p, float radius) {
     out[index].pose.p = p;
     out[index].radius = radius;
@@ -164,10 +185,11 @@ void handJointsFromGrip(const Pose& grip, bool leftHand, float curl, std::array<
     float lengths[3];
     float radius;
   };
-  const Finger fingers[4] = {{XR_HAND_JOINT_INDEX_METACARPAL_EXT, -0.022f, 0.04f, -0.035f, {0.040f, 0.025f, 0.022f}, 0.0095f},
-                             {XR_HAND_JOINT_MIDDLE_METACARPAL_EXT, 0.0f, 0.04f, -0.038f, {0.045f, 0.028f, 0.024f}, 0.0095f},
-                             {XR_HAND_JOINT_RING_METACARPAL_EXT, 0.019f, 0.038f, -0.034f, {0.042f, 0.026f, 0.023f}, 0.009f},
-                             {XR_HAND_JOINT_LITTLE_METACARPAL_EXT, 0.036f, 0.035f, -0.027f, {0.032f, 0.018f, 0.020f}, 0.008f}};
+  const Finger fingers[4] = {
+      {XR_HAND_JOINT_INDEX_METACARPAL_EXT, -0.022f, 0.04f, -0.035f, {0.040f, 0.025f, 0.022f}, 0.0095f},
+      {XR_HAND_JOINT_MIDDLE_METACARPAL_EXT, 0.0f, 0.04f, -0.038f, {0.045f, 0.028f, 0.024f}, 0.0095f},
+      {XR_HAND_JOINT_RING_METACARPAL_EXT, 0.019f, 0.038f, -0.034f, {0.042f, 0.026f, 0.023f}, 0.009f},
+      {XR_HAND_JOINT_LITTLE_METACARPAL_EXT, 0.036f, 0.035f, -0.027f, {0.032f, 0.018f, 0.020f}, 0.008f}};
   const float bend = glm::radians(12.0f + 60.0f * std::clamp(curl, 0.0f, 1.0f));
   for (const auto& f : fingers) {
     local(f.first, {f.x * 0.6f, 0.0f, f.baseZ}, f.radius * 1.1f);

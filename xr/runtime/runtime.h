@@ -14,11 +14,11 @@
 #define XR_NO_PROTOTYPES
 #define XR_USE_GRAPHICS_API_VULKAN
 #define XR_USE_TIMESPEC
-#include <ctime>
 #include <openxr/openxr.h>
 #include <openxr/openxr_platform.h>
 
 #include <array>
+#include <ctime>
 #include <deque>
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -69,6 +69,9 @@ class PoseProvider {
   std::vector<BodySample> samples_;
   std::string error_, source_ = "synthetic";
 };
+
+// BVH motion capture (head, hands) as samples in OpenXR conventions; "" or why it failed.
+std::string loadBvhSamples(const std::string& path, std::vector<BodySample>& out);
 
 // The 26 XR_EXT_hand_tracking joints of a relaxed hand, given its grip pose; poses in the same
 // space as the grip. radius in metres.
@@ -131,9 +134,9 @@ struct Swapchain {
   std::vector<VkDeviceMemory> memory;
   std::deque<uint32_t> acquired;  // acquired, in order
   uint32_t nextIndex = 0;
-  bool waited = false;             // the oldest acquired image was waited on
-  int64_t lastReleased = -1;       // index of the most recently released image
-  std::vector<bool> initialized;   // moved out of VK_IMAGE_LAYOUT_UNDEFINED yet
+  bool waited = false;            // the oldest acquired image was waited on
+  int64_t lastReleased = -1;      // index of the most recently released image
+  std::vector<bool> initialized;  // moved out of VK_IMAGE_LAYOUT_UNDEFINED yet
 };
 
 struct HandTracker {
@@ -147,7 +150,7 @@ struct Session {
   bool running = false;        // between xrBeginSession and xrEndSession
   bool exitRequested = false;  // xrRequestExitSession or EMBODY_XR_FRAMES reached
   bool lost = false;
-  XrTime startTime = 0;        // session creation: trace time 0
+  XrTime startTime = 0;  // session creation: trace time 0
   // Vulkan binding (application objects; the runtime only borrows them).
   VkInstance vkInstance = VK_NULL_HANDLE;
   VkPhysicalDevice vkPhysicalDevice = VK_NULL_HANDLE;
@@ -173,8 +176,8 @@ struct Session {
   uint64_t frameLimit = 0;  // EMBODY_XR_FRAMES, 0 = none
   uint64_t lossAt = 0;      // EMBODY_XR_LOSS_FRAMES: LOSS_PENDING after this many frames
   uint32_t capturedFrames = 0;
-  Pose localOrigin;          // LOCAL space in STAGE: the head at session start, yaw only
-  TrackedPose lastHead;      // last valid head pose, reported (untracked) while tracking is lost
+  Pose localOrigin;      // LOCAL space in STAGE: the head at session start, yaw only
+  TrackedPose lastHead;  // last valid head pose, reported (untracked) while tracking is lost
 };
 
 struct Event {
@@ -211,7 +214,7 @@ struct Registry {
   std::set<Instance*> instances;
 };
 Registry& registry();
-Instance* findInstance(XrInstance h);     // nullptr when not live
+Instance* findInstance(XrInstance h);  // nullptr when not live
 Session* findSession(XrSession h, Instance** inst = nullptr);
 Space* findSpace(XrSpace h, Instance** inst = nullptr);
 Swapchain* findSwapchain(XrSwapchain h, Instance** inst = nullptr);
@@ -238,7 +241,8 @@ const char* structureTypeName(XrStructureType t);
 
 // Vulkan helpers used by the session (vulkan.cpp).
 void destroySwapchainImages(Swapchain& sc);
-void captureLeftEye(Session& s, Swapchain& sc, uint32_t imageIndex, const XrRect2Di& rect, uint32_t arrayIndex);
+void captureLeftEye(Session& s, Swapchain& sc, uint32_t imageIndex, const XrRect2Di& rect,
+                    uint32_t arrayIndex);
 void releaseSessionVulkan(Session& s);
 bool initSessionVulkan(Session& s);  // queue + command pool on the application's device
 
@@ -256,6 +260,7 @@ struct EntryRegistrar {
   EntryRegistrar(const char* name, PFN_xrVoidFunction fn);
 };
 }  // namespace embody::xrrt
-#define EMBODY_XR_ENTRY(fn)                                                                  \
-  static_assert(std::is_same_v<decltype(&fn), PFN_xr##fn>, "signature of xr" #fn);          \
-  static const ::embody::xrrt::EntryRegistrar registrar_##fn("xr" #fn, reinterpret_cast<PFN_xrVoidFunction>(&fn));
+#define EMBODY_XR_ENTRY(fn)                                                        \
+  static_assert(std::is_same_v<decltype(&fn), PFN_xr##fn>, "signature of xr" #fn); \
+  static const ::embody::xrrt::EntryRegistrar registrar_##fn("xr" #fn,             \
+                                                             reinterpret_cast<PFN_xrVoidFunction>(&fn));

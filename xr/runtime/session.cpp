@@ -39,8 +39,8 @@ XrFovf eyeFov(int eye) {
 bool poseValid(const XrPosef& p) {
   const float n = std::sqrt(p.orientation.x * p.orientation.x + p.orientation.y * p.orientation.y +
                             p.orientation.z * p.orientation.z + p.orientation.w * p.orientation.w);
-  return std::isfinite(n) && std::fabs(n - 1.0f) < 1e-3f && std::isfinite(p.position.x) && std::isfinite(p.position.y) &&
-         std::isfinite(p.position.z);
+  return std::isfinite(n) && std::fabs(n - 1.0f) < 1e-3f && std::isfinite(p.position.x) &&
+         std::isfinite(p.position.y) && std::isfinite(p.position.z);
 }
 
 // Runtime-initiated or application-requested exit: walk the states down to STOPPING.
@@ -60,10 +60,12 @@ XrResult XRAPI_CALL CreateSession(XrInstance instance, const XrSessionCreateInfo
   std::lock_guard lock(inst->mutex);
   const XrGraphicsBindingVulkanKHR* binding = nullptr;
   for (auto* n = static_cast<const XrBaseInStructure*>(ci->next); n; n = n->next)
-    if (n->type == XR_TYPE_GRAPHICS_BINDING_VULKAN_KHR) binding = reinterpret_cast<const XrGraphicsBindingVulkanKHR*>(n);
+    if (n->type == XR_TYPE_GRAPHICS_BINDING_VULKAN_KHR)
+      binding = reinterpret_cast<const XrGraphicsBindingVulkanKHR*>(n);
   if (!binding) return XR_ERROR_GRAPHICS_DEVICE_INVALID;  // headless sessions are not offered
   if (!inst->graphicsRequirementsQueried) return XR_ERROR_GRAPHICS_REQUIREMENTS_CALL_MISSING;
-  if (!binding->instance || !binding->physicalDevice || !binding->device) return XR_ERROR_GRAPHICS_DEVICE_INVALID;
+  if (!binding->instance || !binding->physicalDevice || !binding->device)
+    return XR_ERROR_GRAPHICS_DEVICE_INVALID;
   if (!inst->sessions.empty()) return XR_ERROR_LIMIT_REACHED;
   auto s = std::make_unique<Session>();
   s->instance = inst;
@@ -202,7 +204,8 @@ XrResult XRAPI_CALL WaitFrame(XrSession session, const XrFrameWaitInfo* info, Xr
   }
   const XrTime now = nowNs();
   if (wakeAt > now) {
-    timespec ts{static_cast<time_t>((wakeAt - now) / 1000000000), static_cast<long>((wakeAt - now) % 1000000000)};
+    timespec ts{static_cast<time_t>((wakeAt - now) / 1000000000),
+                static_cast<long>((wakeAt - now) % 1000000000)};
     nanosleep(&ts, nullptr);
   }
   return XR_SUCCESS;
@@ -233,7 +236,8 @@ XrResult checkSubImage(const XrSwapchainSubImage& sub, bool wantDepth) {
   if (sc->lastReleased < 0) return XR_ERROR_LAYER_INVALID;
   const auto& r = sub.imageRect;
   if (r.offset.x < 0 || r.offset.y < 0 || r.extent.width <= 0 || r.extent.height <= 0 ||
-      uint32_t(r.offset.x + r.extent.width) > sc->info.width || uint32_t(r.offset.y + r.extent.height) > sc->info.height)
+      uint32_t(r.offset.x + r.extent.width) > sc->info.width ||
+      uint32_t(r.offset.y + r.extent.height) > sc->info.height)
     return XR_ERROR_SWAPCHAIN_RECT_INVALID;
   if (sub.imageArrayIndex >= sc->info.arraySize) return XR_ERROR_VALIDATION_FAILURE;
   return XR_SUCCESS;
@@ -249,7 +253,8 @@ XrResult XRAPI_CALL EndFrame(XrSession session, const XrFrameEndInfo* info) {
   if (!s->running) return XR_ERROR_SESSION_NOT_RUNNING;
   if (!s->frameBegun) return XR_ERROR_CALL_ORDER_INVALID;
   if (info->displayTime <= 0) return XR_ERROR_TIME_INVALID;
-  if (info->environmentBlendMode != XR_ENVIRONMENT_BLEND_MODE_OPAQUE) return XR_ERROR_ENVIRONMENT_BLEND_MODE_UNSUPPORTED;
+  if (info->environmentBlendMode != XR_ENVIRONMENT_BLEND_MODE_OPAQUE)
+    return XR_ERROR_ENVIRONMENT_BLEND_MODE_UNSUPPORTED;
   if (info->layerCount > XR_MIN_COMPOSITION_LAYERS_SUPPORTED) return XR_ERROR_LAYER_LIMIT_EXCEEDED;
   if (info->layerCount > 0 && !info->layers) return XR_ERROR_VALIDATION_FAILURE;
   const XrCompositionLayerProjection* firstProjection = nullptr;
@@ -261,7 +266,8 @@ XrResult XRAPI_CALL EndFrame(XrSession session, const XrFrameEndInfo* info) {
       const auto* proj = reinterpret_cast<const XrCompositionLayerProjection*>(layer);
       if (proj->viewCount != 2 || !proj->views) return XR_ERROR_VALIDATION_FAILURE;
       for (uint32_t v = 0; v < 2; ++v) {
-        if (proj->views[v].type != XR_TYPE_COMPOSITION_LAYER_PROJECTION_VIEW) return XR_ERROR_VALIDATION_FAILURE;
+        if (proj->views[v].type != XR_TYPE_COMPOSITION_LAYER_PROJECTION_VIEW)
+          return XR_ERROR_VALIDATION_FAILURE;
         if (!poseValid(proj->views[v].pose)) return XR_ERROR_POSE_INVALID;
         if (XrResult r = checkSubImage(proj->views[v].subImage, false); XR_FAILED(r)) return r;
         for (auto* n = static_cast<const XrBaseInStructure*>(proj->views[v].next); n; n = n->next)
@@ -269,8 +275,8 @@ XrResult XRAPI_CALL EndFrame(XrSession session, const XrFrameEndInfo* info) {
               inst->extension(XR_KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME)) {
             const auto* d = reinterpret_cast<const XrCompositionLayerDepthInfoKHR*>(n);
             if (XrResult r = checkSubImage(d->subImage, true); XR_FAILED(r)) return r;
-            if (!(d->minDepth >= 0.0f && d->maxDepth <= 1.0f && d->minDepth < d->maxDepth) || !std::isfinite(d->nearZ) ||
-                !std::isfinite(d->farZ) || d->nearZ == d->farZ)
+            if (!(d->minDepth >= 0.0f && d->maxDepth <= 1.0f && d->minDepth < d->maxDepth) ||
+                !std::isfinite(d->nearZ) || !std::isfinite(d->farZ) || d->nearZ == d->farZ)
               return XR_ERROR_VALIDATION_FAILURE;
           }
       }
@@ -312,18 +318,20 @@ EMBODY_XR_ENTRY(EndFrame)
 XrResult XRAPI_CALL EnumerateReferenceSpaces(XrSession session, uint32_t capacity, uint32_t* count,
                                              XrReferenceSpaceType* spaces) {
   if (!findSession(session)) return XR_ERROR_HANDLE_INVALID;
-  static constexpr XrReferenceSpaceType kTypes[] = {XR_REFERENCE_SPACE_TYPE_VIEW, XR_REFERENCE_SPACE_TYPE_LOCAL,
-                                                    XR_REFERENCE_SPACE_TYPE_STAGE};
+  static constexpr XrReferenceSpaceType kTypes[] = {
+      XR_REFERENCE_SPACE_TYPE_VIEW, XR_REFERENCE_SPACE_TYPE_LOCAL, XR_REFERENCE_SPACE_TYPE_STAGE};
   return twoCall(capacity, count, spaces, 3, [](XrReferenceSpaceType* t, size_t i) { *t = kTypes[i]; });
 }
 EMBODY_XR_ENTRY(EnumerateReferenceSpaces)
 
-XrResult XRAPI_CALL CreateReferenceSpace(XrSession session, const XrReferenceSpaceCreateInfo* ci, XrSpace* out) {
+XrResult XRAPI_CALL CreateReferenceSpace(XrSession session, const XrReferenceSpaceCreateInfo* ci,
+                                         XrSpace* out) {
   Instance* inst = nullptr;
   Session* s = findSession(session, &inst);
   if (!s) return XR_ERROR_HANDLE_INVALID;
   if (!ci || !out || ci->type != XR_TYPE_REFERENCE_SPACE_CREATE_INFO) return XR_ERROR_VALIDATION_FAILURE;
-  if (ci->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_VIEW && ci->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_LOCAL &&
+  if (ci->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_VIEW &&
+      ci->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_LOCAL &&
       ci->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_STAGE)
     return XR_ERROR_REFERENCE_SPACE_UNSUPPORTED;
   if (!poseValid(ci->poseInReferenceSpace)) return XR_ERROR_POSE_INVALID;
@@ -343,7 +351,8 @@ XrResult XRAPI_CALL CreateReferenceSpace(XrSession session, const XrReferenceSpa
 }
 EMBODY_XR_ENTRY(CreateReferenceSpace)
 
-XrResult XRAPI_CALL GetReferenceSpaceBoundsRect(XrSession session, XrReferenceSpaceType type, XrExtent2Df* bounds) {
+XrResult XRAPI_CALL GetReferenceSpaceBoundsRect(XrSession session, XrReferenceSpaceType type,
+                                                XrExtent2Df* bounds) {
   if (!findSession(session)) return XR_ERROR_HANDLE_INVALID;
   if (!bounds) return XR_ERROR_VALIDATION_FAILURE;
   if (type == XR_REFERENCE_SPACE_TYPE_STAGE) {
@@ -403,7 +412,8 @@ XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace baseSpace, XrTime time, X
     location->pose = toXr(r.pose);
     location->locationFlags = XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT;
     if (r.tracked)
-      location->locationFlags |= XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT | XR_SPACE_LOCATION_POSITION_TRACKED_BIT;
+      location->locationFlags |=
+          XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT | XR_SPACE_LOCATION_POSITION_TRACKED_BIT;
   }
   for (auto* n = static_cast<XrBaseOutStructure*>(location->next); n; n = n->next) {
     if (n->type != XR_TYPE_SPACE_VELOCITY) continue;
@@ -413,7 +423,8 @@ XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace baseSpace, XrTime time, X
     vel->angularVelocity = {0, 0, 0};
     // Central difference over +-5 ms of the same relative pose.
     constexpr XrTime kDt = 5000000;
-    const Relative a = locateRelative(s, *sp, *base, time - kDt), b = locateRelative(s, *sp, *base, time + kDt);
+    const Relative a = locateRelative(s, *sp, *base, time - kDt),
+                   b = locateRelative(s, *sp, *base, time + kDt);
     if (a.valid && b.valid) {
       const float dt = 2.0f * kDt * 1e-9f;
       const glm::vec3 lin = (b.pose.p - a.pose.p) / dt;
@@ -454,7 +465,8 @@ XrResult XRAPI_CALL LocateViews(XrSession session, const XrViewLocateInfo* info,
   viewState->viewStateFlags = 0;
   if (r.valid) {
     viewState->viewStateFlags = XR_VIEW_STATE_ORIENTATION_VALID_BIT | XR_VIEW_STATE_POSITION_VALID_BIT;
-    if (r.tracked) viewState->viewStateFlags |= XR_VIEW_STATE_ORIENTATION_TRACKED_BIT | XR_VIEW_STATE_POSITION_TRACKED_BIT;
+    if (r.tracked)
+      viewState->viewStateFlags |= XR_VIEW_STATE_ORIENTATION_TRACKED_BIT | XR_VIEW_STATE_POSITION_TRACKED_BIT;
   }
   const float halfIpd = 0.5f * ipdMetres();
   return twoCall(capacity, count, views, 2, [&](XrView* v, size_t eye) {
@@ -467,7 +479,9 @@ EMBODY_XR_ENTRY(LocateViews)
 
 }  // namespace
 
-double traceSeconds(const Session& s, XrTime t) { return static_cast<double>(t - s.startTime) * 1e-9; }
+double traceSeconds(const Session& s, XrTime t) {
+  return static_cast<double>(t - s.startTime) * 1e-9;
+}
 
 Located locateInStage(Session& s, const Space& space, XrTime t) {
   const BodySample body = s.instance->poses.sample(traceSeconds(s, t));

@@ -21,20 +21,24 @@ bool isDepthFormat(VkFormat f) {
   return f == VK_FORMAT_D32_SFLOAT || f == VK_FORMAT_D16_UNORM || f == VK_FORMAT_D24_UNORM_S8_UINT ||
          f == VK_FORMAT_D32_SFLOAT_S8_UINT;
 }
-bool hasStencil(VkFormat f) { return f == VK_FORMAT_D24_UNORM_S8_UINT || f == VK_FORMAT_D32_SFLOAT_S8_UINT; }
+bool hasStencil(VkFormat f) {
+  return f == VK_FORMAT_D24_UNORM_S8_UINT || f == VK_FORMAT_D32_SFLOAT_S8_UINT;
+}
 
 // Formats in the runtime's order of preference: sRGB colour first (the compositor expects
 // display-referred sRGB), then UNORM, then depth.
 std::vector<VkFormat> supportedFormats(VkPhysicalDevice pd) {
-  const VkFormat candidates[] = {VK_FORMAT_R8G8B8A8_SRGB,   VK_FORMAT_B8G8R8A8_SRGB, VK_FORMAT_R8G8B8A8_UNORM,
-                                 VK_FORMAT_B8G8R8A8_UNORM,  VK_FORMAT_D32_SFLOAT,    VK_FORMAT_D16_UNORM,
+  const VkFormat candidates[] = {VK_FORMAT_R8G8B8A8_SRGB,     VK_FORMAT_B8G8R8A8_SRGB,
+                                 VK_FORMAT_R8G8B8A8_UNORM,    VK_FORMAT_B8G8R8A8_UNORM,
+                                 VK_FORMAT_D32_SFLOAT,        VK_FORMAT_D16_UNORM,
                                  VK_FORMAT_D24_UNORM_S8_UINT, VK_FORMAT_D32_SFLOAT_S8_UINT};
   std::vector<VkFormat> out;
   for (VkFormat f : candidates) {
     VkFormatProperties props{};
     vkGetPhysicalDeviceFormatProperties(pd, f, &props);
-    const VkFormatFeatureFlags need = isDepthFormat(f) ? VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT
-                                                       : (VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_TRANSFER_SRC_BIT);
+    const VkFormatFeatureFlags need =
+        isDepthFormat(f) ? VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT
+                         : (VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_TRANSFER_SRC_BIT);
     if ((props.optimalTilingFeatures & need) == need) out.push_back(f);
   }
   return out;
@@ -90,13 +94,15 @@ class OneShot {
 };
 
 VkImageLayout attachmentLayout(const Swapchain& sc) {
-  return sc.depth ? VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  return sc.depth ? VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+                  : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
 }
 
 VkImageSubresourceRange fullRange(const Swapchain& sc) {
   VkImageSubresourceRange r{};
-  r.aspectMask = sc.depth ? (VK_IMAGE_ASPECT_DEPTH_BIT | (hasStencil(sc.format) ? VK_IMAGE_ASPECT_STENCIL_BIT : 0))
-                          : VK_IMAGE_ASPECT_COLOR_BIT;
+  r.aspectMask = sc.depth
+                     ? (VK_IMAGE_ASPECT_DEPTH_BIT | (hasStencil(sc.format) ? VK_IMAGE_ASPECT_STENCIL_BIT : 0))
+                     : VK_IMAGE_ASPECT_COLOR_BIT;
   r.levelCount = VK_REMAINING_MIP_LEVELS;
   r.layerCount = VK_REMAINING_ARRAY_LAYERS;
   return r;
@@ -117,26 +123,27 @@ XrResult requirements(XrInstance instance, XrSystemId systemId, XrGraphicsRequir
 }
 
 XrResult XRAPI_CALL GetVulkanGraphicsRequirements2KHR(XrInstance instance, XrSystemId systemId,
-                                                       XrGraphicsRequirementsVulkanKHR* req) {
+                                                      XrGraphicsRequirementsVulkanKHR* req) {
   return requirements(instance, systemId, req);
 }
 EMBODY_XR_ENTRY(GetVulkanGraphicsRequirements2KHR)
 
 XrResult XRAPI_CALL GetVulkanGraphicsRequirementsKHR(XrInstance instance, XrSystemId systemId,
-                                                      XrGraphicsRequirementsVulkanKHR* req) {
+                                                     XrGraphicsRequirementsVulkanKHR* req) {
   return requirements(instance, systemId, req);
 }
 EMBODY_XR_ENTRY(GetVulkanGraphicsRequirementsKHR)
 
 XrResult XRAPI_CALL CreateVulkanInstanceKHR(XrInstance instance, const XrVulkanInstanceCreateInfoKHR* ci,
-                                             VkInstance* vkInstance, VkResult* vkResult) {
+                                            VkInstance* vkInstance, VkResult* vkResult) {
   Instance* inst = findInstance(instance);
   if (!inst) return XR_ERROR_HANDLE_INVALID;
   if (!ci || !vkInstance || !vkResult || ci->type != XR_TYPE_VULKAN_INSTANCE_CREATE_INFO_KHR ||
       !ci->pfnGetInstanceProcAddr || !ci->vulkanCreateInfo)
     return XR_ERROR_VALIDATION_FAILURE;
   if (ci->systemId != kSystemId) return XR_ERROR_SYSTEM_INVALID;
-  auto create = reinterpret_cast<PFN_vkCreateInstance>(ci->pfnGetInstanceProcAddr(VK_NULL_HANDLE, "vkCreateInstance"));
+  auto create =
+      reinterpret_cast<PFN_vkCreateInstance>(ci->pfnGetInstanceProcAddr(VK_NULL_HANDLE, "vkCreateInstance"));
   if (!create) return XR_ERROR_RUNTIME_FAILURE;
   // This runtime needs no instance extensions of its own: the application's request goes as is.
   *vkResult = create(ci->vulkanCreateInfo, ci->vulkanAllocator, vkInstance);
@@ -167,8 +174,9 @@ XrResult pickPhysicalDevice(VkInstance vk, VkPhysicalDevice* out) {
   return XR_SUCCESS;
 }
 
-XrResult XRAPI_CALL GetVulkanGraphicsDevice2KHR(XrInstance instance, const XrVulkanGraphicsDeviceGetInfoKHR* info,
-                                                 VkPhysicalDevice* pd) {
+XrResult XRAPI_CALL GetVulkanGraphicsDevice2KHR(XrInstance instance,
+                                                const XrVulkanGraphicsDeviceGetInfoKHR* info,
+                                                VkPhysicalDevice* pd) {
   Instance* inst = findInstance(instance);
   if (!inst) return XR_ERROR_HANDLE_INVALID;
   if (!info || !pd || info->type != XR_TYPE_VULKAN_GRAPHICS_DEVICE_GET_INFO_KHR || !info->vulkanInstance)
@@ -183,7 +191,7 @@ XrResult XRAPI_CALL GetVulkanGraphicsDevice2KHR(XrInstance instance, const XrVul
 EMBODY_XR_ENTRY(GetVulkanGraphicsDevice2KHR)
 
 XrResult XRAPI_CALL GetVulkanGraphicsDeviceKHR(XrInstance instance, XrSystemId systemId, VkInstance vk,
-                                                VkPhysicalDevice* pd) {
+                                               VkPhysicalDevice* pd) {
   Instance* inst = findInstance(instance);
   if (!inst) return XR_ERROR_HANDLE_INVALID;
   if (systemId != kSystemId) return XR_ERROR_SYSTEM_INVALID;
@@ -193,11 +201,11 @@ XrResult XRAPI_CALL GetVulkanGraphicsDeviceKHR(XrInstance instance, XrSystemId s
 EMBODY_XR_ENTRY(GetVulkanGraphicsDeviceKHR)
 
 XrResult XRAPI_CALL CreateVulkanDeviceKHR(XrInstance instance, const XrVulkanDeviceCreateInfoKHR* ci,
-                                           VkDevice* device, VkResult* vkResult) {
+                                          VkDevice* device, VkResult* vkResult) {
   Instance* inst = findInstance(instance);
   if (!inst) return XR_ERROR_HANDLE_INVALID;
-  if (!ci || !device || !vkResult || ci->type != XR_TYPE_VULKAN_DEVICE_CREATE_INFO_KHR || !ci->pfnGetInstanceProcAddr ||
-      !ci->vulkanCreateInfo || !ci->vulkanPhysicalDevice)
+  if (!ci || !device || !vkResult || ci->type != XR_TYPE_VULKAN_DEVICE_CREATE_INFO_KHR ||
+      !ci->pfnGetInstanceProcAddr || !ci->vulkanCreateInfo || !ci->vulkanPhysicalDevice)
     return XR_ERROR_VALIDATION_FAILURE;
   if (ci->systemId != kSystemId) return XR_ERROR_SYSTEM_INVALID;
   VkInstance vk;
@@ -213,25 +221,27 @@ XrResult XRAPI_CALL CreateVulkanDeviceKHR(XrInstance instance, const XrVulkanDev
 EMBODY_XR_ENTRY(CreateVulkanDeviceKHR)
 
 // XR_KHR_vulkan_enable: the runtime needs no extra Vulkan extensions (an empty list).
-XrResult emptyExtensionList(XrInstance instance, XrSystemId systemId, uint32_t capacity, uint32_t* count, char* buffer) {
+XrResult emptyExtensionList(XrInstance instance, XrSystemId systemId, uint32_t capacity, uint32_t* count,
+                            char* buffer) {
   if (!findInstance(instance)) return XR_ERROR_HANDLE_INVALID;
   if (systemId != kSystemId) return XR_ERROR_SYSTEM_INVALID;
   return twoCall(capacity, count, buffer, 1, [](char* c, size_t) { *c = '\0'; });
 }
-XrResult XRAPI_CALL GetVulkanInstanceExtensionsKHR(XrInstance instance, XrSystemId systemId, uint32_t capacity,
-                                                    uint32_t* count, char* buffer) {
+XrResult XRAPI_CALL GetVulkanInstanceExtensionsKHR(XrInstance instance, XrSystemId systemId,
+                                                   uint32_t capacity, uint32_t* count, char* buffer) {
   return emptyExtensionList(instance, systemId, capacity, count, buffer);
 }
 EMBODY_XR_ENTRY(GetVulkanInstanceExtensionsKHR)
 XrResult XRAPI_CALL GetVulkanDeviceExtensionsKHR(XrInstance instance, XrSystemId systemId, uint32_t capacity,
-                                                  uint32_t* count, char* buffer) {
+                                                 uint32_t* count, char* buffer) {
   return emptyExtensionList(instance, systemId, capacity, count, buffer);
 }
 EMBODY_XR_ENTRY(GetVulkanDeviceExtensionsKHR)
 
 // ---- swapchains ---------------------------------------------------------------------------------
 
-XrResult XRAPI_CALL EnumerateSwapchainFormats(XrSession session, uint32_t capacity, uint32_t* count, int64_t* formats) {
+XrResult XRAPI_CALL EnumerateSwapchainFormats(XrSession session, uint32_t capacity, uint32_t* count,
+                                              int64_t* formats) {
   Instance* inst = nullptr;
   Session* s = findSession(session, &inst);
   if (!s) return XR_ERROR_HANDLE_INVALID;
@@ -250,13 +260,16 @@ XrResult XRAPI_CALL CreateSwapchain(XrSession session, const XrSwapchainCreateIn
   if (s->lost) return XR_ERROR_SESSION_LOST;
   const auto formats = supportedFormats(s->vkPhysicalDevice);
   const auto format = static_cast<VkFormat>(ci->format);
-  if (std::find(formats.begin(), formats.end(), format) == formats.end()) return XR_ERROR_SWAPCHAIN_FORMAT_UNSUPPORTED;
+  if (std::find(formats.begin(), formats.end(), format) == formats.end())
+    return XR_ERROR_SWAPCHAIN_FORMAT_UNSUPPORTED;
   if (ci->width == 0 || ci->height == 0 || ci->width > 4096 || ci->height > 4096 || ci->arraySize == 0 ||
       ci->mipCount == 0 || (ci->faceCount != 1 && ci->faceCount != 6) || ci->sampleCount != 1)
     return XR_ERROR_VALIDATION_FAILURE;
   const bool depth = isDepthFormat(format);
-  if (depth && (ci->usageFlags & XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT)) return XR_ERROR_FEATURE_UNSUPPORTED;
-  if (!depth && (ci->usageFlags & XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT)) return XR_ERROR_FEATURE_UNSUPPORTED;
+  if (depth && (ci->usageFlags & XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT))
+    return XR_ERROR_FEATURE_UNSUPPORTED;
+  if (!depth && (ci->usageFlags & XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT))
+    return XR_ERROR_FEATURE_UNSUPPORTED;
 
   auto sc = std::make_unique<Swapchain>();
   sc->session = s;
@@ -266,13 +279,16 @@ XrResult XRAPI_CALL CreateSwapchain(XrSession session, const XrSwapchainCreateIn
   sc->depth = depth;
   VkImageUsageFlags usage = VK_IMAGE_USAGE_TRANSFER_SRC_BIT;  // the capture reads images back
   if (ci->usageFlags & XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT) usage |= VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
-  if (ci->usageFlags & XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT) usage |= VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
+  if (ci->usageFlags & XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT)
+    usage |= VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
   if (ci->usageFlags & XR_SWAPCHAIN_USAGE_UNORDERED_ACCESS_BIT) usage |= VK_IMAGE_USAGE_STORAGE_BIT;
   if (ci->usageFlags & XR_SWAPCHAIN_USAGE_TRANSFER_SRC_BIT) usage |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
   if (ci->usageFlags & XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT) usage |= VK_IMAGE_USAGE_TRANSFER_DST_BIT;
   if (ci->usageFlags & XR_SWAPCHAIN_USAGE_SAMPLED_BIT) usage |= VK_IMAGE_USAGE_SAMPLED_BIT;
-  if (ci->usageFlags & XR_SWAPCHAIN_USAGE_INPUT_ATTACHMENT_BIT_KHR) usage |= VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT;
-  if (depth && !(usage & VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT)) usage |= VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
+  if (ci->usageFlags & XR_SWAPCHAIN_USAGE_INPUT_ATTACHMENT_BIT_KHR)
+    usage |= VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT;
+  if (depth && !(usage & VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT))
+    usage |= VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
   if (!depth && !(usage & VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT)) usage |= VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
 
   VkImageCreateInfo ii{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
@@ -299,8 +315,10 @@ XrResult XRAPI_CALL CreateSwapchain(XrSession session, const XrSwapchainCreateIn
     vkGetImageMemoryRequirements(s->vkDevice, image, &mr);
     VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     ai.allocationSize = mr.size;
-    ai.memoryTypeIndex = findMemoryType(s->vkPhysicalDevice, mr.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    if (ai.memoryTypeIndex == UINT32_MAX) ai.memoryTypeIndex = findMemoryType(s->vkPhysicalDevice, mr.memoryTypeBits, 0);
+    ai.memoryTypeIndex =
+        findMemoryType(s->vkPhysicalDevice, mr.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    if (ai.memoryTypeIndex == UINT32_MAX)
+      ai.memoryTypeIndex = findMemoryType(s->vkPhysicalDevice, mr.memoryTypeBits, 0);
     VkDeviceMemory mem = VK_NULL_HANDLE;
     if (vkAllocateMemory(s->vkDevice, &ai, nullptr, &mem) != VK_SUCCESS) {
       destroySwapchainImages(*sc);
@@ -350,11 +368,13 @@ XrResult XRAPI_CALL EnumerateSwapchainImages(XrSwapchain swapchain, uint32_t cap
 }
 EMBODY_XR_ENTRY(EnumerateSwapchainImages)
 
-XrResult XRAPI_CALL AcquireSwapchainImage(XrSwapchain swapchain, const XrSwapchainImageAcquireInfo* info, uint32_t* index) {
+XrResult XRAPI_CALL AcquireSwapchainImage(XrSwapchain swapchain, const XrSwapchainImageAcquireInfo* info,
+                                          uint32_t* index) {
   Instance* inst = nullptr;
   Swapchain* sc = findSwapchain(swapchain, &inst);
   if (!sc) return XR_ERROR_HANDLE_INVALID;
-  if (!index || (info && info->type != XR_TYPE_SWAPCHAIN_IMAGE_ACQUIRE_INFO)) return XR_ERROR_VALIDATION_FAILURE;
+  if (!index || (info && info->type != XR_TYPE_SWAPCHAIN_IMAGE_ACQUIRE_INFO))
+    return XR_ERROR_VALIDATION_FAILURE;
   std::lock_guard lock(inst->mutex);
   Session& s = *sc->session;
   if (s.lost) return XR_ERROR_SESSION_LOST;
@@ -372,9 +392,11 @@ XrResult XRAPI_CALL AcquireSwapchainImage(XrSwapchain swapchain, const XrSwapcha
     b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
     b.image = sc->images[i];
     b.subresourceRange = fullRange(*sc);
-    b.dstAccessMask = sc->depth ? VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT : VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
-    const VkPipelineStageFlags dst = sc->depth ? (VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT)
-                                               : VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
+    b.dstAccessMask =
+        sc->depth ? VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT : VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
+    const VkPipelineStageFlags dst =
+        sc->depth ? (VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT)
+                  : VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
     vkCmdPipelineBarrier(os.cmd(), VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, dst, 0, 0, nullptr, 0, nullptr, 1, &b);
     if (!os.submitAndWait()) return XR_ERROR_RUNTIME_FAILURE;
     sc->initialized[i] = true;
@@ -440,7 +462,8 @@ bool initSessionVulkan(Session& s) {
   return s.queue && vkCreateCommandPool(s.vkDevice, &pi, nullptr, &s.cmdPool) == VK_SUCCESS;
 }
 
-void captureLeftEye(Session& s, Swapchain& sc, uint32_t imageIndex, const XrRect2Di& rect, uint32_t arrayIndex) {
+void captureLeftEye(Session& s, Swapchain& sc, uint32_t imageIndex, const XrRect2Di& rect,
+                    uint32_t arrayIndex) {
   if (s.captureDir.empty() || sc.depth || imageIndex >= sc.images.size()) return;
   const VkFormat f = sc.format;
   if (f != VK_FORMAT_R8G8B8A8_SRGB && f != VK_FORMAT_R8G8B8A8_UNORM && f != VK_FORMAT_B8G8R8A8_SRGB &&
@@ -458,9 +481,11 @@ void captureLeftEye(Session& s, Swapchain& sc, uint32_t imageIndex, const XrRect
   vkGetBufferMemoryRequirements(s.vkDevice, buffer, &mr);
   VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   ai.allocationSize = mr.size;
-  ai.memoryTypeIndex = findMemoryType(s.vkPhysicalDevice, mr.memoryTypeBits,
-                                      VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
-  bool ok = ai.memoryTypeIndex != UINT32_MAX && vkAllocateMemory(s.vkDevice, &ai, nullptr, &mem) == VK_SUCCESS &&
+  ai.memoryTypeIndex =
+      findMemoryType(s.vkPhysicalDevice, mr.memoryTypeBits,
+                     VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+  bool ok = ai.memoryTypeIndex != UINT32_MAX &&
+            vkAllocateMemory(s.vkDevice, &ai, nullptr, &mem) == VK_SUCCESS &&
             vkBindBufferMemory(s.vkDevice, buffer, mem, 0) == VK_SUCCESS;
   if (ok) {
     OneShot os(s);
@@ -476,13 +501,14 @@ void captureLeftEye(Session& s, Swapchain& sc, uint32_t imageIndex, const XrRect
       b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
       b.image = sc.images[imageIndex];
       b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, arrayIndex, 1};
-      vkCmdPipelineBarrier(os.cmd(), VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0,
-                           nullptr, 0, nullptr, 1, &b);
+      vkCmdPipelineBarrier(os.cmd(), VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+                           VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 0, nullptr, 1, &b);
       VkBufferImageCopy region{};
       region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, arrayIndex, 1};
       region.imageOffset = {rect.offset.x, rect.offset.y, 0};
       region.imageExtent = {w, h, 1};
-      vkCmdCopyImageToBuffer(os.cmd(), sc.images[imageIndex], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer, 1, &region);
+      vkCmdCopyImageToBuffer(os.cmd(), sc.images[imageIndex], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer, 1,
+                             &region);
       b.srcAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
       b.dstAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_COLOR_ATTACHMENT_READ_BIT;
       b.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
@@ -493,10 +519,10 @@ void captureLeftEye(Session& s, Swapchain& sc, uint32_t imageIndex, const XrRect
       hb.srcQueueFamilyIndex = hb.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
       hb.buffer = buffer;
       hb.size = VK_WHOLE_SIZE;
-      vkCmdPipelineBarrier(os.cmd(), VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, nullptr, 1, &hb, 0,
-                           nullptr);
-      vkCmdPipelineBarrier(os.cmd(), VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, 0, 0,
-                           nullptr, 0, nullptr, 1, &b);
+      vkCmdPipelineBarrier(os.cmd(), VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0,
+                           nullptr, 1, &hb, 0, nullptr);
+      vkCmdPipelineBarrier(os.cmd(), VK_PIPELINE_STAGE_TRANSFER_BIT,
+                           VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, 0, 0, nullptr, 0, nullptr, 1, &b);
       ok = os.submitAndWait();
     }
   }
@@ -512,7 +538,8 @@ void captureLeftEye(Session& s, Swapchain& sc, uint32_t imageIndex, const XrRect
     char name[64];
     std::snprintf(name, sizeof(name), "left_%05u.png", s.capturedFrames);
     const std::string path = (std::filesystem::path(s.captureDir) / name).string();
-    if (stbi_write_png(path.c_str(), static_cast<int>(w), static_cast<int>(h), 4, rgba.data(), static_cast<int>(w * 4)))
+    if (stbi_write_png(path.c_str(), static_cast<int>(w), static_cast<int>(h), 4, rgba.data(),
+                       static_cast<int>(w * 4)))
       ++s.capturedFrames;
     else
       std::fprintf(stderr, "embody headless runtime: cannot write %s\n", path.c_str());

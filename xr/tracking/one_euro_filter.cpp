@@ -60,6 +60,7 @@ void PoseFilter::setParams(TrackerId id, const TrackerFilterParams& params) {
 void PoseFilter::reset() {
   for (auto& f : position_) f.reset();
   for (auto& f : orientation_) f.reset();
+  haveRaw_.fill(false);
   primed_ = false;
 }
 
@@ -74,8 +75,15 @@ PoseSample PoseFilter::apply(const PoseSample& input) {
     if (!p.valid || !isUsable(p)) {
       position_[i].reset();
       orientation_[i].reset();
+      haveRaw_[i] = false;
       continue;
     }
+    if (haveRaw_[i] && glm::length(p.position - lastRaw_[i]) > jumpSpeed * dt + 0.02f) {
+      position_[i].reset();
+      orientation_[i].reset();
+    }
+    lastRaw_[i] = p.position;
+    haveRaw_[i] = true;
     p.position = position_[i].filter(p.position, dt);
     p.orientation = orientation_[i].filter(glm::normalize(p.orientation), dt);
   }

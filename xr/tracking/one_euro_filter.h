@@ -51,7 +51,8 @@ class OneEuroQuat {
 
 // One position and one orientation filter per tracker. Invalid trackers pass through and reset
 // their filter (the tracking-loss guard blends them back in); so does a gap longer than
-// `maxGapSeconds` between samples.
+// `maxGapSeconds` between samples, and a jump faster than `jumpSpeed` (an outlier is passed on
+// as it is, for the guard to reject, instead of being smeared over the following samples).
 class PoseFilter {
  public:
   explicit PoseFilter(const TrackerFilterParams& params = {});
@@ -60,8 +61,11 @@ class PoseFilter {
   void reset();
 
   static constexpr double maxGapSeconds = 0.25;
+  static constexpr float jumpSpeed = 10.0f;  // m/s, as TrackingGuardConfig::jumpSpeed
 
  private:
+  std::array<glm::vec3, kTrackerCount> lastRaw_{};
+  std::array<bool, kTrackerCount> haveRaw_{};
   std::array<OneEuroVec3, kTrackerCount> position_;
   std::array<OneEuroQuat, kTrackerCount> orientation_;
   double lastTime_ = 0.0;

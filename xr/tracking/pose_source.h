@@ -46,4 +46,16 @@ Result<std::unique_ptr<PoseSource>> openPoseSource(std::string_view spec, const 
 // Wraps a source and keeps only the trackers in `keep` (others are reported absent and invalid).
 std::unique_ptr<PoseSource> maskTrackers(std::unique_ptr<PoseSource> source, TrackerMask keep);
 
+// Wraps a source and marks the trackers in `lost` invalid from `from` to `to` seconds (their
+// positions set to NaN, as a broken driver might): tracking-loss tests and demos.
+std::unique_ptr<PoseSource> withTrackingLoss(std::unique_ptr<PoseSource> source, TrackerMask lost, double from,
+                                             double to);
+
+// Parses "left,right@2.0-3.0" (tracker keys, then a time window in seconds) for withTrackingLoss.
+struct TrackingLossSpec {
+  TrackerMask lost;
+  double from = 0.0, to = 0.0;
+};
+Result<TrackingLossSpec> parseTrackingLoss(std::string_view spec);
+
 }  // namespace embody::tracking

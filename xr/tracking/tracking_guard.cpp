@@ -174,11 +174,12 @@ const GuardedSample& TrackingGuard::update(const PoseSample& input) {
   updateHead(input[TrackerId::Head], time, dt);
   for (auto id : {TrackerId::Hips, TrackerId::LeftHand, TrackerId::RightHand, TrackerId::LeftFoot, TrackerId::RightFoot})
     updateLimb(id, input[id], time, dt);
-  // Lost or blending hands stay within reach of the estimated shoulder.
+  // Lost hands stay within reach of the estimated shoulder. (Not recovering ones: they head for
+  // a live target, which the estimate must not hold back, from a point that was within reach.)
   const TrackerPose& head = out_.pose[TrackerId::Head];
   for (auto id : {TrackerId::LeftHand, TrackerId::RightHand}) {
     const auto s = out_.status[static_cast<size_t>(index(id))];
-    if (s == TrackerStatus::Tracked) continue;
+    if (s == TrackerStatus::Tracked || s == TrackerStatus::Recovering) continue;
     TrackerPose& h = out_.pose[id];
     const glm::vec3 shoulder = body_.shoulderFromHead(head, sideOf(id));
     const float maxReach = config_.reachMargin * body_.armReach;

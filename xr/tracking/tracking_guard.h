@@ -14,8 +14,8 @@
 //   sample stands at eye height at the origin.
 // - When tracking returns, the target moves from where it was towards the live pose no faster
 //   than `recoverySpeed` (and `recoveryAngularSpeed`) until it has caught up.
-// - While a hand is not live-tracked it stays within arm's reach of the shoulder estimated from
-//   the head (BodyDimensions::shoulderFromHead).
+// - While a hand is lost (held, easing, neutral) it stays within arm's reach of the shoulder
+//   estimated from the head (BodyDimensions::shoulderFromHead).
 #include "xr/tracking/body_dimensions.h"
 
 namespace embody::tracking {

@@ -1,0 +1,254 @@
+// embody experiment NAME --out DIR: reproducible experiments that write CSV, summary.json and
+// PNG plots (rendered by gnuplot from the CSV with a script written next to them, so a person can
+// re-plot or restyle them). Experiments:
+//   isolated-spine  Raunhardt & Boulic 2008 §5.1: the 24-vertebra spine alone, coupled vs uncoupled
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+#include "app/args.h"
+#include "avatar/spine/isolated_experiment.h"
+
+namespace {
+
+using namespace embody;
+namespace fs = std::filesystem;
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// Figures 6, 7 and 8 of the paper, from the CSV files written beside the script.
+const char* const kIsolatedSpinePlots = R"gp(# Plots of `embody experiment isolated-spine` (run: gnuplot plots.gp in this folder).
+set datafile separator ','
+set terminal pngcairo size 1500,520 font 'Sans,11'
+clip(x) = (x > 1e-12 ? x : 1e-12)
+
+# Figure 7: task errors and joint variation per iteration.
+set output 'fig7_convergence.png'
+set multiplot layout 1,3 title 'Isolated spine: convergence, coupled (9 free dofs) vs uncoupled (72 dofs)'
+set grid
+set key top right
+set logscale y
+set format y '10^{%L}'
+set xlabel 'iteration'
+set ylabel 'neck position error (m)'
+set title 'position task (priority 1)'
+plot 'coupled_iterations.csv' skip 1 using 1:(clip($3)) with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
+     'uncoupled_iterations.csv' skip 1 using 1:(clip($3)) with lines lw 2 lc rgb '#d62728' title 'uncoupled'
+set ylabel 'head orientation error (deg)'
+set title 'orientation task (priority 0)'
+plot 'coupled_iterations.csv' skip 1 using 1:(clip($4)) with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
+     'uncoupled_iterations.csv' skip 1 using 1:(clip($4)) with lines lw 2 lc rgb '#d62728' title 'uncoupled'
+set ylabel '|{/Symbol D}q| (rad)'
+set title 'joint variation norm'
+plot 'coupled_iterations.csv' skip 1 using 1:(clip($5)) with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
+     'uncoupled_iterations.csv' skip 1 using 1:(clip($5)) with lines lw 2 lc rgb '#d62728' title 'uncoupled'
+unset multiplot
+unset logscale y
+set format y '%g'
+
+# Figure 8: how the swing is distributed over the vertebrae.
+set output 'fig8_swing.png'
+set multiplot layout 1,3 title 'Isolated spine: swing and torsion per vertebra (swing: s_x flexion, s_y lateral bending)'
+set title 'swing components (deg)'
+set xlabel 's_x (flexion +forward)'
+set ylabel 's_y (lateral bending +left)'
+set key top left
+plot 'coupled_vertebrae.csv' skip 1 using 4:5 with linespoints pt 7 ps 1.2 lw 1.5 lc rgb '#1f77b4' title 'coupled', \
+     'uncoupled_vertebrae.csv' skip 1 using 4:5 with linespoints pt 5 ps 1.0 lw 1.5 lc rgb '#d62728' title 'uncoupled'
+set title 'swing / joint limit (0 = swing-less revolute site)'
+set xlabel 'vertebra (caudal to cranial)'
+set ylabel 'normalised swing'
+set yrange [-1.1:1.1]
+set key top right
+set xtics rotate by 90 right font ',8'
+plot 'coupled_vertebrae.csv' skip 1 using 1:8:xtic(2) with linespoints pt 7 lw 2 lc rgb '#1f77b4' title 'coupled s_y', \
+     'uncoupled_vertebrae.csv' skip 1 using 1:8 with linespoints pt 5 lw 2 lc rgb '#d62728' title 'uncoupled s_y', \
+     'coupled_vertebrae.csv' skip 1 using 1:7 with linespoints pt 6 dt 2 lc rgb '#1f77b4' title 'coupled s_x', \
+     'uncoupled_vertebrae.csv' skip 1 using 1:7 with linespoints pt 4 dt 2 lc rgb '#d62728' title 'uncoupled s_x'
+set autoscale y
+set title 'torsion (deg)'
+set ylabel 'torsion (+ front to the left)'
+set key top left
+plot 'coupled_vertebrae.csv' skip 1 using 1:6:xtic(2) with linespoints pt 7 lw 2 lc rgb '#1f77b4' title 'coupled', \
+     'uncoupled_vertebrae.csv' skip 1 using 1:6 with linespoints pt 5 lw 2 lc rgb '#d62728' title 'uncoupled', \
+     0 with lines lc rgb 'gray' notitle
+unset multiplot
+set xtics norotate font ''
+
+# Figure 6: the final spine shapes, front and side views (same scale on both axes).
+set terminal pngcairo size 1200,820 font 'Sans,11'
+set output 'fig6_shapes.png'
+set multiplot layout 1,2 title 'Isolated spine: final shapes (neck pulled to the left, head orientation kept)'
+set size ratio -1
+set key bottom right box opaque
+set xtics 0.05
+set ytics 0.05
+set yrange [0.2:0.85]
+set title 'front view'
+set xlabel 'x (m, + character left)'
+set ylabel 'y (m, up)'
+set xrange [-0.1:0.2]
+plot 'coupled_shape.csv' skip 1 using 3:4 with linespoints dt 2 pt 1 ps 0.6 lw 1.5 lc rgb 'gray40' title 'rest', \
+     'coupled_shape.csv' skip 1 using 6:7 with linespoints pt 7 ps 0.8 lw 2 lc rgb '#1f77b4' title 'coupled', \
+     'uncoupled_shape.csv' skip 1 using 6:7 with linespoints pt 5 ps 0.7 lw 2 lc rgb '#d62728' title 'uncoupled', \
+     'target.csv' skip 1 using 1:2 with points pt 3 ps 2.5 lw 2 lc rgb 'black' title 'neck target'
+set title 'side view'
+set xlabel 'z (m, + forward)'
+set xrange [-0.25:0.05]
+plot 'coupled_shape.csv' skip 1 using 5:4 with linespoints dt 2 pt 1 ps 0.6 lw 1.5 lc rgb 'gray40' title 'rest', \
+     'coupled_shape.csv' skip 1 using 8:7 with linespoints pt 7 ps 0.8 lw 2 lc rgb '#1f77b4' title 'coupled', \
+     'uncoupled_shape.csv' skip 1 using 8:7 with linespoints pt 5 ps 0.7 lw 2 lc rgb '#d62728' title 'uncoupled', \
+     'target.csv' skip 1 using 3:2 with points pt 3 ps 2.5 lw 2 lc rgb 'black' title 'neck target'
+unset multiplot
+)gp";
+
+std::string shellQuote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+bool writeFile(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  return static_cast<bool>(out);
+}
+
+void writeRun(const fs::path& dir, const spine::ExperimentRun& run, std::string& error) {
+  std::string it = "iteration,time_us,position_error_m,orientation_error_deg,dq_norm_rad\n";
+  char line[256];
+  for (const spine::IterationSample& s : run.samples) {
+    std::snprintf(line, sizeof line, "%d,%.3f,%.9g,%.9g,%.9g\n", s.iteration, s.time_us, s.position_error,
+                  s.orientation_error / kDeg, s.step_norm);
+    it += line;
+  }
+  const spine::SpineDescription& d = run.description;
+  std::string vs = "index,site,region,s_x_deg,s_y_deg,torsion_deg,s_x_norm,s_y_norm\n";
+  std::string shape = "index,joint,rest_x,rest_y,rest_z,final_x,final_y,final_z\n";
+  for (size_t k = 0; k < d.sites.size(); ++k) {
+    const spine::SiteMotion& m = run.motion[k];
+    const Eigen::Vector3d& r = run.joints.ranges[k];
+    auto norm = [&](spine::Component c, double v) {
+      const double range = r[static_cast<int>(c)];
+      if (range <= 0) return 0.0;
+      return v / (v >= 0 ? spine::upperLimit(d, c, range) : -spine::lowerLimit(d, c, range));
+    };
+    std::snprintf(line, sizeof line, "%zu,%s,%s,%.6f,%.6f,%.6f,%.6f,%.6f\n", k, d.sites[k].name.c_str(),
+                  spine::toString(d.sites[k].region), m.s_x / kDeg, m.s_y / kDeg, m.torsion / kDeg,
+                  norm(spine::Component::Flexion, m.s_x), norm(spine::Component::Bending, m.s_y));
+    vs += line;
+  }
+  for (size_t k = 0; k < run.final_centres.size(); ++k) {
+    const Eigen::Vector3d& a = run.rest_centres[k];
+    const Eigen::Vector3d& b = run.final_centres[k];
+    const std::string name = k < d.sites.size() ? d.sites[k].name : "skullbase";
+    std::snprintf(line, sizeof line, "%zu,%s,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f\n", k, name.c_str(), a.x(), a.y(), a.z(),
+                  b.x(), b.y(), b.z());
+    shape += line;
+  }
+  if (!writeFile(dir / (run.variant + "_iterations.csv"), it) || !writeFile(dir / (run.variant + "_vertebrae.csv"), vs) ||
+      !writeFile(dir / (run.variant + "_shape.csv"), shape))
+    error = "cannot write the " + run.variant + " CSV files in " + dir.string();
+}
+
+int runIsolatedSpine(const cli::Args& args) {
+  const fs::path out = args.get("out");
+  spine::ExperimentOptions o;
+  try {
+    o.iterations = args.integer("iterations");
+    o.pull = args.number("pull");
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
+  o.axis_coupling = args.has("axis-coupling");
+  auto desc = spine::loadSpineModel(args.get("model"));
+  if (!desc) {
+    std::fprintf(stderr, "embody experiment: error: %s\n", desc.error().c_str());
+    return 1;
+  }
+  auto result = spine::runIsolatedSpineExperiment(*desc, o);
+  if (!result) {
+    std::fprintf(stderr, "embody experiment: error: %s\n", result.error().c_str());
+    return 1;
+  }
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) {
+    std::fprintf(stderr, "embody experiment: error: cannot create %s: %s\n", out.string().c_str(), ec.message().c_str());
+    return 1;
+  }
+  std::string error;
+  writeRun(out, result->coupled, error);
+  writeRun(out, result->uncoupled, error);
+  const nlohmann::json summary = spine::experimentSummary(*result, o);
+  char target[128];
+  std::snprintf(target, sizeof target, "x,y,z\n%.6f,%.6f,%.6f\n", result->neck_target.x(), result->neck_target.y(),
+                result->neck_target.z());
+  if (error.empty() && (!writeFile(out / "summary.json", summary.dump(2) + "\n") || !writeFile(out / "target.csv", target) ||
+                        !writeFile(out / "plots.gp", kIsolatedSpinePlots)))
+    error = "cannot write in " + out.string();
+  if (!error.empty()) {
+    std::fprintf(stderr, "embody experiment: error: %s\n", error.c_str());
+    return 1;
+  }
+  for (const char* v : {"coupled", "uncoupled"}) {
+    const auto& s = summary[v];
+    std::printf("%-9s position error %.4f m, orientation error %.2g deg, %.1f us/iteration, swing spread %.3g, "
+                "torsion sign changes %d\n",
+                v, s["final_position_error_m"].get<double>(), s["final_orientation_error_deg"].get<double>(),
+                s["mean_iteration_us"].get<double>(), s["swing_spread"].get<double>(),
+                s["torsion_sign_changes_within_regions"].get<int>());
+  }
+  if (args.has("no-plots")) {
+    std::printf("wrote CSV and summary.json to %s (plots skipped)\n", out.string().c_str());
+    return 0;
+  }
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
+    std::fprintf(stderr, "embody experiment: error: gnuplot not found (install gnuplot-nox); CSV, summary.json and "
+                         "plots.gp are in %s\n", out.string().c_str());
+    return 1;
+  }
+  const std::string cmd = "cd " + shellQuote(out.string()) + " && gnuplot plots.gp";
+  if (std::system(cmd.c_str()) != 0) {
+    std::fprintf(stderr, "embody experiment: error: gnuplot failed on %s/plots.gp\n", out.string().c_str());
+    return 1;
+  }
+  std::printf("wrote CSV, summary.json and fig6_shapes.png, fig7_convergence.png, fig8_swing.png to %s\n",
+              out.string().c_str());
+  return 0;
+}
+
+int runExperiment(cli::Argv argv) {
+  cli::Args args("embody experiment",
+                 "Runs a reproducible experiment and writes CSV, summary.json and PNG plots (gnuplot).\n"
+                 "  isolated-spine: Raunhardt & Boulic 2008 §5.1 on the 24-vertebra spine, coupled and uncoupled: "
+                 "the head's orientation is kept (priority 0) while the neck is pulled sideways (priority 1).");
+  args.positional("name", "the experiment: isolated-spine");
+  args.option("out", "DIR", "folder for the results (created)");
+  args.option("model", "full|simplified|FILE", "spine model", "full");
+  args.option("iterations", "N", "solver iterations per run", "100");
+  args.option("pull", "METRES", "how far the neck target is moved to the character's left", "0.12");
+  args.flag("axis-coupling", "add the cross-axis rows to the coupled model");
+  args.flag("no-plots", "write CSV and summary.json only");
+  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (args.get("name") != "isolated-spine") {
+    std::fprintf(stderr, "error: unknown experiment '%s' (expected: isolated-spine)\n\n%s", args.get("name").c_str(),
+                 args.usage().c_str());
+    return 2;
+  }
+  if (args.get("out").empty()) {
+    std::fprintf(stderr, "error: --out DIR is required\n\n%s", args.usage().c_str());
+    return 2;
+  }
+  return runIsolatedSpine(args);
+}
+
+}  // namespace
+
+EMBODY_COMMAND("experiment", "run a paper experiment (isolated-spine) and write CSV, summary.json and plots", runExperiment);

@@ -1,0 +1,123 @@
+#include "avatar/body/calibration.h"
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <tuple>
+
+namespace embody::avatar {
+namespace {
+
+bool plausible(double metres) { return std::isfinite(metres) && metres >= 0.5 && metres <= 2.6; }
+
+}  // namespace
+
+double avatarHeight(const AvatarAsset& avatar) {
+  const glm::vec3 up = avatar.humanoid.up;
+  std::vector<glm::mat4> globals;
+  computeGlobals(avatar.skeleton, SkeletonPose::rest(avatar.skeleton), globals);
+  if (!avatar.mesh.vertices.empty()) {
+    std::vector<glm::mat4> palette;
+    computeSkinningPalette(avatar, globals, palette);
+    std::vector<glm::vec3> pos, nrm;
+    skinOnCpu(avatar.mesh, palette, pos, nrm);
+    float lo = INFINITY, hi = -INFINITY;
+    for (const auto& p : pos) {
+      lo = std::min(lo, glm::dot(p, up));
+      hi = std::max(hi, glm::dot(p, up));
+    }
+    return static_cast<double>(hi - lo);
+  }
+  const int head = avatar.humanoid.joint(HumanBone::head);
+  if (head < 0) return 0.0;
+  float lo = INFINITY;
+  for (const auto& g : globals) lo = std::min(lo, glm::dot(glm::vec3(g[3]), up));
+  return static_cast<double>(glm::dot(glm::vec3(globals[static_cast<size_t>(head)][3]), up) - lo) / 0.91;
+}
+
+Result<BodyProfile> calibrate(const AvatarAsset& avatar, const CalibrationInput& in) {
+  BodyProfile p;
+  p.avatar = avatar.sourcePath.empty() ? "default" : avatar.sourcePath;
+  p.avatarHeight = avatarHeight(avatar);
+  if (!(p.avatarHeight > 0.05)) return Error{"cannot measure the avatar's height"};
+  if (in.userHeight) {
+    if (!plausible(*in.userHeight)) return Error{"user height must be between 0.5 and 2.6 m"};
+    p.userHeight = *in.userHeight;
+    p.eyeHeight = kEyeHeightRatio * p.userHeight;
+  } else if (in.eyeHeight) {
+    if (!plausible(*in.eyeHeight / kEyeHeightRatio)) return Error{"eye height must be between 0.47 and 2.4 m"};
+    p.eyeHeight = *in.eyeHeight;
+    p.userHeight = p.eyeHeight / kEyeHeightRatio;
+  } else {
+    return Error{"calibration needs the user's height or eye height"};
+  }
+  p.scale = p.userHeight / p.avatarHeight;
+  // Arm span of the avatar: both arm chains (shoulder -> hand) plus the hands and the shoulder width.
+  const HumanoidMap& h = avatar.humanoid;
+  if (h.usable()) {
+    std::vector<glm::mat4> g;
+    computeGlobals(avatar.skeleton, SkeletonPose::rest(avatar.skeleton), g);
+    auto at = [&](HumanBone b) { return glm::vec3(g[static_cast<size_t>(h.joint(b))][3]); };
+    const double left = glm::length(at(HumanBone::leftLowerArm) - at(HumanBone::leftUpperArm)) +
+                        glm::length(at(HumanBone::leftHand) - at(HumanBone::leftLowerArm));
+    const double right = glm::length(at(HumanBone::rightLowerArm) - at(HumanBone::rightUpperArm)) +
+                         glm::length(at(HumanBone::rightHand) - at(HumanBone::rightLowerArm));
+    const double shoulders = glm::length(at(HumanBone::leftUpperArm) - at(HumanBone::rightUpperArm));
+    p.avatarArmSpan = left + right + shoulders + 2.0 * 0.108 * p.avatarHeight;  // hand length ~10.8 % of height
+  }
+  if (in.armSpan) {
+    if (!plausible(*in.armSpan)) return Error{"arm span must be between 0.5 and 2.6 m"};
+    p.armSpan = *in.armSpan;
+    if (p.avatarArmSpan > 0.0) p.armScale = p.armSpan / (p.avatarArmSpan * p.scale);
+  }
+  return p;
+}
+
+Status saveProfile(const BodyProfile& p, const std::string& path) {
+  nlohmann::json j = {{"version", 1},
+                      {"avatar", p.avatar},
+                      {"user_height_m", p.userHeight},
+                      {"eye_height_m", p.eyeHeight},
+                      {"arm_span_m", p.armSpan > 0.0 ? nlohmann::json(p.armSpan) : nlohmann::json(nullptr)},
+                      {"avatar_height_m", p.avatarHeight},
+                      {"avatar_arm_span_m", p.avatarArmSpan},
+                      {"scale", p.scale},
+                      {"arm_scale", p.armScale}};
+  std::ofstream f(path);
+  if (!f) return Error{"cannot write profile '" + path + "'"};
+  f << j.dump(2) << "\n";
+  if (!f) return Error{"cannot write profile '" + path + "'"};
+  return {};
+}
+
+Result<BodyProfile> loadProfile(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) return Error{"cannot open profile '" + path + "'"};
+  std::stringstream ss;
+  ss << f.rdbuf();
+  const auto j = nlohmann::json::parse(ss.str(), nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return Error{"profile '" + path + "' is not a JSON object"};
+  auto number = [&](const char* key, double& out, bool required) -> Status {
+    if (!j.contains(key) || j[key].is_null()) {
+      if (required) return Error{"profile '" + path + "': missing " + key};
+      return {};
+    }
+    if (!j[key].is_number() || !std::isfinite(j[key].get<double>()))
+      return Error{"profile '" + path + "': " + key + " must be a number"};
+    out = j[key].get<double>();
+    return {};
+  };
+  BodyProfile p;
+  if (j.contains("avatar") && j["avatar"].is_string()) p.avatar = j["avatar"].get<std::string>();
+  for (auto [key, out, required] : {std::tuple{"user_height_m", &p.userHeight, true}, std::tuple{"eye_height_m", &p.eyeHeight, false},
+                                    std::tuple{"arm_span_m", &p.armSpan, false}, std::tuple{"avatar_height_m", &p.avatarHeight, false},
+                                    std::tuple{"avatar_arm_span_m", &p.avatarArmSpan, false}, std::tuple{"scale", &p.scale, true},
+                                    std::tuple{"arm_scale", &p.armScale, false}})
+    if (auto s = number(key, *out, required); !s.ok()) return Error{s.error()};
+  if (!plausible(p.userHeight)) return Error{"profile '" + path + "': user_height_m must be between 0.5 and 2.6"};
+  if (!(p.scale > 0.05 && p.scale < 20.0)) return Error{"profile '" + path + "': scale must be between 0.05 and 20"};
+  return p;
+}
+
+}  // namespace embody::avatar

@@ -1,0 +1,48 @@
+#pragma once
+// Calibration: scaling the body to the user, and the small JSON profile that remembers it.
+//
+// The avatar is scaled uniformly so that its height matches the user's: from --user-height, or
+// from the eye height (the head pose at calibration; an HMD knows the eyes, not the top of the
+// head). Eye height is taken as 0.933 of body height (H-Anim's 1.75 m humanoid has its eyes at
+// about 1.633 m), for the avatar too unless it states an eye position. Arm span is optional: it
+// is stored with its ratio to the avatar's but not applied (non-uniform limb scaling would break
+// the exact pivot match with the render skeleton).
+#include <optional>
+#include <string>
+
+#include "avatar/avatar_asset.h"
+#include "core/result.h"
+
+namespace embody::avatar {
+
+constexpr double kEyeHeightRatio = 0.933;
+
+struct CalibrationInput {
+  std::optional<double> userHeight;  // metres, total height
+  std::optional<double> eyeHeight;   // metres, eyes above the floor (used when no user height)
+  std::optional<double> armSpan;     // metres, fingertip to fingertip
+};
+
+struct BodyProfile {
+  std::string avatar;           // source path or "default"
+  double userHeight = 0.0;      // metres
+  double eyeHeight = 0.0;       // metres
+  double armSpan = 0.0;         // metres, 0 when not measured
+  double avatarHeight = 0.0;    // metres, at the avatar's own scale
+  double avatarArmSpan = 0.0;   // metres, hand joint to hand joint along the arm chains + hands
+  double scale = 1.0;           // user / avatar, applied uniformly
+  double armScale = 1.0;        // user arm span / avatar arm span (stored, not applied)
+};
+
+// Height of the avatar standing at rest: mesh bounds along up when it has a mesh, else from the
+// head joint (head joint / 0.91).
+double avatarHeight(const AvatarAsset& avatar);
+
+// Needs a usable humanoid mapping for the arm span; fails on non-positive or absurd inputs
+// (outside 0.5 - 2.6 m) and when neither height is given.
+Result<BodyProfile> calibrate(const AvatarAsset& avatar, const CalibrationInput& input);
+
+Status saveProfile(const BodyProfile& profile, const std::string& path);
+Result<BodyProfile> loadProfile(const std::string& path);  // validates every number
+
+}  // namespace embody::avatar

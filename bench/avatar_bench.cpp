@@ -1,0 +1,70 @@
+// Avatar timings: loading, building the default mannequin and the body model, retargeting, and
+// one solve + retarget frame on the default avatar.
+#include <benchmark/benchmark.h>
+
+#include "avatar/body/body_model.h"
+#include "avatar/gltf/gltf_loader.h"
+#include "avatar/procedural/default_avatar.h"
+#include "test_paths.h"
+
+using namespace embody;
+using namespace embody::avatar;
+
+static void BM_LoadCesiumMan(benchmark::State& state) {
+  const std::string path = test::sharedAsset("CesiumMan.glb");
+  if (path.empty()) {
+    state.SkipWithError("CesiumMan.glb not found");
+    return;
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(loadAvatarFile(path));
+}
+BENCHMARK(BM_LoadCesiumMan)->Unit(benchmark::kMillisecond);
+
+static void BM_BuildDefaultAvatar(benchmark::State& state) {
+  for (auto _ : state) benchmark::DoNotOptimize(buildDefaultAvatar());
+}
+BENCHMARK(BM_BuildDefaultAvatar)->Unit(benchmark::kMillisecond);
+
+static void BM_BuildBodyModel(benchmark::State& state) {
+  const AvatarAsset a = buildDefaultAvatar();
+  for (auto _ : state) benchmark::DoNotOptimize(buildBodyModel(a));
+}
+BENCHMARK(BM_BuildBodyModel)->Unit(benchmark::kMillisecond);
+
+static void BM_Retarget(benchmark::State& state) {
+  const AvatarAsset a = buildDefaultAvatar();
+  auto body = buildBodyModel(a);
+  ik::Data data(body->model);
+  ik::kinematics(body->model, data, false);
+  SkeletonPose pose;
+  for (auto _ : state) {
+    retarget(body.value(), a, data, pose);
+    benchmark::DoNotOptimize(pose.local.data());
+  }
+}
+BENCHMARK(BM_Retarget)->Unit(benchmark::kMicrosecond);
+
+// A frame: the left hand target moves on a small circle; solve (warm start) then retarget.
+static void BM_SolveAndRetargetDefault(benchmark::State& state) {
+  const AvatarAsset a = buildDefaultAvatar();
+  auto body = buildBodyModel(a);
+  ik::Data data(body->model);
+  ik::kinematics(body->model, data, false);
+  for (ik::TaskId t : {body->leftFootTask, body->rightFootTask, body->headTask, body->leftHandTask, body->rightHandTask})
+    (void)data.setTarget(t, data.jointFrame(body->model.tasks[static_cast<size_t>(t)].desc.joint));
+  (void)data.setTarget(body->comTask, data.centerOfMass());
+  const Eigen::Isometry3d hand0 = data.jointFrame(body->leftHand);
+  SkeletonPose pose;
+  int frame = 0;
+  for (auto _ : state) {
+    Eigen::Isometry3d hand = hand0;
+    const double phase = 0.05 * frame++;
+    hand.translation() += Eigen::Vector3d(0.0, 0.1 + 0.05 * std::sin(phase), 0.25 + 0.05 * std::cos(phase));
+    (void)data.setTarget(body->leftHandTask, hand);
+    benchmark::DoNotOptimize(ik::solve(body->model, data));
+    retarget(body.value(), a, data, pose);
+  }
+}
+BENCHMARK(BM_SolveAndRetargetDefault)->Unit(benchmark::kMicrosecond);
+
+BENCHMARK_MAIN();

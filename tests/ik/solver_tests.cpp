@@ -1,0 +1,453 @@
+// The priority loop: fast path vs reference, strict priorities, constraints, convergence,
+// robustness against bad input, deadlines.
+#include <catch2/catch.hpp>
+
+#include <numbers>
+
+#include "avatar/ik/sample_models.h"
+#include "avatar/ik/solver_detail.h"
+#include "ik_test_util.h"
+
+using namespace embody::ik;
+
+namespace {
+
+const Model& humanoid() {
+  static const Model m = sampleHumanoid().value();
+  return m;
+}
+const Model& coupledSpine() {
+  static const Model m = sampleSpine(true).value();
+  return m;
+}
+
+// Targets = the task values of a random configuration, optionally pushed by `push` metres.
+void randomTargets(const Model& model, Data& data, std::mt19937& rng, double spread, double push = 0.0,
+                   double shrink = 1.0) {
+  Data probe(model);
+  REQUIRE(probe.setConfiguration(test::randomInsideLimits(model, rng, spread, shrink)));
+  kinematics(model, probe, false);
+  std::normal_distribution<double> g;
+  for (size_t t = 0; t < model.tasks.size(); ++t) {
+    const TaskId id = static_cast<TaskId>(t);
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = probe.taskOrientation(id).toRotationMatrix();
+    pose.translation() = probe.taskPosition(id) + push * Eigen::Vector3d(g(rng), g(rng), g(rng));
+    REQUIRE(data.setTarget(id, pose));
+  }
+}
+
+double equalityViolation(const Model& model, const Eigen::VectorXd& q) {
+  if (model.equality_matrix.rows() == 0) return 0.0;
+  return (model.equality_matrix * q - model.equality_rhs).cwiseAbs().maxCoeff();
+}
+
+double worstInequality(const Model& model, const Eigen::VectorXd& q, const std::vector<int>& excused) {
+  double worst = -1e300;
+  for (size_t i = 0; i < model.inequalities.size(); ++i) {
+    if (std::find(excused.begin(), excused.end(), static_cast<int>(i)) != excused.end()) continue;
+    double v = -model.inequalities[i].rhs;
+    for (const LinearTerm& t : model.inequalities[i].terms) v += t.coefficient * q(model.dofIndex(t.dof));
+    worst = std::max(worst, v);
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("fast (reduced) path equals the reference projector path on random problems") {
+  std::mt19937 rng(21);
+  std::vector<const Model*> models = {&humanoid(), &coupledSpine()};
+  std::vector<Model> randoms;
+  for (int i = 0; i < 10; ++i) randoms.push_back(test::randomAllTypesModel(rng, i % 2 == 0));
+  for (const Model& m : randoms) models.push_back(&m);
+  for (const Model* model : models) {
+    for (int trial = 0; trial < 10; ++trial) {
+      Data data(*model);
+      REQUIRE(data.setConfiguration(test::randomInsideLimits(*model, rng, 1.0)));
+      randomTargets(*model, data, rng, 1.0, 0.1);
+      kinematics(*model, data);
+      SolveOptions fast, reference;
+      reference.path = Path::Reference;
+      const Eigen::VectorXd a = priorityPass(*model, data, fast);
+      const Eigen::VectorXd b = priorityPass(*model, data, reference);
+      INFO("model with " << model->dofs << " dofs, trial " << trial);
+      CHECK((a - b).cwiseAbs().maxCoeff() < 1e-9);
+      // Full iterations with the clamping loop (joint limits pinned) agree too.
+      // Full iterations with the clamping loop (joint limits pinned) agree too: compare each
+      // iteration from the same state (round-off would otherwise compound over iterations).
+      for (int it = 0; it < 3; ++it) {
+        Data other = data;
+        const Eigen::VectorXd q0 = data.q();
+        iterate(*model, data, fast);
+        iterate(*model, other, reference);
+        INFO("iteration " << it << " step " << (data.q() - q0).norm() << " clamps " << data.report().active_clamps.size());
+        // 1e-9 relative to the step (steps of several radians happen far from the targets).
+        CHECK((data.q() - other.q()).cwiseAbs().maxCoeff() < 1e-9 * std::max(1.0, (data.q() - q0).norm()));
+        CHECK(data.report().active_clamps == other.report().active_clamps);
+      }
+    }
+  }
+}
+
+TEST_CASE("strict priority: lower levels leave J_a dq of every higher level unchanged") {
+  std::mt19937 rng(5);
+  for (const Model* model : {&humanoid(), &coupledSpine()}) {
+    for (Path path : {Path::Fast, Path::Reference}) {
+      for (int trial = 0; trial < 10; ++trial) {
+        Data data(*model);
+        REQUIRE(data.setConfiguration(test::randomInsideLimits(*model, rng, 1.0)));
+        randomTargets(*model, data, rng, 1.0, 0.5);  // conflicting: pushed off the reachable set
+        SolveOptions o;
+        o.path = path;
+        o.clamping = false;
+        for (size_t a = 0; a < model->levels.size(); ++a) {
+          // Only levels 0..a on:
+          for (size_t t = 0; t < model->tasks.size(); ++t)
+            REQUIRE(data.setEnabled(static_cast<TaskId>(t), model->tasks[t].level_index <= static_cast<int>(a)));
+          kinematics(*model, data);
+          const Eigen::MatrixXd j = taskJacobian(data);
+          const Eigen::VectorXd partial = priorityPass(*model, data, o);
+          for (size_t t = 0; t < model->tasks.size(); ++t) REQUIRE(data.setEnabled(static_cast<TaskId>(t), true));
+          kinematics(*model, data);
+          const Eigen::VectorXd full = priorityPass(*model, data, o);
+          const auto& level = model->levels[a];
+          const auto ja = j.middleRows(level.first_row, level.rows);
+          INFO("level " << a << " path " << (path == Path::Fast ? "fast" : "reference"));
+          CHECK((ja * partial - ja * full).cwiseAbs().maxCoeff() < 1e-9);
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("strict priority over a full solve: a conflicting lower task cannot pull the feet off") {
+  const Model& model = humanoid();
+  std::mt19937 rng(8);
+  for (int trial = 0; trial < 10; ++trial) {
+    Data data(model);
+    REQUIRE(data.setConfiguration(test::randomInsideLimits(model, rng, 0.3, 0.5)));
+    kinematics(model, data, false);
+    const TaskId lf = model.findTask("left_foot"), rf = model.findTask("right_foot");
+    const TaskId lh = model.findTask("left_hand"), head = model.findTask("head");
+    // Every task keeps its current value, except the left hand, which wants to be 0.5 m further
+    // out than the arm reaches without moving the feet, CoM and head.
+    for (TaskId t = 0; t < static_cast<TaskId>(model.tasks.size()); ++t) {
+      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+      pose.linear() = data.taskOrientation(t).toRotationMatrix();
+      pose.translation() = data.taskPosition(t);
+      REQUIRE(data.setTarget(t, pose));
+    }
+    REQUIRE(data.setTarget(lh, data.taskPosition(lh) + Eigen::Vector3d(0.5, 0.3, 0.3)));
+    SolveOptions o;
+    o.max_iterations = 200;
+    const SolveReport& r = solve(model, data, o);
+    // Second-order drift from the lower task's steps is corrected every iteration: what is left
+    // is orders of magnitude below the lower task's own error.
+    CHECK(r.tasks[lf].position < 2e-5);
+    CHECK(r.tasks[rf].position < 2e-5);
+    CHECK(r.tasks[lf].rotation < 2e-5);
+    CHECK(r.tasks[rf].rotation < 2e-5);
+    CHECK(r.tasks[head].position < 2e-3);
+    CHECK(r.tasks[lh].position > 0.02);  // the conflict is real: the hand stays off
+    CHECK(data.q().allFinite());
+  }
+}
+
+TEST_CASE("equalities hold to 1e-9 after 10,000 iterations of random targets (no drift)") {
+  const Model& model = coupledSpine();
+  std::mt19937 rng(99);
+  Data data(model);
+  SolveOptions o;
+  double worstIneq = -1;
+  int clampedIterations = 0;
+  for (int it = 0; it < 10000; ++it) {
+    if (it % 20 == 0) randomTargets(model, data, rng, 1.0, 0.05);
+    iterate(model, data, o);
+    REQUIRE(equalityViolation(model, data.q()) < 1e-9);
+    worstIneq = std::max(worstIneq, worstInequality(model, data.q(), data.report().unsatisfiable));
+    clampedIterations += data.report().active_clamps.empty() ? 0 : 1;
+  }
+  CHECK(equalityViolation(model, data.q()) < 1e-9);
+  CHECK(worstIneq < 1e-8);
+  CHECK(clampedIterations > 100);  // the test does exercise the clamping loop
+}
+
+TEST_CASE("joint limits are never violated beyond tolerance on the humanoid") {
+  const Model& model = humanoid();
+  std::mt19937 rng(31);
+  Data data(model);
+  SolveOptions o;
+  o.max_iterations = 30;
+  for (int problem = 0; problem < 50; ++problem) {
+    randomTargets(model, data, rng, 1.0, 0.3);
+    const SolveReport& r = solve(model, data, o);
+    CHECK(worstInequality(model, data.q(), r.unsatisfiable) < 1e-8);
+    CHECK(r.unsatisfiable.empty());
+  }
+}
+
+namespace {
+// Two revolute joints about z on a short chain, with a point task at the tip.
+Model twoJointModel(const std::vector<InequalityRow>& inequalities, const std::vector<EqualityRow>& equalities = {}) {
+  ModelBuilder b;
+  Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
+  step.translation() = Eigen::Vector3d(0.5, 0, 0);
+  const JointId a = b.addJoint("a", kNoParent, JointType::Revolute);
+  const JointId c = b.addJoint("b", a, JointType::Revolute, step);
+  const JointId tip = b.addJoint("tip", c, JointType::Fixed, step);
+  for (InequalityRow row : inequalities) b.addInequality(row);
+  for (EqualityRow row : equalities) b.addEquality(row);
+  TaskDesc t;
+  t.name = "tip";
+  t.joint = tip;
+  t.axes = kAxisX | kAxisY;
+  b.addTask(t);
+  return b.build().value();
+}
+}  // namespace
+
+TEST_CASE("a user coupling inequality is honoured and reported as an active clamp") {
+  const Model model = twoJointModel({{"a+b <= 0.6", {{{0, 0}, 1.0}, {{1, 0}, 1.0}}, 0.6, InequalityKind::UserCoupling}});
+  Data data(model);
+  // Target needs a + b = pi/2 (tip at (0.5, 0.5) with a = 0, b = pi/2, among others).
+  REQUIRE(data.setTarget(0, Eigen::Vector3d(0.0, 1.0, 0.0)));
+  SolveOptions o;
+  o.max_iterations = 100;
+  const SolveReport& r = solve(model, data, o);
+  CHECK(data.q()(0) + data.q()(1) <= 0.6 + 1e-9);
+  CHECK(r.active_clamps == std::vector<int>{0});
+  CHECK(r.unsatisfiable.empty());
+  CHECK(r.tasks[0].position > 0.01);  // the constraint wins over the task
+}
+
+TEST_CASE("a violated row dependent on the active set is skipped; reported only when it stays violated") {
+  SECTION("a duplicate of a pinned row is satisfied by the first one: not reported") {
+    const Model model = twoJointModel({{"a <= 0.3", {{{0, 0}, 1.0}}, 0.3, InequalityKind::UserCoupling},
+                                       {"2a <= 0.6", {{{0, 0}, 2.0}}, 0.6, InequalityKind::UserCoupling}});
+    Data data(model);
+    REQUIRE(data.setTarget(0, Eigen::Vector3d(0.0, 1.0, 0.0)));
+    const SolveReport& r = solve(model, data, {});
+    CHECK(data.q()(0) <= 0.3 + 1e-9);
+    CHECK(r.active_clamps == std::vector<int>{0});  // first added wins
+    CHECK(r.unsatisfiable.empty());
+  }
+  SECTION("an equality a = 1 against the inequality a <= 0.5: the inequality is reported") {
+    EqualityRow eq{"a = 1", {{{0, 0}, 1.0}}, 1.0};
+    const Model model = twoJointModel({{"a <= 0.5", {{{0, 0}, 1.0}}, 0.5, InequalityKind::UserCoupling}}, {eq});
+    Data data(model);
+    REQUIRE(data.setTarget(0, Eigen::Vector3d(0.0, 1.0, 0.0)));
+    SolveOptions o;
+    o.max_iterations = 20;
+    const SolveReport& r = solve(model, data, o);
+    CHECK(std::abs(data.q()(0) - 1.0) < 1e-9);  // equalities have infinite priority
+    CHECK(r.unsatisfiable == std::vector<int>{0});
+  }
+  SECTION("contradicting inequalities a <= 0.2 and a >= 0.4: the second is reported") {
+    const Model model = twoJointModel({{"a <= 0.2", {{{0, 0}, 1.0}}, 0.2, InequalityKind::UserCoupling},
+                                       {"a >= 0.4", {{{0, 0}, -1.0}}, -0.4, InequalityKind::UserCoupling}});
+    Data data(model);
+    REQUIRE(data.setTarget(0, Eigen::Vector3d(0.0, 1.0, 0.0)));
+    REQUIRE(data.setConfiguration(Eigen::Vector2d(0.3, 0.0)));
+    SolveOptions o;
+    o.max_iterations = 1;
+    const SolveReport& r = solve(model, data, o);
+    REQUIRE(r.active_clamps.size() == 1);
+    REQUIRE(r.unsatisfiable.size() == 1);
+    CHECK(r.active_clamps[0] != r.unsatisfiable[0]);
+  }
+}
+
+TEST_CASE("reachable random targets on the humanoid are met to 1e-4 m within 60 iterations") {
+  // Targets: every task's value at a random configuration drawn from the middle half of each
+  // joint's range (root rotation within ±0.5 rad); solved from the neutral pose.
+  const Model& model = humanoid();
+  std::mt19937 rng(1234);
+  int met = 0, problems = 200, worstIterations = 0;
+  SolveOptions o;
+  o.max_iterations = 60;
+  for (int p = 0; p < problems; ++p) {
+    Data data(model);  // from the neutral pose
+    randomTargets(model, data, rng, 0.5, 0.0, 0.5);
+    const SolveReport& r = solve(model, data, o);
+    bool ok = r.converged();
+    for (const TaskResidual& t : r.tasks) ok = ok && t.position <= 1e-4;
+    if (ok) {
+      ++met;
+      worstIterations = std::max(worstIterations, r.iterations);
+    }
+  }
+  INFO("met " << met << " of " << problems << ", worst iterations " << worstIterations);
+  CHECK(met >= 198);  // >= 99 %
+  WARN("humanoid reachable targets: " << met << "/" << problems << " met, worst " << worstIterations << " iterations");
+}
+
+TEST_CASE("100,000 random problems produce no NaN") {
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::normal_distribution<double> g;
+  const Model small = test::randomAllTypesModel(rng, true);
+  Data data(small);
+  SolveOptions o;
+  o.max_iterations = 1;
+  int nonFinite = 0;
+  for (int p = 0; p < 100000; ++p) {
+    // Wild configurations (near and past |v| = pi), far and degenerate targets, random weights.
+    Eigen::VectorXd q = test::randomConfiguration(small, rng, p % 10 == 0 ? 10.0 : 3.0);
+    if (p % 7 == 0) q.setZero();
+    int rejected = data.setConfiguration(q) ? 0 : 1;  // (plain counters: Catch per call is slow)
+    for (size_t t = 0; t < small.tasks.size(); ++t) {
+      const TaskId id = static_cast<TaskId>(t);
+      const double scale = p % 5 == 0 ? 100.0 : 1.0;
+      rejected += data.setTarget(id, Eigen::Vector3d(g(rng), g(rng), g(rng)) * scale) ? 0 : 1;
+      rejected += data.setTarget(id, Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng) + 1e-3)) ? 0 : 1;
+      rejected += data.setWeight(id, std::exp(3 * u(rng))) ? 0 : 1;
+      rejected += data.setEnabled(id, (p + t) % 4 != 0) ? 0 : 1;
+    }
+    REQUIRE(rejected == 0);
+    const SolveReport& r = solve(small, data, o);
+    if (!data.q().allFinite() || r.stop == StopReason::InvalidState) ++nonFinite;
+  }
+  CHECK(nonFinite == 0);
+  // And 200 full solves on the humanoid from random starts, half of them unreachable.
+  const Model& model = humanoid();
+  Data hd(model);
+  SolveOptions ho;
+  ho.max_iterations = 30;
+  for (int p = 0; p < 200; ++p) {
+    randomTargets(model, hd, rng, 1.5, p % 2 == 0 ? 2.0 : 0.0);
+    const SolveReport& r = solve(model, hd, ho);
+    REQUIRE(hd.q().allFinite());
+    REQUIRE(r.stop != StopReason::InvalidState);
+  }
+}
+
+TEST_CASE("non-finite targets, weights and configurations are rejected with the state unchanged") {
+  const Model& model = humanoid();
+  Data data(model);
+  std::mt19937 rng(3);
+  randomTargets(model, data, rng, 0.5);
+  const Eigen::VectorXd q = data.q();
+  const TaskId head = model.findTask("head");
+  const Eigen::Vector3d p = data.targetPosition(head);
+  const Eigen::Quaterniond r = data.targetOrientation(head);
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  CHECK_FALSE(data.setTarget(head, Eigen::Vector3d(nan, 0, 0)));
+  CHECK_FALSE(data.setTarget(head, Eigen::Vector3d(0, inf, 0)));
+  CHECK_FALSE(data.setTarget(head, Eigen::Quaterniond(nan, 0, 0, 1)));
+  CHECK_FALSE(data.setTarget(head, Eigen::Quaterniond(0, 0, 0, 0)));
+  Eigen::Isometry3d bad = Eigen::Isometry3d::Identity();
+  bad.translation().x() = inf;
+  CHECK_FALSE(data.setTarget(head, bad));
+  bad = Eigen::Isometry3d::Identity();
+  bad.linear() *= 2.0;  // not a rotation
+  CHECK_FALSE(data.setTarget(head, bad));
+  CHECK_FALSE(data.setWeight(head, nan));
+  CHECK_FALSE(data.setWeight(head, 0.0));
+  CHECK_FALSE(data.setWeight(head, -1.0));
+  CHECK_FALSE(data.setWeight(head, inf));
+  CHECK_FALSE(data.setTarget(99, Eigen::Vector3d::Zero()));
+  Eigen::VectorXd badq = q;
+  badq(3) = nan;
+  CHECK_FALSE(data.setConfiguration(badq));
+  CHECK_FALSE(data.setConfiguration(Eigen::VectorXd::Zero(5)));
+  const embody::Status s = data.setTarget(head, Eigen::Vector3d(nan, 0, 0));
+  CHECK(s.error().find("not finite") != std::string::npos);
+  CHECK(data.q() == q);
+  CHECK(data.targetPosition(head) == p);
+  CHECK(data.targetOrientation(head).coeffs() == r.coeffs());
+  // Invalid solver options: reported, q untouched.
+  SolveOptions o;
+  o.damping_eps = nan;
+  CHECK(solve(model, data, o).stop == StopReason::InvalidState);
+  CHECK(data.q() == q);
+}
+
+TEST_CASE("unreachable targets: the error decreases, stays bounded, and does not oscillate") {
+  const Model& model = humanoid();
+  Data data(model);
+  const TaskId lh = model.findTask("left_hand"), rh = model.findTask("right_hand");
+  REQUIRE(data.setTarget(lh, Eigen::Vector3d(2.5, 1.4, 0.5)));
+  REQUIRE(data.setTarget(rh, Eigen::Vector3d(-0.3, 3.0, -2.0)));
+  SolveOptions o;
+  o.max_iterations = 1;
+  o.min_step = 0;
+  std::vector<double> errors, steps;
+  Eigen::VectorXd previous = data.q();
+  double worstHigher = 0;
+  for (int it = 0; it < 300; ++it) {
+    const SolveReport& r = solve(model, data, o);
+    REQUIRE(data.q().allFinite());
+    errors.push_back(r.levels.back());
+    for (size_t k = 0; k + 1 < r.levels.size(); ++k)
+      if (it > 50) worstHigher = std::max(worstHigher, r.levels[k]);
+    steps.push_back((data.q() - previous).norm());
+    previous = data.q();
+  }
+  // Bounded and decreasing overall (the lowest level may give a little back while the higher
+  // levels recover their second-order drift: that is the priority order at work).
+  for (double e : errors) CHECK(e <= errors.front() + 1e-9);
+  CHECK(errors.back() < errors.front() - 0.1);
+  CHECK(errors.back() > 1.0);  // it is unreachable
+  CHECK(worstHigher < 5e-3);   // the feet, CoM and head keep their (reachable) targets
+  // No oscillation: in the last 100 iterations the error moves one way (no back-and-forth) and
+  // the steps are small.
+  int reversals = 0;
+  for (size_t i = errors.size() - 100; i + 1 < errors.size(); ++i) {
+    const double d0 = errors[i] - errors[i - 1], d1 = errors[i + 1] - errors[i];
+    if (d0 * d1 < 0 && std::min(std::abs(d0), std::abs(d1)) > 1e-7) ++reversals;
+  }
+  CHECK(reversals <= 5);  // a period-2 cycle would reverse ~100 times
+  double late = 0;
+  for (size_t i = steps.size() - 20; i < steps.size(); ++i) late = std::max(late, steps[i]);
+  CHECK(late < 2e-3);
+}
+
+TEST_CASE("a solver given a deadline returns by the deadline plus at most one iteration") {
+  // A clock that advances 1 ms per reading: deterministic.
+  struct TickClock final : Clock {
+    mutable time_point t{};
+    time_point now() const override {
+      const time_point r = t;
+      t += std::chrono::milliseconds(1);
+      return r;
+    }
+  } clock;
+  const Model& model = humanoid();
+  Data data(model);
+  REQUIRE(data.setTarget(model.findTask("left_hand"), Eigen::Vector3d(3.0, 1.0, 0.0)));  // unreachable
+  SolveOptions o;
+  o.clock = &clock;
+  o.max_iterations = 1000;
+  o.min_step = 0;
+  o.deadline = Clock::time_point{} + std::chrono::microseconds(5500);
+  const SolveReport& r = solve(model, data, o);
+  // Readings: start 0 ms, then one before each iteration: 1..5 ms pass, 6 ms stops.
+  CHECK(r.stop == StopReason::Deadline);
+  CHECK(r.iterations == 5);
+  CHECK(r.elapsed == std::chrono::milliseconds(7));
+  // A deadline already past: no iteration at all, state unchanged.
+  const Eigen::VectorXd q = data.q();
+  o.deadline = clock.t - std::chrono::milliseconds(1);
+  const SolveReport& r2 = solve(model, data, o);
+  CHECK(r2.iterations == 0);
+  CHECK(r2.stop == StopReason::Deadline);
+  CHECK(data.q() == q);
+}
+
+TEST_CASE("tasks switch on and off without rebuilding; a solved Data converges in zero iterations") {
+  const Model& model = humanoid();
+  Data data(model);
+  CHECK(solve(model, data).converged());
+  CHECK(data.report().iterations == 0);
+  const TaskId lh = model.findTask("left_hand");
+  const Eigen::Vector3d start = data.taskPosition(lh);
+  REQUIRE(data.setTarget(lh, start + Eigen::Vector3d(-0.1, -0.05, 0.1)));
+  REQUIRE(data.setEnabled(lh, false));
+  CHECK(solve(model, data).converged());
+  CHECK((data.taskPosition(lh) - start).norm() < 1e-9);  // off: not moved
+  REQUIRE(data.setEnabled(lh, true));
+  const SolveReport& r = solve(model, data);
+  CHECK(r.converged());
+  CHECK((data.taskPosition(lh) - start - Eigen::Vector3d(-0.1, -0.05, 0.1)).norm() < 1e-4);
+}
