@@ -1,5 +1,5 @@
-// embody render: one frame of an avatar in its rest pose, written as PNG. A thin front end over
-// gfx::AvatarRenderer (engine/avatar_renderer.h); the runtime extends this command with motions.
+// embody render: an avatar driven by a motion (pose source -> IK thread -> skinning -> offscreen
+// frames, app/render_job.h), or without --motion one frame of its rest pose, written as PNG.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -9,12 +9,13 @@
 #include <stdexcept>
 
 #include "app/args.h"
+#include "app/render_job.h"
+#include "avatar/procedural/default_avatar.h"
 #include "avatar/gltf/gltf_loader.h"
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
 #include "engine/image_io.h"
 #include "engine/instance.h"
-#include "engine/test_avatar.h"
 
 namespace {
 
@@ -31,14 +32,29 @@ struct ValidationReport {
 
 int runRender(cli::Argv argv) {
   cli::Args args("embody render",
-                 "Renders one frame of an avatar (rest pose) offscreen and writes it as PNG into --out.");
+                 "Drives an avatar with a motion through the runtime (tracking -> budgeted IK thread -> skinning -> "
+                 "offscreen frames) and writes frame_00000.png..., contact_sheet.png and stats.json into --out. "
+                 "Without --motion: one frame of the rest pose (frame_0000.png).");
   args.option("avatar", "FILE|default", "a .gltf/.glb/.vrm file, or 'default' (the built-in procedural avatar)",
               "default");
   args.option("out", "DIR", "output folder (created if missing)");
-  args.option("width", "PIXELS", "frame width", "1280");
-  args.option("height", "PIXELS", "frame height", "720");
-  args.option("view", "KIND", "third-person (orbit camera), first-person (at the eyes) or stereo (two eyes)",
-              "third-person");
+  args.option("motion", "SOURCE", "FILE.bvh, FILE.jsonl or synthetic:NAME (embody motion list)");
+  args.option("frames", "N", "frames to render (default: the motion's duration, at most 20 s)");
+  args.option("fps", "HZ", "frame rate: the motion is sampled every 1/fps s", "90");
+  args.option("size", "WxH", "frame size (motion default 480x480; rest pose 1280x720)");
+  args.option("width", "PIXELS", "frame width (or --size)");
+  args.option("height", "PIXELS", "frame height (or --size)");
+  args.option("view", "KIND", "third (orbit camera), first (at the eyes) or stereo (two eyes, side by side with "
+              "--motion); third-person/first-person also accepted", "third");
+  args.option("spine", "MODE", "IK spine: auto, full (every vertebra) or simplified", "auto");
+  args.option("bone-map", "FILE", "JSON object VRM-1.0-bone-name -> node name");
+  args.option("user-height", "METRES", "the user's height (default: the profile's, else from the first head sample)");
+  args.option("profile", "FILE", "user profile JSON (embody avatar calibrate): the user's height");
+  args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (default: fit the clip to the user's height)");
+  args.option("ik-budget-ms", "MS", "IK time budget per frame", "1");
+  args.option("record", "FILE.jsonl", "also record the motion's samples as a JSON Lines trace");
+  args.flag("coupled-spine", "the coupled spine model (Raunhardt & Boulic) instead of independent spine sites");
+  args.flag("three-point", "keep only head and hands (HMD + controllers): the lower body is inferred, feet step");
   args.option("yaw", "DEGREES", "orbit camera yaw around the avatar (0 = from the front)", "30");
   args.option("pitch", "DEGREES", "orbit camera pitch (positive looks down)", "10");
   args.option("device", "SELECTOR", "Vulkan device: auto, an index, 'lavapipe', or part of its name", "auto");
@@ -54,14 +70,25 @@ int runRender(cli::Argv argv) {
     std::fprintf(stderr, "error: --out DIR is required\n\n%s", args.usage().c_str());
     return 2;
   }
-  int width = 0, height = 0;
+  const bool motion = args.has("motion");
+  int width = motion ? 480 : 1280, height = motion ? 480 : 720;
   float yaw = 0.0f, pitch = 0.0f;
   try {
-    width = args.integer("width");
-    height = args.integer("height");
+    if (args.has("size")) {
+      const std::string size = args.get("size");
+      const size_t x = size.find('x');
+      size_t used = 0;
+      if (x == std::string::npos) throw std::invalid_argument("--size must look like 256x256");
+      width = std::stoi(size.substr(0, x), &used);
+      if (used != x) throw std::invalid_argument("--size must look like 256x256");
+      height = std::stoi(size.substr(x + 1), &used);
+      if (used != size.size() - x - 1) throw std::invalid_argument("--size must look like 256x256");
+    }
+    if (args.has("width")) width = args.integer("width");
+    if (args.has("height")) height = args.integer("height");
     yaw = glm::radians(float(args.number("yaw")));
     pitch = glm::radians(float(args.number("pitch")));
-  } catch (const std::invalid_argument& e) {
+  } catch (const std::exception& e) {  // invalid_argument / out_of_range from stoi
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
   }
@@ -69,18 +96,54 @@ int runRender(cli::Argv argv) {
     std::fprintf(stderr, "error: --width/--height must be between 16 and 8192\n");
     return 2;
   }
-  const std::string view = args.get("view");
-  if (view != "third-person" && view != "first-person" && view != "stereo") {
-    std::fprintf(stderr, "error: --view must be third-person, first-person or stereo\n");
+  std::string view = args.get("view");
+  if (view == "third-person" || view == "first-person") view = view.substr(0, view.find('-'));
+  if (view != "third" && view != "first" && view != "stereo") {
+    std::fprintf(stderr, "error: --view must be first, third or stereo\n");
     return 2;
+  }
+  if (motion) {
+    app::RenderJob job;
+    try {
+      job.avatar = args.get("avatar");
+      job.boneMap = args.get("bone-map");
+      job.spine = args.get("spine");
+      job.motion = args.get("motion");
+      job.profile = args.get("profile");
+      job.record = args.get("record");
+      if (args.has("user-height")) job.userHeight = float(args.number("user-height"));
+      if (args.has("bvh-scale")) job.bvhScale = args.number("bvh-scale");
+      if (args.has("bvh-scale") && !(job.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");
+      if (args.has("frames")) job.frames = args.integer("frames");
+      if (args.has("frames") && job.frames < 1) throw std::invalid_argument("--frames must be at least 1");
+      job.fps = args.number("fps");
+      job.budgetMs = args.number("ik-budget-ms");
+    } catch (const std::invalid_argument& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 2;
+    }
+    job.threePoint = args.has("three-point");
+    job.coupledSpine = args.has("coupled-spine");
+    job.width = width;
+    job.height = height;
+    job.view = view;
+    job.yaw = yaw;
+    job.pitch = pitch;
+    job.device = args.get("device");
+    job.validate = args.has("validate");
+    job.msaa = args.has("msaa");
+    job.skeleton = args.has("skeleton");
+    job.gizmos = args.has("gizmos");
+    job.grid = !args.has("no-grid");
+    job.out = args.get("out");
+    return app::runRenderJob(job);
   }
 
   // The avatar first: a bad file is the most likely error and needs no GPU to report.
   avatar::AvatarAsset asset;
   const std::string avatarArg = args.get("avatar");
   if (avatarArg == "default") {
-    // The avatar library's default avatar is not there yet: the renderer's procedural test avatar.
-    asset = gfx::makeTestAvatar();
+    asset = avatar::buildDefaultAvatar();
   } else {
     auto loaded = avatar::loadAvatarFile(avatarArg);
     if (!loaded) {
@@ -142,11 +205,11 @@ int runRender(cli::Argv argv) {
   }
   std::vector<std::pair<std::filesystem::path, avatar::Image>> frames;
   const float aspect = float(width) / float(height);
-  if (view == "third-person") {
+  if (view == "third") {
     auto img = r.render(pose, r.orbitAround(pose, yaw, pitch), fo);
     if (!img) return std::fprintf(stderr, "error: %s\n", img.error().c_str()), 1;
     frames.emplace_back(out / "frame_0000.png", std::move(img).value());
-  } else if (view == "first-person") {
+  } else if (view == "first") {
     fo.view = gfx::ViewKind::FirstPerson;
     // Look a little down at the own body, as a person in a headset does.
     const glm::mat4 eye = r.eyePose(pose) * glm::mat4_cast(glm::angleAxis(glm::radians(-60.0f), glm::vec3(1, 0, 0)));
@@ -177,4 +240,4 @@ int runRender(cli::Argv argv) {
 
 }  // namespace
 
-EMBODY_COMMAND("render", "render one frame of an avatar (rest pose) to PNG", runRender);
+EMBODY_COMMAND("render", "drive an avatar with a motion through the IK runtime and render it offscreen to PNG frames + stats", runRender);

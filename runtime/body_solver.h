@@ -24,6 +24,9 @@ struct SolveResult {
   // Distance in metres between each tracker's target and the body part it drives after the
   // solve; negative where the tracker drives no task.
   std::array<float, tracking::kTrackerCount> residual{-1, -1, -1, -1, -1, -1};
+  // Per tracker: whether its target is within the avatar's reach (hands: the arm's reach from
+  // the shoulder). Hand errors count only where it is: an out-of-reach target cannot be met.
+  std::array<bool, tracking::kTrackerCount> reachable{true, true, true, true, true, true};
 };
 
 class BodySolver {

@@ -43,6 +43,22 @@ StatsSummary StatsRecorder::summary() const {
     s.residualP95[i] = r.empty() ? -1.0 : percentile(r, 95);
     s.trackedFraction[i] = static_cast<double>(tracked) / static_cast<double>(frames_.size());
   }
+  std::vector<double> head, hands;
+  for (const auto& f : frames_) {
+    bool finite = std::isfinite(f.ikSeconds);
+    for (float r : f.residual) finite = finite && std::isfinite(r);
+    s.nonFiniteFrames += finite ? 0 : 1;
+    const float h = f.residual[static_cast<size_t>(tracking::index(tracking::TrackerId::Head))];
+    if (h >= 0.0f) head.push_back(h);
+    for (auto id : {tracking::TrackerId::LeftHand, tracking::TrackerId::RightHand}) {
+      const auto i = static_cast<size_t>(tracking::index(id));
+      if (f.residual[i] < 0.0f) continue;
+      if (f.reachable[i]) hands.push_back(f.residual[i]);
+      else ++s.handFramesOutOfReach;
+    }
+  }
+  s.headErrorP95 = head.empty() ? -1.0 : percentile(head, 95);
+  s.handErrorP95 = hands.empty() ? -1.0 : percentile(hands, 95);
   return s;
 }
 
@@ -51,6 +67,10 @@ void toJson(nlohmann::json& j, const StatsSummary& s) {
   j["ik"] = {{"budget_ms", s.budgetMs},          {"p50_ms", s.ikP50Ms},
              {"p99_ms", s.ikP99Ms},              {"max_ms", s.ikMaxMs},
              {"deadline_misses", s.deadlineMisses}, {"iterations_mean", s.iterationsMean}};
+  j["tracking"] = {{"head_error_p95_m", s.headErrorP95},
+                   {"hand_error_p95_m", s.handErrorP95},
+                   {"hand_frames_out_of_reach", s.handFramesOutOfReach},
+                   {"non_finite_frames", s.nonFiniteFrames}};
   nlohmann::json trackers = nlohmann::json::object();
   for (auto id : tracking::kAllTrackers) {
     const auto i = static_cast<size_t>(tracking::index(id));

@@ -19,6 +19,7 @@ struct FrameStats {
   bool converged = false;
   bool deadlineMiss = false;  // returned after the deadline
   std::array<float, tracking::kTrackerCount> residual{-1, -1, -1, -1, -1, -1};  // metres, < 0: no task
+  std::array<bool, tracking::kTrackerCount> reachable{true, true, true, true, true, true};
   std::array<tracking::TrackerStatus, tracking::kTrackerCount> status{};
   double renderSeconds = 0.0;  // filled in by the render side when it has drawn the frame
 };
@@ -34,6 +35,11 @@ struct StatsSummary {
   // fraction of frames it was live-tracked.
   std::array<double, tracking::kTrackerCount> residualP95{-1, -1, -1, -1, -1, -1};
   std::array<double, tracking::kTrackerCount> trackedFraction{};
+  // stats.json "tracking": p95 of the head residual, and of both hands' residuals on frames where
+  // the hand's target is within reach (-1: none).
+  double headErrorP95 = -1.0, handErrorP95 = -1.0;
+  size_t handFramesOutOfReach = 0;
+  size_t nonFiniteFrames = 0;  // frames whose pose or residuals were not finite (must stay 0)
 };
 
 // Collects frames (reserve up front; add() does not allocate within the reserved size).
@@ -52,6 +58,7 @@ class StatsRecorder {
 double percentile(std::vector<double>& values, double p);
 
 // {"frames", "ik": {budget_ms, p50_ms, p99_ms, max_ms, deadline_misses, iterations_mean},
+//  "tracking": {head_error_p95_m, hand_error_p95_m, hand_frames_out_of_reach, non_finite_frames},
 //  "trackers": {"head": {"tracked_fraction", "residual_p95_m"}, ...}, "render": {"p50_ms"}}
 void toJson(nlohmann::json& j, const StatsSummary& s);
 

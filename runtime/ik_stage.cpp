@@ -38,6 +38,7 @@ const FrameStats& IkStage::process(const tracking::PoseSample& sample, SolvedFra
   s.converged = r.converged;
   s.deadlineMiss = end > deadline;
   s.residual = r.residual;
+  s.reachable = r.reachable;
   s.status = out.targets.status;
   s.renderSeconds = 0.0;
   return s;

@@ -13,6 +13,7 @@ std::string_view taskKindName(TaskKind kind) {
     case TaskKind::FootPlant: return "foot_plant";
     case TaskKind::TrackerPosition: return "position";
     case TaskKind::TrackerOrientation: return "orientation";
+    case TaskKind::InferredHips: return "inferred_hips";
   }
   return "?";
 }
@@ -30,20 +31,27 @@ TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
       l.tasks.push_back({TaskKind::FootPlant, foot, 1, 1.0f});
     }
   }
-  l.tasks.push_back({TaskKind::Balance, TrackerId::Hips, 1, 1.0f});
+  // Balance is an inequality (enabled only while the centre of mass leaves the support polygon)
+  // and only where the lower body is inferred: with foot trackers the user's own feet are the
+  // support, and a walking user is balanced dynamically, not statically (the CoM runs ahead of
+  // the stance foot), so a static balance row would hold the tracked body back.
+  if (l.inferLowerBody) l.tasks.push_back({TaskKind::Balance, TrackerId::Hips, 1, 1.0f});
   // 2: the head: the user's viewpoint; a mismatch is seen at once in first person.
   if (trackers.has(TrackerId::Head)) {
     l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Head, 2, 1.0f});
     l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, 2, 1.0f});
   }
-  // 3: hand positions (and the hips when tracked: they shape the trunk).
+  // 3: hand positions.
   for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
     if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerPosition, hand, 3, 1.0f});
-  if (trackers.has(TrackerId::Hips)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Hips, 3, 0.5f});
   // 4: orientations that matter less than positions.
   for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
     if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerOrientation, hand, 4, 1.0f});
-  if (trackers.has(TrackerId::Hips)) l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Hips, 4, 0.5f});
+  // A tracked pelvis drives no task: with the head and both feet tracked, the pelvis is already
+  // determined by the avatar's own legs and spine, and any pelvis row (even orientation only, even
+  // at the lowest level) fights those whenever the user's proportions differ from the avatar's;
+  // measured on the CMU walk, it made the solve diverge. It is the pivot for scaling the user's
+  // strides to the avatar's legs instead (avatar_body_solver.h).
   return l;
 }
 
@@ -57,7 +65,7 @@ std::string TaskLayout::describe() const {
   std::string s;
   for (const auto& t : tasks) {
     s += "  " + std::to_string(t.priority) + "  " + std::string(taskKindName(t.kind));
-    if (t.kind != TaskKind::Balance) s += " " + std::string(tracking::trackerKey(t.tracker));
+    if (t.kind != TaskKind::Balance && t.kind != TaskKind::InferredHips) s += " " + std::string(tracking::trackerKey(t.tracker));
     if (t.weight != 1.0f) s += " (weight " + std::to_string(t.weight).substr(0, 4) + ")";
     s += "\n";
   }

@@ -15,7 +15,8 @@ enum class TaskKind : uint8_t {
   Balance,           // centre of mass projected on the floor, over the support polygon (2 rows)
   FootPlant,         // an inferred planted foot (three-point mode): position + orientation
   TrackerPosition,   // a tracker's position (3 rows)
-  TrackerOrientation // a tracker's orientation (3 rows)
+  TrackerOrientation, // a tracker's orientation (3 rows)
+  InferredHips        // three-point mode: the pelvis under the head, upright, facing the heading
 };
 
 struct TaskSpec {

@@ -158,13 +158,13 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
     if (t.kind == TaskKind::FootPlant) ++plants;
     if (t.kind == TaskKind::TrackerPosition && t.tracker == tracking::TrackerId::Head) CHECK(t.priority == 2);
     if (t.kind == TaskKind::TrackerPosition && t.tracker == tracking::TrackerId::LeftHand) CHECK(t.priority == 3);
-    CHECK((t.tracker != tracking::TrackerId::Hips || t.kind == TaskKind::Balance));
+    CHECK((t.tracker != tracking::TrackerId::Hips || t.kind == TaskKind::Balance || t.kind == TaskKind::InferredHips));
   }
   CHECK(balance == 1);
   CHECK(plants == 2);
   const TaskLayout full = taskLayoutFor(tracking::TrackerMask::all());
   CHECK_FALSE(full.inferLowerBody);
-  for (const auto& t : full.tasks) CHECK(t.kind != TaskKind::FootPlant);
+  for (const auto& t : full.tasks) CHECK((t.kind != TaskKind::FootPlant && t.kind != TaskKind::InferredHips));
   CHECK(full.describe().find("1  position left_foot") != std::string::npos);
   CHECK(statusWeight(tracking::TrackerStatus::Absent) == 0.0f);
   CHECK(statusWeight(tracking::TrackerStatus::Held) == 1.0f);

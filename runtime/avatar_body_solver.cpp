@@ -1,0 +1,378 @@
+#include "runtime/avatar_body_solver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "avatar/humanoid/humanoid_map.h"
+
+namespace embody::runtime {
+
+using tracking::TrackerId;
+using tracking::TrackerStatus;
+
+namespace {
+
+Eigen::Vector3d toEigen(const glm::vec3& v) { return {v.x, v.y, v.z}; }
+glm::vec3 toGlm(const Eigen::Vector3d& v) { return {float(v.x()), float(v.y()), float(v.z())}; }
+Eigen::Quaterniond toEigen(const glm::quat& q) { return Eigen::Quaterniond(q.w, q.x, q.y, q.z); }
+
+// The model `body` was built with, plus `tasks` (the builder's validation runs again).
+Result<ik::Model> withTasks(const ik::Model& model, const std::vector<ik::TaskDesc>& tasks) {
+  ik::ModelBuilder b;
+  for (const auto& j : model.joints) b.addJoint(j.desc);
+  for (const auto& e : model.equalities) b.addEquality(e);
+  for (const auto& i : model.inequalities)
+    if (i.kind == ik::InequalityKind::UserCoupling) b.addInequality(i);
+  for (const auto& t : tasks) b.addTask(t);
+  b.setUp(model.up);
+  return b.build();
+}
+
+}  // namespace
+
+Result<std::unique_ptr<AvatarBodySolver>> AvatarBodySolver::create(const avatar::AvatarAsset& avatar,
+                                                                   const AvatarBodyOptions& options) {
+  std::unique_ptr<AvatarBodySolver> s(new AvatarBodySolver(avatar));
+  if (auto st = s->build(options); !st) return Error{st.error()};
+  return s;
+}
+
+Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
+  options_ = options;
+  avatar::BodyModelOptions bo;
+  bo.spine = options.spine;
+  bo.totalMass = options.totalMass;
+  bo.addTasks = false;
+  bo.coupledSpine = options.coupledSpine;
+  auto body = avatar::buildBodyModel(avatar_, bo);
+  if (!body) return Error{body.error()};
+  body_ = std::move(body).value();
+  const avatar::HumanoidMap& map = avatar_.humanoid;
+  up_ = toEigen(map.up).normalized();
+  forward_ = toEigen(map.forward);
+  forward_ = (forward_ - up_ * up_.dot(forward_)).normalized();
+  // Tracking space (+X right, +Y up, -Z forward) -> avatar space.
+  Eigen::Matrix3d c;
+  c.col(0) = forward_.cross(up_);
+  c.col(1) = up_;
+  c.col(2) = -forward_;
+  fromTracking_ = Eigen::Quaterniond(c).normalized();
+
+  joint_[size_t(tracking::index(TrackerId::Head))] = body_.head;
+  joint_[size_t(tracking::index(TrackerId::LeftHand))] = body_.leftHand;
+  joint_[size_t(tracking::index(TrackerId::RightHand))] = body_.rightHand;
+  joint_[size_t(tracking::index(TrackerId::Hips))] = body_.hips;
+  joint_[size_t(tracking::index(TrackerId::LeftFoot))] = body_.leftFoot;
+  joint_[size_t(tracking::index(TrackerId::RightFoot))] = body_.rightFoot;
+  auto ikOf = [&](avatar::HumanBone bone) {
+    const int a = map.joint(bone);
+    return a >= 0 ? body_.ikJointOfAvatar[size_t(a)] : -1;
+  };
+  leftShoulder_ = ikOf(avatar::HumanBone::leftUpperArm);
+  rightShoulder_ = ikOf(avatar::HumanBone::rightUpperArm);
+  const ik::JointId leftElbow = ikOf(avatar::HumanBone::leftLowerArm);
+  if (leftShoulder_ < 0 || rightShoulder_ < 0 || leftElbow < 0) return Error{"the avatar's arms are not mapped"};
+
+  // Rest geometry from the model without tasks (q = 0 is the rest pose).
+  {
+    ik::Data rest(body_.model);
+    ik::kinematics(body_.model, rest, false);
+    auto pos = [&](ik::JointId j) { return Eigen::Vector3d(rest.jointFrame(j).translation()); };
+    for (auto id : tracking::kAllTrackers)
+      restRotation_[size_t(tracking::index(id))] = Eigen::Quaterniond(rest.jointFrame(joint_[size_t(tracking::index(id))]).rotation());
+    armReach_ = (pos(leftElbow) - pos(leftShoulder_)).norm() + (pos(body_.leftHand) - pos(leftElbow)).norm();
+
+    // Height and floor from the skinned rest mesh (the skeleton alone misses the skull and soles).
+    std::vector<glm::mat4> globals, palette;
+    avatar::computeGlobals(avatar_.skeleton, avatar::SkeletonPose::rest(avatar_.skeleton), globals);
+    avatar::computeSkinningPalette(avatar_, globals, palette);
+    std::vector<glm::vec3> positions, normals;
+    avatar::skinOnCpu(avatar_.mesh, palette, positions, normals);
+    double lo = 1e30, hi = -1e30;
+    for (const auto& p : positions) {
+      const double h = up_.dot(toEigen(p));
+      lo = std::min(lo, h), hi = std::max(hi, h);
+    }
+    const Eigen::Vector3d head = pos(body_.head);
+    if (!(hi > lo + 0.3)) {  // no usable mesh: the skeleton, with a head's height on top
+      lo = std::min(up_.dot(pos(body_.leftFoot)), up_.dot(pos(body_.rightFoot))) - 0.07;
+      hi = up_.dot(head) + 0.15;
+    }
+    floor_ = lo;
+    avatarHeight_ = hi - lo;
+    for (auto id : tracking::kAllTrackers)
+      restHeight_[size_t(tracking::index(id))] = up_.dot(pos(joint_[size_t(tracking::index(id))])) - floor_;
+    // The eyes: at the anthropometric eye height (0.936 of stature), ahead of the head's pivot.
+    const auto dims = tracking::BodyDimensions::fromHeight(float(avatarHeight_));
+    avatarEyeHeight_ = dims.eyeHeight;
+    const Eigen::Vector3d eye = head + up_ * (floor_ + avatarEyeHeight_ - up_.dot(head)) + forward_ * dims.eyeForward;
+    eyeInHead_ = restRotation_[0].conjugate() * (eye - head);
+    restHeadToHips_ = pos(body_.hips) - head;
+
+    // Tracker frame -> joint frame. Reference tracker orientations (tracking space) for the rest
+    // pose: identity for head, hips, feet; the grip pose of the rest hand for the hands.
+    for (auto id : tracking::kAllTrackers) {
+      const size_t i = size_t(tracking::index(id));
+      glm::quat ref(1.0f, 0.0f, 0.0f, 0.0f);
+      if (id == TrackerId::LeftHand || id == TrackerId::RightHand) {
+        const bool left = id == TrackerId::LeftHand;
+        const Eigen::Vector3d fingers = restRotation_[i] * Eigen::Vector3d::UnitY();
+        const Eigen::Vector3d palm = restRotation_[i] * Eigen::Vector3d::UnitX() * (left ? 1.0 : -1.0);
+        ref = tracking::gripOrientation(left ? tracking::Side::Left : tracking::Side::Right,
+                                        toGlm(fromTracking_.conjugate() * fingers), toGlm(fromTracking_.conjugate() * palm));
+      }
+      jointFromTracker_[i] = (fromTracking_ * toEigen(ref)).conjugate() * restRotation_[i];
+    }
+
+    // Feet for three-point mode: rest ankles relative to the hips' ground point.
+    const Eigen::Vector3d hipsGround = pos(body_.hips) - up_ * up_.dot(pos(body_.hips));
+    planner_.configure(options.feet, FootShape{}, up_, forward_,
+                       {pos(body_.leftFoot) - hipsGround, pos(body_.rightFoot) - hipsGround}, avatarHeight_ / 1.75);
+  }
+
+  // Tasks from the layout (layout priority 1 = solver level 0).
+  layout_ = taskLayoutFor(options.trackers);
+  std::vector<ik::TaskDesc> tasks;
+  auto add = [&](ik::TaskDesc t, int priority, float weight) {
+    t.level = priority - 1;
+    t.weight = weight;
+    tasks.push_back(std::move(t));
+    return ik::TaskId(tasks.size() - 1);
+  };
+  for (const TaskSpec& spec : layout_.tasks) {
+    const size_t i = size_t(tracking::index(spec.tracker));
+    ik::TaskDesc t;
+    t.name = std::string(taskKindName(spec.kind)) + "_" + std::string(tracking::trackerKey(spec.tracker));
+    t.joint = joint_[i];
+    t.position_tolerance = 5e-4;
+    t.rotation_tolerance = 0.01;
+    switch (spec.kind) {
+      case TaskKind::TrackerPosition:
+        t.type = ik::TaskType::Position;
+        if (spec.tracker == TrackerId::Head) t.offset = eyeInHead_;
+        // A tracked pelvis steers the trunk over the ground only: its height follows from the
+        // head and the legs, whose proportions differ between user and avatar.
+        if (spec.tracker == TrackerId::Hips && std::abs(std::abs(up_.y()) - 1.0) < 1e-6) t.axes = ik::kAxisX | ik::kAxisZ;
+        positionTask_[i] = add(t, spec.priority, spec.weight);
+        break;
+      case TaskKind::TrackerOrientation:
+        t.type = ik::TaskType::Orientation;
+        if (spec.tracker != TrackerId::Head) t.rotation_tolerance = 0.05;
+        orientationTask_[i] = add(t, spec.priority, spec.weight);
+        break;
+      case TaskKind::FootPlant:
+        t.type = ik::TaskType::Pose;
+        positionTask_[i] = add(t, spec.priority, spec.weight);
+        break;
+      case TaskKind::Balance:
+        t.type = ik::TaskType::CenterOfMass;
+        t.position_tolerance = 0.005;
+        balanceTask_ = add(t, spec.priority, spec.weight);
+        break;
+      case TaskKind::InferredHips:
+        t.type = ik::TaskType::Position;
+        t.position_tolerance = 0.05;
+        hipsPosTask_ = add(t, spec.priority, spec.weight);
+        t.type = ik::TaskType::Orientation;
+        t.name += "_rotation";
+        t.rotation_tolerance = 0.2;
+        hipsRotTask_ = add(t, spec.priority, spec.weight * 0.5f);
+        break;
+    }
+  }
+  auto model = withTasks(body_.model, tasks);
+  if (!model) return Error{"body model with tracker tasks: " + model.error()};
+  body_.model = std::move(model).value();
+  data_ = std::make_unique<ik::Data>(body_.model);
+  restQ_ = Eigen::VectorXd::Zero(body_.model.dofs);
+  lastGoodQ_ = restQ_;
+  if (options.userHeight > 0.0f) calibrate(options.userHeight);
+  return Status::success();
+}
+
+void AvatarBodySolver::calibrate(float userHeight) {
+  const auto dims = tracking::BodyDimensions::fromHeight(userHeight);
+  scale_ = avatarEyeHeight_ / double(dims.eyeHeight);
+}
+
+Eigen::Vector3d AvatarBodySolver::toAvatar(const glm::vec3& p) const {
+  return fromTracking_ * (scale_ * toEigen(p)) + up_ * floor_;
+}
+
+Eigen::Vector3d AvatarBodySolver::eyePosition() const { return data_->jointFrame(body_.head) * eyeInHead_; }
+
+void AvatarBodySolver::resetWarmStart() {
+  (void)data_->setConfiguration(restQ_);
+  lastGoodQ_ = restQ_;
+  heightsCalibrated_ = false;
+  heightOffset_.fill(0.0);
+  legRatio_ = 1.0;
+  solvedOnce_ = false;
+  planner_.restart();
+}
+
+void AvatarBodySolver::setPose(ik::TaskId position, ik::TaskId orientation, const Eigen::Vector3d& p,
+                               const Eigen::Quaterniond& q, double weight) {
+  ik::Data& d = *data_;
+  for (ik::TaskId t : {position, orientation}) {
+    if (t < 0) continue;
+    if (!(weight > 0.0)) {
+      (void)d.setEnabled(t, false);
+      continue;
+    }
+    (void)d.setEnabled(t, true);
+    (void)d.setWeight(t, weight * body_.model.tasks[size_t(t)].desc.weight);
+    const ik::TaskType type = body_.model.tasks[size_t(t)].desc.type;
+    if (type == ik::TaskType::Pose) {
+      Eigen::Isometry3d iso = Eigen::Isometry3d::Identity();
+      iso.linear() = q.toRotationMatrix();
+      iso.translation() = p;
+      (void)d.setTarget(t, iso);
+    } else if (type == ik::TaskType::Orientation) {
+      (void)d.setTarget(t, q);
+    } else {
+      (void)d.setTarget(t, p);
+    }
+  }
+}
+
+void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
+  ik::Data& d = *data_;
+  const size_t headIndex = size_t(tracking::index(TrackerId::Head));
+  if (!heightsCalibrated_ && targets.status[headIndex] == TrackerStatus::Tracked) {
+    heightsCalibrated_ = true;
+    const auto& lf = targets.pose[TrackerId::LeftFoot];
+    const auto& rf = targets.pose[TrackerId::RightFoot];
+    if (targets[TrackerId::LeftFoot] == TrackerStatus::Tracked && targets[TrackerId::RightFoot] == TrackerStatus::Tracked) {
+      const double lowest = scale_ * std::min(lf.position.y, rf.position.y);
+      for (auto id : {TrackerId::LeftFoot, TrackerId::RightFoot})
+        heightOffset_[size_t(tracking::index(id))] = restHeight_[size_t(tracking::index(id))] - lowest;
+    }
+    if (targets[TrackerId::Hips] == TrackerStatus::Tracked) {
+      const size_t h = size_t(tracking::index(TrackerId::Hips));
+      heightOffset_[h] = restHeight_[h] - scale_ * targets.pose[TrackerId::Hips].position.y;
+      // Stride scaling: the user's leg (pelvis to ankle) against the avatar's.
+      const double userLeg = scale_ * (targets.pose[TrackerId::Hips].position.y - std::min(lf.position.y, rf.position.y));
+      const double avatarLeg = restHeight_[h] - restHeight_[size_t(tracking::index(TrackerId::LeftFoot))];
+      if (userLeg > 0.2 && avatarLeg > 0.2) legRatio_ = std::clamp(avatarLeg / userLeg, 0.5, 2.0);
+    }
+  }
+  // Every tracker's target, in avatar space, as its joint's pose.
+  for (auto id : tracking::kAllTrackers) {
+    const size_t i = size_t(tracking::index(id));
+    const tracking::TrackerPose& tp = targets.pose[id];
+    const double w = tp.valid ? statusWeight(targets.status[i]) : 0.0;
+    targetPoint_[i] = toAvatar(tp.position) + up_ * heightOffset_[i];
+    targetRotation_[i] = (fromTracking_ * toEigen(tp.orientation)).normalized() * jointFromTracker_[i];
+    if (positionTask_[i] >= 0 && body_.model.tasks[size_t(positionTask_[i])].desc.type == ik::TaskType::Pose) continue;
+    setPose(positionTask_[i], orientationTask_[i], targetPoint_[i], targetRotation_[i], w);
+  }
+  // Tracked feet with a tracked pelvis: strides scaled by the leg ratio about the pelvis's ground
+  // point, so a longer-legged user's steps stay within the avatar's legs.
+  const size_t hipsI = size_t(tracking::index(TrackerId::Hips));
+  if (!layout_.inferLowerBody && legRatio_ != 1.0 && targets.status[hipsI] != TrackerStatus::Absent) {
+    const Eigen::Vector3d pelvis = targetPoint_[hipsI];
+    for (auto id : {TrackerId::LeftFoot, TrackerId::RightFoot}) {
+      const size_t i = size_t(tracking::index(id));
+      if (positionTask_[i] < 0 || !d.enabled(positionTask_[i])) continue;
+      Eigen::Vector3d offset = targetPoint_[i] - pelvis;
+      offset -= up_ * up_.dot(offset);
+      targetPoint_[i] += (legRatio_ - 1.0) * offset;
+      (void)d.setTarget(positionTask_[i], targetPoint_[i]);
+    }
+  }
+  if (!layout_.inferLowerBody) return;
+
+  // Three-point mode: the pelvis and the feet are inferred from the head.
+  const Eigen::Quaterniond headTurn = targetRotation_[headIndex] * restRotation_[headIndex].conjugate();
+  const double yaw = headingOf(headTurn, up_, forward_);
+  const Eigen::Quaterniond heading = yawRotation(yaw, up_);
+  const Eigen::Vector3d headPivot = targetPoint_[headIndex] - targetRotation_[headIndex] * eyeInHead_;
+  const Eigen::Vector3d hips = headPivot + heading * restHeadToHips_;
+  const size_t hipsIndex = size_t(tracking::index(TrackerId::Hips));
+  setPose(hipsPosTask_, hipsRotTask_, hips, heading * restRotation_[hipsIndex], 1.0);
+
+  const double time = targets.pose.time;
+  if (!planner_.initialised()) planner_.reset(hips, yaw, time);
+  const Eigen::Vector3d com = solvedOnce_ ? Eigen::Vector3d(d.centerOfMass()) : hips;
+  const auto& feet = planner_.update(time, hips, yaw, com);
+  for (int f = 0; f < 2; ++f) {
+    const size_t i = size_t(tracking::index(f == 0 ? TrackerId::LeftFoot : TrackerId::RightFoot));
+    targetPoint_[i] = feet[size_t(f)].position;
+    targetRotation_[i] = yawRotation(feet[size_t(f)].yaw, up_) * restRotation_[i];
+    setPose(positionTask_[i], -1, targetPoint_[i], targetRotation_[i], 1.0);
+  }
+  // Balance as an inequality: only while the centre of mass is off the support polygon.
+  if (balanceTask_ >= 0) {
+    const bool over = !solvedOnce_ || planner_.overSupport(com);
+    (void)d.setEnabled(balanceTask_, !over && options_.balanceRow);
+    if (!over) (void)d.setTarget(balanceTask_, planner_.nearestSupportPoint(com, 0.01 * avatarHeight_ / 1.75));
+  }
+}
+
+SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::SkeletonPose& pose) {
+  SolveResult result;
+  const Clock& clock = *request.clock;
+  const tracking::GuardedSample& targets = *request.targets;
+  const size_t headIndex = size_t(tracking::index(TrackerId::Head));
+  if (scale_ <= 0.0) {
+    // Calibrate from the first live head sample: its height is a standing eye height.
+    const tracking::TrackerPose& head = targets.pose[TrackerId::Head];
+    const float eye = head.position.y;
+    const bool live = targets.status[headIndex] == TrackerStatus::Tracked && head.valid && eye > 0.4f && eye < 2.4f;
+    calibrate(live ? eye / 0.936f : 1.75f);
+    if (live) calibratedFromHead_ = true;
+  }
+  setTargets(targets);
+
+  // One PIK iteration per call, each timed: the next one starts only when the largest recent
+  // iteration (iterations with many clamping passes cost several times the average) and the
+  // retargeting still fit before the deadline.
+  ik::SolveOptions o;
+  o.max_iterations = 1;
+  o.clock = &clock;
+  int iterations = 0;
+  bool converged = false, broken = false;
+  while (iterations < options_.maxIterations) {
+    const TimePoint start = clock.now();
+    if (start + fromSeconds(predictedIteration_ + predictedFinish_) > request.deadline && iterations > 0) break;
+    if (start + fromSeconds(predictedFinish_) >= request.deadline) break;
+    const ik::SolveReport& report = ik::solve(body_.model, *data_, o);
+    const double cost = toSeconds(clock.now() - start);
+    predictedIteration_ = std::max(cost, 0.9 * predictedIteration_);
+    iterations += report.iterations;
+    if (report.converged()) converged = true;
+    if (report.stop == ik::StopReason::InvalidState) broken = true;
+    if (report.iterations == 0 || report.stop != ik::StopReason::IterationCap) break;
+  }
+  const TimePoint solvedAt = clock.now();
+  result.iterations = iterations;
+  result.converged = converged;
+
+  // Never publish a broken configuration: fall back to the last good one.
+  if (!data_->q().allFinite() || broken) {
+    (void)data_->setConfiguration(lastGoodQ_);
+    ik::kinematics(body_.model, *data_, false);
+  } else {
+    lastGoodQ_ = data_->q();
+  }
+  solvedOnce_ = true;
+  avatar::retarget(body_, avatar_, *data_, pose);
+
+  // Residuals in avatar metres: the tracked point against the body part it drives.
+  for (auto id : tracking::kAllTrackers) {
+    const size_t i = size_t(tracking::index(id));
+    if (positionTask_[i] < 0 || !data_->enabled(positionTask_[i])) continue;
+    const Eigen::Vector3d actual = id == TrackerId::Head ? eyePosition() : jointPosition(joint_[i]);
+    result.residual[i] = float((actual - targetPoint_[i]).norm());
+    if (id == TrackerId::LeftHand || id == TrackerId::RightHand) {
+      const ik::JointId shoulder = shoulderJoint(id == TrackerId::LeftHand ? tracking::Side::Left : tracking::Side::Right);
+      result.reachable[i] = (targetPoint_[i] - jointPosition(shoulder)).norm() <= armReach_;
+    }
+  }
+  predictedFinish_ = std::max(toSeconds(clock.now() - solvedAt), 0.9 * predictedFinish_);
+  return result;
+}
+
+}  // namespace embody::runtime

@@ -1,0 +1,132 @@
+#pragma once
+// The runtime's BodySolver on a real avatar: the IK body model (avatar/body) with the PIK solver
+// (avatar/ik), tasks from the tracker layout (task_layout.h), calibration from the user's height,
+// procedural stepping in three-point mode (foot_planner.h), and retargeting onto the skeleton.
+//
+//   auto solver = AvatarBodySolver::create(avatar, options);   // builds the model, calibrates
+//   IkStage stage(**solver, clock, stageConfig);                 // filter + guard + budget
+//   stage.process(sample, frame);                                // frame.pose skins the avatar
+//
+// Spaces. Targets arrive in the tracking space (OpenXR: metres, +Y up, -Z forward, floor at y = 0)
+// and are mapped into the avatar's model space: scaled by avatarEyeHeight / userEyeHeight about
+// the floor and turned so the user's forward is the avatar's. Residuals are measured there, in
+// metres on the avatar.
+//
+// Tracker -> IK joint: head (the eyes, an offset in the head joint's frame), hands (wrist = the
+// hand joint's pivot), hips (pelvis = the root), feet (ankle = the foot joint's pivot). The
+// rotation from a tracker's frame to its joint's frame is fixed at calibration: the tracker
+// orientation that corresponds to the avatar's rest pose (identity for head, hips and feet; for a
+// hand the grip pose of the rest hand) maps onto the joint's rest orientation.
+//
+// Budget. The solve runs PIK iterations until converged, the iteration cap, or the deadline minus
+// the predicted cost of one more iteration (the largest recent one), so it returns before the
+// deadline while iterations cost what they did and by the deadline plus at most one iteration
+// when one suddenly costs more.
+#include <memory>
+
+#include "avatar/avatar_asset.h"
+#include "avatar/body/body_model.h"
+#include "runtime/body_solver.h"
+#include "runtime/foot_planner.h"
+#include "runtime/task_layout.h"
+
+namespace embody::runtime {
+
+struct AvatarBodyOptions {
+  avatar::SpineMode spine = avatar::SpineMode::Auto;
+  tracking::TrackerMask trackers = tracking::TrackerMask::all();  // what the source provides
+  // The user's height in metres (profile / --user-height); 0 = from the first valid head sample
+  // (its height is taken as a standing eye height).
+  float userHeight = 0.0f;
+  int maxIterations = 40;
+  double totalMass = 75.0;
+  FootPlannerConfig feet;
+  // Balance in three-point mode is kept by stepping: a step starts as soon as the centre of mass
+  // leaves the support polygon. The centre-of-mass row of the layout (an inequality: enabled only
+  // while the CoM is outside, target the nearest point of the polygon) is off by default: with
+  // the current PIK solver, a CoM row that conflicts with the head makes the solve diverge
+  // (measured on the CMU walk; docs/runtime.md).
+  bool balanceRow = false;
+  // The coupled spine (avatar/spine) or one uncoupled ball joint per spine site (default). With
+  // the coupled spine the head misses its target on the CMU walk (head p95 3.3 cm against
+  // < 1 cm uncoupled, default avatar, all trackers): the coupling rows keep the trunk from
+  // lengthening the reach the way independent sites can. docs/runtime.md.
+  bool coupledSpine = false;
+};
+
+class AvatarBodySolver final : public BodySolver {
+ public:
+  // Fails when the avatar cannot be mapped to a body model (the error lists what is missing).
+  static Result<std::unique_ptr<AvatarBodySolver>> create(const avatar::AvatarAsset& avatar, const AvatarBodyOptions& options = {});
+
+  SolveResult solve(const SolveRequest& request, avatar::SkeletonPose& pose) override;
+  void resetWarmStart() override;
+
+  const avatar::BodyModel& body() const { return body_; }
+  const ik::Data& data() const { return *data_; }
+  const TaskLayout& layout() const { return layout_; }
+  const FootPlanner& feet() const { return planner_; }
+  bool threePoint() const { return layout_.inferLowerBody; }
+  // Calibration: tracking metres -> avatar metres (0 until the first head sample when the user's
+  // height comes from it).
+  double scale() const { return scale_; }
+  double avatarHeight() const { return avatarHeight_; }
+  double armReach() const { return armReach_; }
+  Eigen::Vector3d toAvatar(const glm::vec3& trackingPoint) const;
+  // Solved positions in the avatar's model space: the eye point, wrists, ankles, shoulders.
+  Eigen::Vector3d eyePosition() const;
+  Eigen::Vector3d jointPosition(ik::JointId joint) const { return data_->jointFrame(joint).translation(); }
+  ik::JointId trackerJoint(tracking::TrackerId id) const { return joint_[size_t(tracking::index(id))]; }
+  // The last targets in avatar space (feet: the planner's in three-point mode).
+  const Eigen::Vector3d& target(tracking::TrackerId id) const { return targetPoint_[size_t(tracking::index(id))]; }
+  bool calibratedFromHead() const { return calibratedFromHead_; }
+  ik::JointId shoulderJoint(tracking::Side side) const { return side == tracking::Side::Left ? leftShoulder_ : rightShoulder_; }
+  const Eigen::Vector3d& up() const { return up_; }
+
+ private:
+  AvatarBodySolver(const avatar::AvatarAsset& avatar) : avatar_(avatar) {}
+  Status build(const AvatarBodyOptions& options);
+  void calibrate(float userHeight);
+  void setTargets(const tracking::GuardedSample& targets);
+  // Enables (weight > 0, times the task's own) or disables a position/orientation/pose task pair.
+  void setPose(ik::TaskId position, ik::TaskId orientation, const Eigen::Vector3d& p, const Eigen::Quaterniond& q, double weight);
+
+  const avatar::AvatarAsset& avatar_;
+  AvatarBodyOptions options_;
+  avatar::BodyModel body_;
+  std::unique_ptr<ik::Data> data_;
+  TaskLayout layout_;
+  FootPlanner planner_;
+  Eigen::VectorXd restQ_, lastGoodQ_;
+  std::array<Eigen::Vector3d, tracking::kTrackerCount> targetPoint_{};
+  std::array<Eigen::Quaterniond, tracking::kTrackerCount> targetRotation_{};
+
+  // Tasks per tracker (position, orientation; -1 none), balance, and the inferred hips.
+  std::array<ik::TaskId, tracking::kTrackerCount> positionTask_{-1, -1, -1, -1, -1, -1};
+  std::array<ik::TaskId, tracking::kTrackerCount> orientationTask_{-1, -1, -1, -1, -1, -1};
+  std::array<ik::JointId, tracking::kTrackerCount> joint_{-1, -1, -1, -1, -1, -1};
+  // Tracker frame -> joint frame rotation (avatar space, see above), and the joint's rest rotation.
+  std::array<Eigen::Quaterniond, tracking::kTrackerCount> jointFromTracker_{};
+  std::array<Eigen::Quaterniond, tracking::kTrackerCount> restRotation_{};
+  ik::TaskId balanceTask_ = -1, hipsPosTask_ = -1, hipsRotTask_ = -1;
+  ik::JointId leftShoulder_ = -1, rightShoulder_ = -1;
+
+  Eigen::Vector3d up_ = Eigen::Vector3d::UnitY(), forward_ = Eigen::Vector3d::UnitZ();
+  Eigen::Quaterniond fromTracking_ = Eigen::Quaterniond::Identity();  // -Z -> the avatar's forward
+  double floor_ = 0.0, avatarHeight_ = 1.75, avatarEyeHeight_ = 1.64, armReach_ = 0.6, scale_ = 0.0;
+  Eigen::Vector3d eyeInHead_ = Eigen::Vector3d::Zero();  // head joint frame
+  Eigen::Vector3d restHeadToHips_ = Eigen::Vector3d::Zero();  // avatar space, at rest
+  // Vertical offsets (avatar metres) added to the hips and feet targets, fixed on the first sample
+  // that has them: the user's (or performer's) pelvis and ankles stand at the avatar's rest
+  // heights then, whatever the proportions. 0 for the other trackers.
+  std::array<double, tracking::kTrackerCount> heightOffset_{};
+  std::array<double, tracking::kTrackerCount> restHeight_{};  // joint pivot above the floor at rest
+  bool heightsCalibrated_ = false;
+  double legRatio_ = 1.0;  // avatar leg / user leg, for tracked feet
+  double predictedIteration_ = 0.0;  // seconds: the largest recent iteration cost
+  double predictedFinish_ = 0.0;     // seconds: retargeting and residuals after the iterations
+  bool solvedOnce_ = false;
+  bool calibratedFromHead_ = false;
+};
+
+}  // namespace embody::runtime

@@ -1,0 +1,214 @@
+#include "runtime/foot_planner.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace embody::runtime {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double wrapAngle(double a) {
+  while (a > kPi) a -= 2.0 * kPi;
+  while (a < -kPi) a += 2.0 * kPi;
+  return a;
+}
+
+double cross2(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
+}
+
+// Andrew's monotone chain into `hull` (counter-clockwise); `pts` is reordered.
+void convexHull(std::vector<Eigen::Vector2d>& pts, std::vector<Eigen::Vector2d>& hull) {
+  std::sort(pts.begin(), pts.end(), [](const auto& a, const auto& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  hull.clear();
+  if (pts.size() < 3) {
+    hull = pts;
+    return;
+  }
+  for (int pass = 0; pass < 2; ++pass) {
+    const size_t start = hull.size();
+    for (size_t k = 0; k < pts.size(); ++k) {
+      const Eigen::Vector2d& p = pass == 0 ? pts[k] : pts[pts.size() - 1 - k];
+      while (hull.size() >= start + 2 && cross2(hull[hull.size() - 2], hull.back(), p) <= 0.0) hull.pop_back();
+      hull.push_back(p);
+    }
+    hull.pop_back();
+  }
+}
+
+Eigen::Vector2d nearestOnSegment(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return a + t * ab;
+}
+
+}  // namespace
+
+Eigen::Quaterniond yawRotation(double yaw, const Eigen::Vector3d& up) { return Eigen::Quaterniond(Eigen::AngleAxisd(yaw, up)); }
+
+double headingOf(const Eigen::Quaterniond& q, const Eigen::Vector3d& up, const Eigen::Vector3d& forward) {
+  const Eigen::Vector3d f = q * forward;
+  const Eigen::Vector3d side = up.cross(forward);
+  const double x = f.dot(forward), y = f.dot(side);
+  if (x * x + y * y < 1e-12) return 0.0;
+  return std::atan2(y, x);
+}
+
+void FootPlanner::configure(const FootPlannerConfig& config, const FootShape& shape, const Eigen::Vector3d& up,
+                            const Eigen::Vector3d& forward, const std::array<Eigen::Vector3d, 2>& restAnkleOffset,
+                            double scale) {
+  config_ = config;
+  shape_ = shape;
+  up_ = up.normalized();
+  forward_ = (forward - up_ * up_.dot(forward)).normalized();
+  axisA_ = forward_;
+  axisB_ = up_.cross(forward_);
+  restOffset_ = restAnkleOffset;
+  scale_ = scale;
+  points_.reserve(16);
+  hull_.reserve(16);
+  initialised_ = false;
+}
+
+Eigen::Vector3d FootPlanner::standSpot(int foot, const Eigen::Vector3d& centre, double yaw) const {
+  const Eigen::Vector3d offset = yawRotation(yaw, up_) * ground(restOffset_[static_cast<size_t>(foot)]);
+  return ground(centre) + offset + up_ * floorHeight_;
+}
+
+void FootPlanner::reset(const Eigen::Vector3d& centre, double yaw, double time) {
+  floorHeight_ = up_.dot(restOffset_[0]);  // the rest ankle height above the centre's ground point
+  for (int f = 0; f < 2; ++f) {
+    feet_[static_cast<size_t>(f)] = {standSpot(f, centre, yaw), yaw, true};
+    swing_[static_cast<size_t>(f)].active = false;
+  }
+  lastCentre_ = ground(centre);
+  velocity_.setZero();
+  lastTime_ = time;
+  lastLanding_ = time - 1.0;
+  lastFoot_ = -1;
+  steps_ = 0;
+  initialised_ = true;
+  buildSupport();
+}
+
+const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::Vector3d& centreIn, double yaw,
+                                                     const Eigen::Vector3d& centerOfMass) {
+  if (!initialised_) reset(centreIn, yaw, time);
+  const Eigen::Vector3d centre = ground(centreIn);
+  const double dt = time - lastTime_;
+  if (dt > 0.0 && dt < 0.5) {
+    const double a = 1.0 - std::exp(-dt / config_.velocitySmoothing);
+    velocity_ += a * ((centre - lastCentre_) / dt - velocity_);
+  } else if (dt >= 0.5) {
+    velocity_.setZero();
+  }
+  lastCentre_ = centre;
+  lastTime_ = time;
+  const double step = config_.stepSeconds;
+  // Where a foot landing after `remaining` seconds should go: under the body then, half a step
+  // ahead of it while it moves.
+  auto landing = [&](int f, double remaining) {
+    return standSpot(f, centre + velocity_ * (remaining + 0.5 * step), yaw);
+  };
+
+  // Swinging feet move along their arcs; a landing ends the swing.
+  bool swinging = false;
+  for (int f = 0; f < 2; ++f) {
+    Swing& s = swing_[static_cast<size_t>(f)];
+    FootTarget& foot = feet_[static_cast<size_t>(f)];
+    if (!s.active) continue;
+    const double phase = std::clamp((time - s.start) / step, 0.0, 1.0);
+    if (phase < 0.7) {
+      s.to = landing(f, (1.0 - phase) * step);
+      s.toYaw = yaw;
+    }
+    if (phase >= 1.0) {
+      s.active = false;
+      foot = {s.to, s.toYaw, true};
+      lastLanding_ = time;
+      continue;
+    }
+    swinging = true;
+    const double u = phase * phase * (3.0 - 2.0 * phase);
+    foot.position = s.from + u * (s.to - s.from) + up_ * (config_.liftHeight * scale_ * std::sin(kPi * phase));
+    foot.yaw = s.fromYaw + u * wrapAngle(s.toYaw - s.fromYaw);
+    foot.planted = false;
+  }
+
+  // Start a step when a foot is out of place and both feet have been down long enough.
+  if (!swinging && time - lastLanding_ >= config_.doubleSupportSeconds) {
+    const bool moving = velocity_.norm() > config_.movingSpeed * scale_;
+    const double threshold = (moving ? config_.walkThreshold : config_.standThreshold) * scale_;
+    const bool unbalanced = !overSupport(centerOfMass);
+    std::array<double, 2> need{};
+    for (int f = 0; f < 2; ++f) {
+      const FootTarget& foot = feet_[static_cast<size_t>(f)];
+      const double dist = ground(landing(f, step) - foot.position).norm();
+      const double turn = std::abs(wrapAngle(yaw - foot.yaw));
+      need[static_cast<size_t>(f)] = std::max(dist / threshold, turn / config_.turnRadians);
+    }
+    int pick = need[0] >= need[1] ? 0 : 1;
+    // Alternate: the foot that stepped last waits while the other one has somewhere to go.
+    if (pick == lastFoot_ && need[static_cast<size_t>(1 - pick)] > 0.3) pick = 1 - pick;
+    if (need[static_cast<size_t>(pick)] >= 1.0 || (unbalanced && need[static_cast<size_t>(pick)] > 0.2)) {
+      Swing& s = swing_[static_cast<size_t>(pick)];
+      FootTarget& foot = feet_[static_cast<size_t>(pick)];
+      s.active = true;
+      s.start = time;
+      s.from = foot.position;
+      s.fromYaw = foot.yaw;
+      s.to = landing(pick, step);
+      s.toYaw = yaw;
+      foot.planted = false;
+      lastFoot_ = pick;
+      ++steps_;
+    }
+  }
+  buildSupport();
+  return feet_;
+}
+
+void FootPlanner::buildSupport() {
+  points_.clear();
+  for (int f = 0; f < 2; ++f) {
+    const Swing& s = swing_[static_cast<size_t>(f)];
+    const Eigen::Vector3d ankle = s.active ? s.to : feet_[static_cast<size_t>(f)].position;
+    const double yaw = s.active ? s.toYaw : feet_[static_cast<size_t>(f)].yaw;
+    const Eigen::Quaterniond r = yawRotation(yaw, up_);
+    const Eigen::Vector3d fwd = r * forward_, side = r * axisB_;
+    const Eigen::Vector3d g = ground(ankle);
+    for (double a : {-shape_.heelBack, shape_.toeForward})
+      for (double b : {-shape_.halfWidth, shape_.halfWidth}) points_.push_back(plane(g + scale_ * (a * fwd + b * side)));
+  }
+  convexHull(points_, hull_);
+}
+
+bool FootPlanner::overSupport(const Eigen::Vector3d& point) const {
+  if (hull_.size() < 3) return false;
+  const Eigen::Vector2d p = plane(point);
+  for (size_t i = 0; i < hull_.size(); ++i)
+    if (cross2(hull_[i], hull_[(i + 1) % hull_.size()], p) < 0.0) return false;
+  return true;
+}
+
+Eigen::Vector3d FootPlanner::nearestSupportPoint(const Eigen::Vector3d& point, double margin) const {
+  if (hull_.empty()) return point;
+  const Eigen::Vector2d p = plane(point);
+  Eigen::Vector2d best = hull_[0];
+  double bestD = 1e300;
+  Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < hull_.size(); ++i) {
+    centroid += hull_[i];
+    const Eigen::Vector2d q = nearestOnSegment(p, hull_[i], hull_[(i + 1) % hull_.size()]);
+    if ((q - p).squaredNorm() < bestD) bestD = (q - p).squaredNorm(), best = q;
+  }
+  centroid /= static_cast<double>(hull_.size());
+  const Eigen::Vector2d in = centroid - best;
+  if (in.norm() > margin) best += in.normalized() * margin;
+  return best.x() * axisA_ + best.y() * axisB_ + up_ * up_.dot(point);
+}
+
+}  // namespace embody::runtime

@@ -1,0 +1,105 @@
+#pragma once
+// Three-point mode (head and hands only, e.g. an HMD with two controllers): where the feet are.
+// The feet stay planted while the body's centre stays over them; when the user walks or turns far
+// enough, the avatar steps, one foot at a time, instead of sliding or twisting its legs.
+//
+// Works in the avatar's model space (metres, `up` the avatar's vertical). Each frame it takes the
+// body centre inferred from the head (the point under the neck, and the heading), keeps a
+// low-passed ground velocity, and for each foot:
+//   planted   its target is fixed in the world (a level-0 task: it does not slide);
+//   swinging  it travels from where it lifted to a landing spot on an arc `liftHeight` high over
+//             `stepSeconds` (smoothstep along the ground, a sine bump up); the landing spot keeps
+//             following the body until 70 % of the swing, then is fixed.
+// A step starts (only one foot swings at a time, after `doubleSupportSeconds` on both feet) when
+// a foot is farther than the threshold from where it would stand under the body, turned more than
+// `turnRadians` from the heading, or the centre of mass has left the support polygon. The landing
+// spot leads the body by its velocity times half a step, so while walking the body passes over
+// each foot at mid-stance. The foot that stepped last waits for the other unless the other is
+// already where it should be: feet alternate.
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <vector>
+
+namespace embody::runtime {
+
+struct FootPlannerConfig {
+  double stepSeconds = 0.3;          // one swing
+  double doubleSupportSeconds = 0.04;
+  double liftHeight = 0.07;          // metres at the avatar's scale (scaled by `scale` below)
+  double walkThreshold = 0.05;       // foot error that starts a step while the body moves
+  double standThreshold = 0.22;      // ... while it stands (leaning does not make it step)
+  double movingSpeed = 0.15;         // m/s: above this the body counts as moving
+  double turnRadians = 0.55;         // ~30 degrees
+  double velocitySmoothing = 0.15;   // seconds, low-pass time constant of the body's velocity
+};
+
+// A foot's sole on the ground, for the support polygon: the ankle's ground point, the heel behind
+// it and the toes ahead along the foot's heading, half the foot's width either side.
+struct FootShape {
+  double heelBack = 0.06, toeForward = 0.16, halfWidth = 0.045;
+};
+
+struct FootTarget {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // ankle (the IK foot joint's pivot)
+  double yaw = 0.0;                                    // heading about `up` (radians)
+  bool planted = true;
+};
+
+class FootPlanner {
+ public:
+  // `restAnkle` are the avatar's rest ankle positions relative to the body centre's ground point
+  // at rest (left, right); `up` and `forward` the avatar's axes.
+  void configure(const FootPlannerConfig& config, const FootShape& shape, const Eigen::Vector3d& up,
+                 const Eigen::Vector3d& forward, const std::array<Eigen::Vector3d, 2>& restAnkleOffset, double scale);
+  // Plants both feet under a body centre (ground point) with a heading; forgets the velocity.
+  void reset(const Eigen::Vector3d& centre, double yaw, double time);
+  // One frame: the body centre inferred from the head (any height; it is projected), its heading,
+  // and the current centre of mass. Returns the foot targets for this frame.
+  const std::array<FootTarget, 2>& update(double time, const Eigen::Vector3d& centre, double yaw,
+                                          const Eigen::Vector3d& centerOfMass);
+  const std::array<FootTarget, 2>& feet() const { return feet_; }
+  bool initialised() const { return initialised_; }
+  void restart() { initialised_ = false; }  // the next update() plants both feet afresh
+  int steps() const { return steps_; }
+  int lastStepFoot() const { return lastFoot_; }
+  // Balance: whether the ground projection of `point` is over the support polygon (the planted
+  // feet plus the landing spot of a swinging foot), and the nearest point of it (`margin` inside).
+  bool overSupport(const Eigen::Vector3d& point) const;
+  Eigen::Vector3d nearestSupportPoint(const Eigen::Vector3d& point, double margin) const;
+  Eigen::Vector3d groundVelocity() const { return velocity_; }
+
+ private:
+  struct Swing {
+    bool active = false;
+    double start = 0.0;
+    Eigen::Vector3d from = Eigen::Vector3d::Zero(), to = Eigen::Vector3d::Zero();
+    double fromYaw = 0.0, toYaw = 0.0;
+  };
+  Eigen::Vector3d ground(const Eigen::Vector3d& p) const { return p - up_ * up_.dot(p); }
+  Eigen::Vector3d standSpot(int foot, const Eigen::Vector3d& centre, double yaw) const;
+  Eigen::Vector2d plane(const Eigen::Vector3d& p) const { return {p.dot(axisA_), p.dot(axisB_)}; }
+  void buildSupport();
+
+  FootPlannerConfig config_;
+  FootShape shape_;
+  Eigen::Vector3d up_ = Eigen::Vector3d::UnitY(), forward_ = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d axisA_ = Eigen::Vector3d::UnitX(), axisB_ = Eigen::Vector3d::UnitZ();
+  std::array<Eigen::Vector3d, 2> restOffset_{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  double scale_ = 1.0;
+  std::array<FootTarget, 2> feet_{};
+  std::array<Swing, 2> swing_{};
+  double floorHeight_ = 0.0;
+  Eigen::Vector3d lastCentre_ = Eigen::Vector3d::Zero(), velocity_ = Eigen::Vector3d::Zero();
+  double lastTime_ = 0.0, lastLanding_ = -1e9;
+  int lastFoot_ = -1, steps_ = 0;
+  bool initialised_ = false;
+  std::vector<Eigen::Vector2d> points_, hull_;  // support polygon (reserved: no per-frame allocation)
+};
+
+// Heading (radians about `up`, 0 = `forward`, positive turning towards `up x forward`) of a
+// rotation that maps `forward` somewhere; the rotation about `up` by an angle.
+double headingOf(const Eigen::Quaterniond& q, const Eigen::Vector3d& up, const Eigen::Vector3d& forward);
+Eigen::Quaterniond yawRotation(double yaw, const Eigen::Vector3d& up);
+
+}  // namespace embody::runtime

@@ -1,0 +1,257 @@
+// The runtime on real avatars, CPU only: pose source -> filter -> loss guard -> budgeted PIK on
+// the avatar's body model -> retargeted skeleton. BVH walk with every tracker (default avatar and
+// CesiumMan), three-point mode with procedural stepping, tracking loss, and the deadline with an
+// injected clock.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <functional>
+#include <nlohmann/json.hpp>
+
+#include "avatar/gltf/gltf_loader.h"
+#include "avatar/procedural/default_avatar.h"
+#include "runtime/avatar_body_solver.h"
+#include "runtime/ik_stage.h"
+#include "test_paths.h"
+#include "xr/tracking/pose_source.h"
+#include "xr/tracking/synthetic_source.h"
+
+using namespace embody;
+using namespace embody::runtime;
+using tracking::TrackerId;
+
+namespace {
+
+// Per frame: far more than the solver needs here (tens of ms at worst on a loaded machine), also
+// under ThreadSanitizer (`make tsan` runs this suite), so any deadline miss is a real one.
+constexpr double kGenerousBudget = 1.0;
+
+const avatar::AvatarAsset& defaultAvatar() {
+  static const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
+  return a;
+}
+
+struct FootTrace {
+  std::vector<Eigen::Vector3d> position[2];  // the avatar's ankles, per frame
+  std::vector<char> planted[2];              // the planner's state, per frame
+};
+
+struct Run {
+  StatsSummary summary;
+  FootTrace feet;
+  size_t nonFinitePoses = 0;
+  int steps = 0;
+  double up = 0.0;
+};
+
+// Drives `frames` frames at `fps` from `source` through an IkStage on the real solver.
+Run drive(const avatar::AvatarAsset& avatar, tracking::PoseSource& source, const AvatarBodyOptions& options, int frames,
+          double fps, double budgetSeconds,
+          const std::function<void(tracking::PoseSample&)>& edit = {},
+          const std::function<void(const AvatarBodySolver&, const SolvedFrame&)>& check = {}) {
+  auto solver = AvatarBodySolver::create(avatar, options);
+  REQUIRE(solver.ok());
+  const Clock& clock = steadyClock();
+  IkStageConfig cfg;
+  cfg.budgetSeconds = budgetSeconds;
+  cfg.guard.userHeight = options.userHeight > 0.0f ? options.userHeight : 1.75f;
+  IkStage stage(**solver, clock, cfg);
+  SolvedFrame frame;
+  frame.pose = avatar::SkeletonPose::rest(avatar.skeleton);
+  StatsRecorder rec;
+  Run run;
+  const AvatarBodySolver& s = **solver;
+  for (int i = 0; i < frames; ++i) {
+    tracking::PoseSample sample = source.sample(i / fps);
+    if (edit) edit(sample);
+    rec.add(stage.process(sample, frame));
+    for (const auto& t : frame.pose.local)
+      if (!std::isfinite(t.translation.x + t.translation.y + t.translation.z + t.rotation.w + t.rotation.x + t.rotation.y +
+                         t.rotation.z))
+        ++run.nonFinitePoses;
+    for (int f = 0; f < 2; ++f) {
+      const TrackerId id = f == 0 ? TrackerId::LeftFoot : TrackerId::RightFoot;
+      run.feet.position[f].push_back(s.jointPosition(s.trackerJoint(id)));
+      run.feet.planted[f].push_back(s.feet().feet()[size_t(f)].planted ? 1 : 0);
+    }
+    if (check) check(s, frame);
+  }
+  run.summary = rec.summary();
+  run.steps = s.feet().steps();
+  return run;
+}
+
+std::unique_ptr<tracking::PoseSource> open(const std::string& spec, tracking::TrackerMask mask = tracking::TrackerMask::all()) {
+  tracking::SourceOptions o;
+  o.userHeight = 1.75f;
+  o.trackers = mask;
+  auto src = tracking::openPoseSource(spec, o);
+  REQUIRE(src.ok());
+  return std::move(src).value();
+}
+
+void checkFullBodyWalk(const avatar::AvatarAsset& avatar) {
+  EMBODY_REQUIRE_SHARED_ASSET(bvh, "cmu_12_01_walk.bvh");
+  auto src = open(bvh);
+  AvatarBodyOptions o;
+  o.userHeight = 1.75f;
+  const int frames = int(src->duration() * 60.0);
+  const Run r = drive(avatar, *src, o, frames, 60.0, kGenerousBudget);
+  INFO("head p95 " << r.summary.headErrorP95 << " hand p95 " << r.summary.handErrorP95 << " misses "
+                   << r.summary.deadlineMisses << " ik p50 " << r.summary.ikP50Ms << " ms, iterations "
+                   << r.summary.iterationsMean);
+  CHECK(r.summary.frames == size_t(frames));
+  CHECK(r.nonFinitePoses == 0);
+  CHECK(r.summary.nonFiniteFrames == 0);
+  CHECK(r.summary.headErrorP95 >= 0.0);
+  CHECK(r.summary.headErrorP95 <= 0.01);
+  CHECK(r.summary.handErrorP95 >= 0.0);
+  CHECK(r.summary.handErrorP95 <= 0.02);
+  CHECK(r.summary.deadlineMisses == 0);
+}
+
+}  // namespace
+
+TEST_CASE("BVH walk, every tracker, default avatar: head within 1 cm, hands within 2 cm (p95), no NaN, no misses") {
+  checkFullBodyWalk(defaultAvatar());
+}
+
+// [!mayfail]: measured head p95 ~4.4 cm on CesiumMan (hands pass, < 1 mm): its legs are
+// proportioned unlike the performer's, and with the feet at the top priority the head cannot
+// reach. Known gap, docs/runtime.md "Known limits".
+TEST_CASE("BVH walk, every tracker, CesiumMan: head within 1 cm, hands within 2 cm (p95), no NaN, no misses", "[!mayfail]") {
+  EMBODY_REQUIRE_SHARED_ASSET(path, "CesiumMan.glb");
+  auto a = avatar::loadAvatarFile(path);
+  REQUIRE(a.ok());
+  checkFullBodyWalk(a.value());
+}
+
+TEST_CASE("three-point walk: the avatar steps foot by foot, planted feet do not slide, head within 1 cm") {
+  EMBODY_REQUIRE_SHARED_ASSET(bvh, "cmu_12_01_walk.bvh");
+  auto src = open(bvh, tracking::TrackerMask::threePoint());
+  AvatarBodyOptions o;
+  o.userHeight = 1.75f;
+  o.trackers = tracking::TrackerMask::threePoint();
+  const int frames = int(src->duration() * 60.0);
+  const Run r = drive(defaultAvatar(), *src, o, frames, 60.0, kGenerousBudget);
+  INFO("head p95 " << r.summary.headErrorP95 << " hand p95 " << r.summary.handErrorP95 << " steps " << r.steps);
+  CHECK(r.nonFinitePoses == 0);
+  CHECK(r.summary.headErrorP95 <= 0.01);
+  // Lift-offs (planted -> swinging), in order, and the ankle's rise above its planted height.
+  std::vector<int> liftOffs;
+  double worstSlide = 0.0, maxRise[2] = {0.0, 0.0};
+  for (int f = 0; f < 2; ++f) {
+    const auto& pos = r.feet.position[f];
+    const auto& planted = r.feet.planted[f];
+    size_t plantStart = 0;
+    for (size_t i = 0; i < pos.size(); ++i) {
+      if (i > 0 && planted[i - 1] && !planted[i]) liftOffs.push_back(int(i) * 2 + f);
+      if (planted[i] && (i == 0 || !planted[i - 1])) plantStart = i;
+      if (planted[i] && i > plantStart + 1) worstSlide = std::max(worstSlide, (pos[i] - pos[plantStart + 1]).norm());
+      if (!planted[i] && plantStart < pos.size()) maxRise[f] = std::max(maxRise[f], pos[i].y() - pos[plantStart].y());
+    }
+  }
+  std::sort(liftOffs.begin(), liftOffs.end());
+  int left = 0, right = 0, repeats = 0;
+  for (size_t k = 0; k < liftOffs.size(); ++k) {
+    (liftOffs[k] % 2 == 0 ? left : right)++;
+    if (k > 0 && liftOffs[k] % 2 == liftOffs[k - 1] % 2) ++repeats;
+  }
+  INFO("lift-offs: left " << left << ", right " << right << ", same foot twice in a row " << repeats << ", worst slide "
+                          << worstSlide << " m, rise " << maxRise[0] << " / " << maxRise[1]);
+  CHECK(left >= 2);
+  CHECK(right >= 2);
+  CHECK(repeats <= (left + right) / 4);  // mostly alternating
+  CHECK(maxRise[0] > 0.02);              // the feet really leave the ground
+  CHECK(maxRise[1] > 0.02);
+  CHECK(worstSlide < 0.02);
+}
+
+TEST_CASE("three-point standing still: the feet stay planted") {
+  auto src = open("synthetic:idle", tracking::TrackerMask::threePoint());
+  AvatarBodyOptions o;
+  o.userHeight = 1.75f;
+  o.trackers = tracking::TrackerMask::threePoint();
+  const Run r = drive(defaultAvatar(), *src, o, 180, 60.0, kGenerousBudget);
+  CHECK(r.steps == 0);
+  CHECK(r.nonFinitePoses == 0);
+  CHECK(r.summary.headErrorP95 <= 0.01);
+}
+
+TEST_CASE("hands lost for 1 s: within arm's reach of the shoulder every frame, at most 3 m/s when tracking returns") {
+  auto src = open("synthetic:figure8");
+  AvatarBodyOptions o;
+  o.userHeight = 1.75f;
+  const double fps = 90.0;
+  std::vector<Eigen::Vector3d> hands[2];
+  double worstReach = 0.0;
+  const Run r = drive(
+      defaultAvatar(), *src, o, int(4.0 * fps), fps, kGenerousBudget,
+      [](tracking::PoseSample& s) {
+        if (s.time >= 1.5 && s.time < 2.5) {
+          s[TrackerId::LeftHand].valid = false;
+          s[TrackerId::RightHand].position = glm::vec3(NAN);  // broken data counts as lost too
+        }
+      },
+      [&](const AvatarBodySolver& s, const SolvedFrame&) {
+        for (int f = 0; f < 2; ++f) {
+          const auto side = f == 0 ? tracking::Side::Left : tracking::Side::Right;
+          const TrackerId id = f == 0 ? TrackerId::LeftHand : TrackerId::RightHand;
+          const Eigen::Vector3d hand = s.jointPosition(s.trackerJoint(id));
+          hands[f].push_back(hand);
+          worstReach = std::max(worstReach, (hand - s.jointPosition(s.shoulderJoint(side))).norm() / s.armReach());
+          // The target itself stays within reach of the solved shoulder too (a margin for the
+          // shoulder the guard estimates from the head).
+          CHECK((s.target(id) - s.jointPosition(s.shoulderJoint(side))).norm() <= 1.1 * s.armReach());
+        }
+      });
+  CHECK(r.nonFinitePoses == 0);
+  CHECK(worstReach <= 1.0 + 1e-6);
+  // Speed of each hand from the moment tracking returns (t = 2.5 s) for one second.
+  double worstSpeed = 0.0;
+  for (int f = 0; f < 2; ++f)
+    for (size_t i = size_t(2.5 * fps) + 1; i < size_t(3.5 * fps); ++i)
+      worstSpeed = std::max(worstSpeed, (hands[f][i] - hands[f][i - 1]).norm() * fps);
+  INFO("worst hand speed after recovery " << worstSpeed << " m/s");
+  CHECK(worstSpeed <= 3.0);
+}
+
+namespace {
+// A clock that moves forward by `tick` seconds every time it is read: a solver's every step costs
+// time, deterministically.
+class TickingClock final : public Clock {
+ public:
+  explicit TickingClock(double tick) : tick_(fromSeconds(tick)) {}
+  time_point now() const override { return t_ += tick_; }
+
+ private:
+  Duration tick_;
+  mutable time_point t_{};
+};
+}  // namespace
+
+TEST_CASE("the avatar solver given a deadline returns by the deadline plus at most one iteration") {
+  auto src = open("synthetic:reach");
+  AvatarBodyOptions o;
+  o.userHeight = 1.75f;
+  auto solver = AvatarBodySolver::create(defaultAvatar(), o);
+  REQUIRE(solver.ok());
+  tracking::TrackingGuard guard;
+  avatar::SkeletonPose pose = avatar::SkeletonPose::rest(defaultAvatar().skeleton);
+  TickingClock clock(50e-6);
+  int iterations = 0;
+  for (int i = 0; i < 20; ++i) {
+    const tracking::GuardedSample& g = guard.update(src->sample(i / 90.0));
+    const TimePoint start = clock.now();
+    SolveRequest req;
+    req.targets = &g;
+    req.clock = &clock;
+    req.deadline = start + fromSeconds(1e-3);
+    const SolveResult r = (*solver)->solve(req, pose);
+    const TimePoint end = clock.now();
+    // Each solver iteration reads this clock once, so one iteration costs one tick: the solve
+    // may end past the deadline by at most that (plus the reads around it).
+    iterations += r.iterations;
+    CHECK(end <= req.deadline + fromSeconds(3 * 50e-6));
+  }
+  CHECK(iterations > 0);
+}
