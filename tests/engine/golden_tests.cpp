@@ -1,10 +1,11 @@
 // Golden images (256x256, tests/golden/, driver string beside each): the procedural skinned mesh
 // in two poses, CesiumMan in a fixed pose, a stereo pair with asymmetric per-eye frusta, the
-// first-person view and 4x MSAA. Regenerate on purpose only: scripts/update-goldens.sh.
+// first-person view, 4x MSAA, and the built-in default avatar in its rest pose. Regenerate on purpose only: scripts/update-goldens.sh.
 #include <catch2/catch.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "avatar/gltf/gltf_loader.h"
+#include "avatar/procedural/default_avatar.h"
 #include "engine/avatar_renderer.h"
 #include "engine/test_avatar.h"
 #include "engine_test_support.h"
@@ -107,4 +108,17 @@ TEST_CASE("golden: stereo pair with asymmetric per-eye frusta", "[gpu][golden]")
   REQUIRE(pair);
   test::checkGolden("stereo_left", (*pair)[0], ctx.device->driverString());
   test::checkGolden("stereo_right", (*pair)[1], ctx.device->driverString());
+}
+
+TEST_CASE("golden: the default avatar in its rest pose", "[gpu][golden]") {
+  test::GpuContext ctx;
+  const auto asset = avatar::buildDefaultAvatar();
+  auto r = gfx::AvatarRenderer::create(*ctx.device, asset, small());
+  REQUIRE(r);
+  const auto pose = avatar::SkeletonPose::rest(asset.skeleton);
+  gfx::FrameOptions fo;
+  fo.gizmos = (*r)->trackingGizmos(pose);
+  auto img = (*r)->render(pose, (*r)->orbitAround(pose, 0.5f, 0.15f), fo);
+  REQUIRE(img);
+  test::checkGolden("default_avatar_rest", *img, ctx.device->driverString());
 }
