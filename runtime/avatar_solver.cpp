@@ -78,6 +78,8 @@ Result<AvatarBinding> bindBodyModel(const avatar::BodyModel& body, const avatar:
     bind(id, task, {toGlm(p), tracking::restGripOrientation(side, toGlm(forearm)), true});
   }
   b.centerOfMass = body.comTask;
+  // Hips: not bound yet (the body model's hips task stays off): a mocap pelvis at the fitted
+  // scale fights the head target at the same level.
   // Feet: the ankles, flat.
   for (auto [id, task] : {std::pair{tracking::TrackerId::LeftFoot, body.leftFootTask},
                           std::pair{tracking::TrackerId::RightFoot, body.rightFootTask}}) {

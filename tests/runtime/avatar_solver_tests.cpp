@@ -1,5 +1,6 @@
 // The runtime on the real avatar body model: the default avatar calibrated to 1.75 m, trackers
 // bound to its tasks on the rest pose, synthetic motions and the CMU walk through IkStage.
+#include <algorithm>
 #include <catch2/catch.hpp>
 
 #include "avatar/body/calibration.h"
@@ -35,6 +36,14 @@ struct Avatar {
   }
 };
 
+// ThreadSanitizer makes the solver ~20x slower and these tests are single-threaded: under it,
+// run a second of each motion instead of all of it (`make tsan` is about the hand-offs).
+#if defined(__SANITIZE_THREAD__)
+constexpr double kMaxSeconds = 1.0;
+#else
+constexpr double kMaxSeconds = 1e9;
+#endif
+
 size_t at(TrackerId id) { return static_cast<size_t>(tracking::index(id)); }
 
 // Runs a source through the stage at `fps` for `seconds`; returns the per-frame stats.
@@ -42,7 +51,7 @@ std::vector<FrameStats> run(IkStage& stage, tracking::PoseSource& src, double fp
                             avatar::SkeletonPose& lastPose) {
   SolvedFrame frame;
   std::vector<FrameStats> out;
-  for (int i = 0; i < static_cast<int>(seconds * fps); ++i) {
+  for (int i = 0; i < static_cast<int>(std::min(seconds, kMaxSeconds) * fps); ++i) {
     out.push_back(stage.process(src.sample(i / fps), frame));
     for (const auto& t : frame.pose.local) {
       REQUIRE(std::isfinite(t.translation.x));
