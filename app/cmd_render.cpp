@@ -49,7 +49,7 @@ int runRender(cli::Argv argv) {
   args.option("spine", "MODE", "IK spine: auto, full (every vertebra) or simplified", "auto");
   args.option("bone-map", "FILE", "JSON object VRM-1.0-bone-name -> node name");
   args.option("user-height", "METRES", "the user's height (default: the profile's, else from the first head sample)");
-  args.option("profile", "FILE", "user profile JSON {\"height_m\": 1.80}");
+  args.option("profile", "FILE", "user profile JSON (embody avatar calibrate): the user's height");
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (default: fit the clip to the user's height)");
   args.option("ik-budget-ms", "MS", "IK time budget per frame", "1");
   args.option("record", "FILE.jsonl", "also record the motion's samples as a JSON Lines trace");

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "avatar/avatar_loader.h"
+#include "avatar/body/calibration.h"
 #include "avatar/gltf/gltf_loader.h"
 #include "avatar/procedural/default_avatar.h"
 #include "engine/avatar_renderer.h"
@@ -31,19 +32,6 @@ using Clock = std::chrono::steady_clock;
 int fail(const std::string& message, int code = 1) {
   std::fprintf(stderr, "error: %s\n", message.c_str());
   return code;
-}
-
-// Reads the user's height from a profile file: {"height_m": 1.80}.
-Result<float> profileHeight(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return Error{"cannot read the profile " + path};
-  nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-  if (j.is_discarded() || !j.is_object()) return Error{"the profile " + path + " is not a JSON object"};
-  const auto it = j.find("height_m");
-  if (it == j.end() || !it->is_number()) return Error{"the profile " + path + " has no number \"height_m\""};
-  const float h = it->get<float>();
-  if (!(h >= 0.5f && h <= 2.5f)) return Error{"the profile's height_m must be 0.5 .. 2.5"};
-  return h;
 }
 
 // Up to `count` frames evenly through the run, tiled into one image at most ~1200 px wide.
@@ -121,9 +109,9 @@ int runRenderJob(const RenderJob& job) {
 
   float userHeight = job.userHeight;
   if (userHeight == 0.0f && !job.profile.empty()) {
-    auto h = profileHeight(job.profile);
-    if (!h) return fail(h.error());
-    userHeight = *h;
+    auto profile = avatar::loadProfile(job.profile);  // avatar/body/calibration.h, `embody avatar calibrate`
+    if (!profile) return fail("profile " + job.profile + ": " + profile.error());
+    userHeight = float(profile->userHeight);
   }
 
   // The avatar and the motion first: bad files are the likely errors and need no GPU to report.
@@ -186,7 +174,7 @@ int runRenderJob(const RenderJob& job) {
   if (ec) return fail("cannot create " + job.out.string() + ": " + ec.message());
 
   // Frame loop: sample -> IK thread (budgeted) -> triple buffer -> skin + render.
-  runtime::SteadyClock clock;
+  const runtime::Clock& clock = runtime::steadyClock();
   runtime::IkStageConfig cfg;
   cfg.budgetSeconds = job.budgetMs * 1e-3;
   cfg.guard.userHeight = so.userHeight;

@@ -13,7 +13,7 @@ struct RenderJob {
   std::string boneMap;             // --bone-map FILE ("" none)
   std::string spine = "auto";      // auto | full | simplified
   std::string motion = "synthetic:figure8";
-  std::string profile;             // --profile FILE: {"height_m": 1.80}
+  std::string profile;             // --profile FILE (avatar/body/calibration.h: saveProfile)
   std::string record;              // --record FILE.jsonl ("" none)
   float userHeight = 0.0f;         // 0: the profile's, else from the first head sample
   double bvhScale = 0.0;

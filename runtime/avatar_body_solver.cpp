@@ -13,19 +13,6 @@ using tracking::TrackerStatus;
 
 namespace {
 
-// The runtime's clock (seconds) as the solver's clock (steady_clock time points).
-class SolverClock final : public ik::Clock {
- public:
-  explicit SolverClock(const runtime::Clock& clock) : clock_(clock) {}
-  time_point now() const override { return toTimePoint(clock_.now()); }
-  static time_point toTimePoint(double seconds) {
-    return time_point(std::chrono::duration_cast<time_point::duration>(std::chrono::duration<double>(seconds)));
-  }
-
- private:
-  const runtime::Clock& clock_;
-};
-
 Eigen::Vector3d toEigen(const glm::vec3& v) { return {v.x, v.y, v.z}; }
 glm::vec3 toGlm(const Eigen::Vector3d& v) { return {float(v.x()), float(v.y()), float(v.z())}; }
 Eigen::Quaterniond toEigen(const glm::quat& q) { return Eigen::Quaterniond(q.w, q.x, q.y, q.z); }
@@ -341,25 +328,24 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   // One PIK iteration per call, each timed: the next one starts only when the largest recent
   // iteration (iterations with many clamping passes cost several times the average) and the
   // retargeting still fit before the deadline.
-  SolverClock solverClock(clock);
   ik::SolveOptions o;
   o.max_iterations = 1;
-  o.clock = &solverClock;
+  o.clock = &clock;
   int iterations = 0;
   bool converged = false, broken = false;
   while (iterations < options_.maxIterations) {
-    const double start = clock.now();
-    if (start + predictedIteration_ + predictedFinish_ > request.deadline && iterations > 0) break;
-    if (start + predictedFinish_ >= request.deadline) break;
+    const TimePoint start = clock.now();
+    if (start + fromSeconds(predictedIteration_ + predictedFinish_) > request.deadline && iterations > 0) break;
+    if (start + fromSeconds(predictedFinish_) >= request.deadline) break;
     const ik::SolveReport& report = ik::solve(body_.model, *data_, o);
-    const double cost = clock.now() - start;
+    const double cost = toSeconds(clock.now() - start);
     predictedIteration_ = std::max(cost, 0.9 * predictedIteration_);
     iterations += report.iterations;
     if (report.converged()) converged = true;
     if (report.stop == ik::StopReason::InvalidState) broken = true;
     if (report.iterations == 0 || report.stop != ik::StopReason::IterationCap) break;
   }
-  const double solvedAt = clock.now();
+  const TimePoint solvedAt = clock.now();
   result.iterations = iterations;
   result.converged = converged;
 
@@ -384,7 +370,7 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
       result.reachable[i] = (targetPoint_[i] - jointPosition(shoulder)).norm() <= armReach_;
     }
   }
-  predictedFinish_ = std::max(clock.now() - solvedAt, 0.9 * predictedFinish_);
+  predictedFinish_ = std::max(toSeconds(clock.now() - solvedAt), 0.9 * predictedFinish_);
   return result;
 }
 
