@@ -8,6 +8,7 @@
 #include "avatar/gltf/gltf_loader.h"
 #include "avatar/procedural/default_avatar.h"
 #include "runtime/tracked_avatar_body.h"
+#include "xr/tracking/trace.h"
 #include "xr/openxr/xr_loop.h"
 
 namespace {
@@ -28,6 +29,7 @@ int runXr(cli::Argv argv) {
   args.option("body", "ik|rest",
               "ik: the body follows head and hands (AvatarBodySolver); rest: the rest pose placed under the head",
               "ik");
+  args.option("record", "FILE.jsonl", "record the head and wrist trackers as a trace (replay with embody render --motion)");
   args.option("ik-budget-ms", "MS", "IK time budget per frame", "1");
   args.flag("seated", "seated mode: the avatar follows your head down instead of standing on the floor");
   args.flag("recenter", "recenter at start (your position and heading become the origin)");
@@ -90,6 +92,13 @@ int runXr(cli::Argv argv) {
 
   // The body: three-point PIK (head + controllers), solved synchronously each frame from the
   // trackers predicted for the frame's display time, placed back in the tracking space.
+  tracking::TraceWriter recorder;
+  const bool record = !args.get("record").empty();
+  if (record)
+    if (auto s = recorder.open(args.get("record"), tracking::TrackerMask::threePoint(), "openxr", 0.0f); !s) {
+      std::fprintf(stderr, "error: %s\n", s.error().c_str());
+      return 1;
+    }
   std::unique_ptr<runtime::TrackedAvatarBody> body;
   if (bodyMode == "ik") {
     runtime::TrackedBodyOptions bo;
@@ -106,8 +115,19 @@ int runXr(cli::Argv argv) {
       return 1;
     }
     body = std::move(created).value();
-    lo.bodyPose = [&body](const tracking::PoseSample& sample, avatar::SkeletonPose& pose) {
-      return body->solve(sample, pose);
+    lo.bodyPose = [&](const tracking::PoseSample& sample, avatar::SkeletonPose& pose) {
+      if (record) (void)recorder.write(sample);
+      const bool ok = body->solve(sample, pose);
+      if (ok && std::getenv("EMBODY_DEBUG_BODY")) {
+        const glm::mat4 m = body->avatarToTracking();
+        for (auto id : {tracking::TrackerId::Head, tracking::TrackerId::LeftHand, tracking::TrackerId::RightHand}) {
+          const Eigen::Vector3d j = body->solver().jointPosition(body->solver().trackerJoint(id));
+          const glm::vec3 w = glm::vec3(m * glm::vec4(float(j.x()), float(j.y()), float(j.z()), 1.0f));
+          const auto& t = sample[id].position;
+          std::printf("dbg %d joint %.3f %.3f %.3f target %.3f %.3f %.3f\n", int(id), w.x, w.y, w.z, t.x, t.y, t.z);
+        }
+      }
+      return ok;
     };
   }
 

@@ -153,12 +153,15 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
     }
     rep.interactionProfile = in.interactionProfile();
     if (!firstDisplayTime) firstDisplayTime = t;
-    auto world = [&](TrackedPose p) {
+    // Wrists to the world, and from OpenXR's hand-joint axes to the trackers' grip axes.
+    auto wrist = [&](int h) {
+      TrackedPose p = in.hand(h).wrist;
       if (p.valid) p.pose = placement.toWorld(p.pose);
+      p.pose.orientation = trackerHandOrientation(p.pose.orientation, h == 0);
       return p;
     };
-    trackers.publish(double(t - firstDisplayTime) * 1e-9, TrackedPose{head, views.valid, views.tracked},
-                     world(in.hand(0).wrist), world(in.hand(1).wrist));
+    trackers.publish(double(t - firstDisplayTime) * 1e-9, TrackedPose{head, views.valid, views.tracked}, wrist(0),
+                     wrist(1));
 
     bool rendered = false;
     if (timing->shouldRender && views.valid) {
