@@ -118,15 +118,6 @@ int runXr(cli::Argv argv) {
     lo.bodyPose = [&](const tracking::PoseSample& sample, avatar::SkeletonPose& pose) {
       if (record) (void)recorder.write(sample);
       const bool ok = body->solve(sample, pose);
-      if (ok && std::getenv("EMBODY_DEBUG_BODY")) {
-        const glm::mat4 m = body->avatarToTracking();
-        for (auto id : {tracking::TrackerId::Head, tracking::TrackerId::LeftHand, tracking::TrackerId::RightHand}) {
-          const Eigen::Vector3d j = body->solver().jointPosition(body->solver().trackerJoint(id));
-          const glm::vec3 w = glm::vec3(m * glm::vec4(float(j.x()), float(j.y()), float(j.z()), 1.0f));
-          const auto& t = sample[id].position;
-          std::printf("dbg %d joint %.3f %.3f %.3f target %.3f %.3f %.3f\n", int(id), w.x, w.y, w.z, t.x, t.y, t.z);
-        }
-      }
       return ok;
     };
   }
