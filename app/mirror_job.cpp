@@ -171,8 +171,8 @@ int runMirror(const MirrorJob& mj) {
     if (third) {
       cam = ar.orbitAround(pose, job.yaw, job.pitch);
     } else {
-      // At the eyes, looking a little down at the own body, as a person in a headset does.
-      const glm::mat4 eye = ar.eyePose(pose) * glm::mat4_cast(glm::angleAxis(glm::radians(-35.0f), glm::vec3(1, 0, 0)));
+      // At the eyes, looking down at the own body (the head is hidden; arms, chest and feet show).
+      const glm::mat4 eye = ar.eyePose(pose) * glm::mat4_cast(glm::angleAxis(glm::radians(-60.0f), glm::vec3(1, 0, 0)));
       cam = gfx::cameraFromPose(eye, gfx::FovAngles::symmetric(glm::radians(90.0f), win.aspect()), 0.02f);
     }
     gfx::SceneFrame scene;
