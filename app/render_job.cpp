@@ -142,6 +142,7 @@ int runRenderJob(const RenderJob& job) {
 
   runtime::AvatarBodyOptions bo;
   bo.spine = spine;
+  bo.coupledSpine = job.coupledSpine;
   bo.trackers = source.trackers();
   // Synthetic motions and BVH clips are built for (fitted to) so.userHeight; a recorded trace's
   // user is unknown unless given: calibrate from its first head sample.

@@ -44,6 +44,7 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
   bo.spine = options.spine;
   bo.totalMass = options.totalMass;
   bo.addTasks = false;
+  bo.coupledSpine = options.coupledSpine;
   auto body = avatar::buildBodyModel(avatar_, bo);
   if (!body) return Error{body.error()};
   body_ = std::move(body).value();
