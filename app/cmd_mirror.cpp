@@ -34,6 +34,7 @@ int runMirrorCommand(cli::Argv argv) {
   args.option("pitch", "DEGREES", "third-person orbit pitch (positive looks down)", "10");
   args.option("screenshot", "FILE.png", "with --frames: write the window's last frame as PNG");
   args.option("device", "SELECTOR", "Vulkan device: auto, an index, 'lavapipe', or part of its name", "auto");
+  args.flag("coupled-spine", "the coupled spine model (Raunhardt & Boulic) instead of independent spine sites");
   args.flag("three-point", "keep only head and hands (HMD + controllers): the lower body is inferred, feet step");
   args.flag("no-grid", "hide the ground grid");
   args.flag("validate", "enable the Khronos validation layer and print the message count at exit");
@@ -70,6 +71,7 @@ int runMirrorCommand(cli::Argv argv) {
   job.view = args.get("view");
   if (job.view == "third-person" || job.view == "first-person") job.view = job.view.substr(0, job.view.find('-'));
   job.threePoint = args.has("three-point");
+  job.coupledSpine = args.has("coupled-spine");
   job.grid = !args.has("no-grid");
   job.validate = args.has("validate");
   job.device = args.get("device");

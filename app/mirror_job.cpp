@@ -4,12 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <glm/gtc/constants.hpp>
-#include <nlohmann/json.hpp>
 #include <thread>
 
 #include "avatar/avatar_loader.h"
+#include "avatar/body/calibration.h"
 #include "avatar/gltf/gltf_loader.h"
 #include "avatar/procedural/default_avatar.h"
 #include "engine/avatar_renderer.h"
@@ -30,17 +29,6 @@ using Clock = std::chrono::steady_clock;
 int fail(const std::string& message, int code = 1) {
   std::fprintf(stderr, "error: %s\n", message.c_str());
   return code;
-}
-
-Result<float> readProfileHeight(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return Error{"cannot read the profile " + path};
-  nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-  if (j.is_discarded() || !j.is_object() || !j.contains("height_m") || !j["height_m"].is_number())
-    return Error{"the profile " + path + " has no number \"height_m\""};
-  const float h = j["height_m"].get<float>();
-  if (!(h >= 0.5f && h <= 2.5f)) return Error{"the profile's height_m must be 0.5 .. 2.5"};
-  return h;
 }
 
 Result<avatar::AvatarAsset> loadAvatar(const RenderJob& job) {
@@ -80,9 +68,9 @@ int runMirror(const MirrorJob& mj) {
   if (!avatar::parseSpineMode(job.spine, spine)) return fail("--spine must be auto, full or simplified", 2);
   float userHeight = job.userHeight;
   if (userHeight == 0.0f && !job.profile.empty()) {
-    auto h = readProfileHeight(job.profile);
-    if (!h) return fail(h.error());
-    userHeight = *h;
+    auto profile = avatar::loadProfile(job.profile);  // avatar/body/calibration.h, `embody avatar calibrate`
+    if (!profile) return fail("profile " + job.profile + ": " + profile.error());
+    userHeight = float(profile->userHeight);
   }
 
   // Files first (the likely errors, no display needed to report them), then the display.
@@ -97,6 +85,7 @@ int runMirror(const MirrorJob& mj) {
   tracking::PoseSource& source = **opened;
   runtime::AvatarBodyOptions bo;
   bo.spine = spine;
+  bo.coupledSpine = job.coupledSpine;
   bo.trackers = source.trackers();
   const bool trace = job.motion.size() > 6 && job.motion.substr(job.motion.size() - 6) == ".jsonl";
   bo.userHeight = userHeight > 0.0f ? userHeight : (trace ? 0.0f : so.userHeight);
