@@ -7,6 +7,7 @@
 #include "app/args.h"
 #include "avatar/gltf/gltf_loader.h"
 #include "avatar/procedural/default_avatar.h"
+#include "runtime/frame_stats.h"
 #include "runtime/tracked_avatar_body.h"
 #include "xr/tracking/trace.h"
 #include "xr/openxr/xr_loop.h"
@@ -100,6 +101,8 @@ int runXr(cli::Argv argv) {
       return 1;
     }
   std::unique_ptr<runtime::TrackedAvatarBody> body;
+  runtime::StatsRecorder ikStats;  // per solved frame, for --stats (grows with the session)
+  const bool keepStats = args.has("stats");
   if (bodyMode == "ik") {
     runtime::TrackedBodyOptions bo;
     bo.body.trackers = tracking::TrackerMask::threePoint();
@@ -118,6 +121,7 @@ int runXr(cli::Argv argv) {
     lo.bodyPose = [&](const tracking::PoseSample& sample, avatar::SkeletonPose& pose) {
       if (record) (void)recorder.write(sample);
       const bool ok = body->solve(sample, pose);
+      if (ok && keepStats) ikStats.add(body->frame().stats);
       return ok;
     };
   }
@@ -144,6 +148,10 @@ int runXr(cli::Argv argv) {
   if (lo.mirror) std::printf("mirror: %llu frames shown\n", static_cast<unsigned long long>(r.mirrorFrames));
   if (lo.vulkanValidation) std::printf("validation messages: %u\n", r.vulkanValidationMessages);
 
+  const runtime::StatsSummary ik = ikStats.summary();
+  if (body)
+    std::printf("ik: p50 %.2f ms, p99 %.2f ms (budget %.2f ms), %zu deadline misses, %.1f iterations\n", ik.ikP50Ms,
+                ik.ikP99Ms, budgetMs, ik.deadlineMisses, ik.iterationsMean);
   if (args.has("stats")) {
     nlohmann::json j = {{"runtime", r.runtime},
                         {"system", r.system},
@@ -168,6 +176,7 @@ int runXr(cli::Argv argv) {
                         {"body", bodyMode},
                         {"body_pose_frames", r.bodyPoseFrames},
                         {"error", r.error}};
+    if (body) runtime::toJson(j, ik);  // "ik" and "tracking" objects as in embody render's stats.json
     std::ofstream out(args.get("stats"));
     out << j.dump(2) << "\n";
     if (!out) {

@@ -169,6 +169,8 @@ TEST_CASE(
   // (the wrist sits a few centimetres behind the grip). Sky and floor away from the arms stay bare.
   CHECK(r.stats["body"] == "ik");
   CHECK(r.stats["body_pose_frames"] == 120);
+  CHECK(r.stats["tracking"]["non_finite_frames"] == 0);
+  CHECK(r.stats["tracking"]["hand_error_p95_m"].get<double>() < 0.02);  // avatar metres, wrists vs targets
   CHECK(countNear(img, left, 16, isAvatar) >= 40);
   CHECK(countNear(img, right, 16, isAvatar) >= 40);
   CHECK(countNear(img, {img.width / 2.0f, 40.0f}, 16, isAvatar) == 0);
