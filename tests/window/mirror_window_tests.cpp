@@ -145,3 +145,17 @@ TEST_CASE("embody mirror without a display fails with a clear message, bad optio
   CHECK(missing.exitCode == 1);
   CHECK(missing.output.find("error:") != std::string::npos);
 }
+
+TEST_CASE("embody demo opens the mirror window when a display is available", "[window]") {
+  if (!canRun()) {
+    WARN("SKIPPED: no display and no xvfb-run (Debian package xvfb)");
+    return;
+  }
+  const std::string dir = outDir("demo");
+  const Run r = shell(withDisplay() + embodyBin() + " demo --frames 3 --size 64x64 --out " + dir);
+  INFO(r.output);
+  REQUIRE(r.exitCode == 0);
+  CHECK(fs::exists(dir + "/stats.json"));
+  CHECK(r.output.find("embody mirror:") != std::string::npos);
+  CHECK(r.output.find("mirror: 900 frames shown") != std::string::npos);
+}
