@@ -42,9 +42,14 @@ glm::mat4 TrackedAvatarBody::avatarToTracking() const {
 
 bool TrackedAvatarBody::solve(const tracking::PoseSample& sample, avatar::SkeletonPose& pose) {
   const tracking::TrackerPose& head = sample[tracking::TrackerId::Head];
+  const bool headUsable = head.valid && tracking::isUsable(head);
+  // Nothing is solved before the first valid head: the solver would calibrate from a default
+  // height instead of the user's eye height.
+  if (!seenHead_ && !headUsable) return false;
+  seenHead_ = true;
   const tracking::PoseSample* input = &sample;
   if (options_.seated) {
-    if (lift_ < 0.0f && head.valid && tracking::isUsable(head))
+    if (lift_ < 0.0f && headUsable)
       lift_ = std::max(0.0f, options_.standingEyeHeight - head.position.y);
     if (lift_ < 0.0f) return false;
     lifted_ = sample;
@@ -53,7 +58,7 @@ bool TrackedAvatarBody::solve(const tracking::PoseSample& sample, avatar::Skelet
     input = &lifted_;
   }
   stage_->process(*input, frame_);
-  if (!(solver_->scale() > 0.0)) return false;  // not calibrated yet: no valid head so far
+  if (!(solver_->scale() > 0.0)) return false;
   const glm::mat4 m = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, options_.seated ? -lift_ : 0.0f, 0.0f)) *
                       avatarToTracking();
   const float s = glm::length(glm::vec3(m[0]));

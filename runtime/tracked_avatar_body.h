@@ -35,7 +35,8 @@ class TrackedAvatarBody {
   static Result<std::unique_ptr<TrackedAvatarBody>> create(const avatar::AvatarAsset& avatar,
                                                            const TrackedBodyOptions& options);
   // Solves `sample` (tracking space) into `pose` (resized to the skeleton). False, with `pose`
-  // left alone, until a valid head sample has calibrated the solver.
+  // left alone, until the first valid head sample (it calibrates the solver when no user height
+  // was given). Afterwards a lost head is the tracking-loss guard's business.
   bool solve(const tracking::PoseSample& sample, avatar::SkeletonPose& pose);
   // Forgets the seated lift and the warm start (after a recenter or recalibration).
   void reset();
@@ -55,6 +56,7 @@ class TrackedAvatarBody {
   SolvedFrame frame_;
   tracking::PoseSample lifted_;
   float lift_ = -1.0f;  // seated: metres added to the trackers (< 0: not fixed yet)
+  bool seenHead_ = false;
 };
 
 }  // namespace embody::runtime
