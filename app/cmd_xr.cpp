@@ -7,6 +7,9 @@
 #include "app/args.h"
 #include "avatar/gltf/gltf_loader.h"
 #include "avatar/procedural/default_avatar.h"
+#include "runtime/frame_stats.h"
+#include "runtime/tracked_avatar_body.h"
+#include "xr/tracking/trace.h"
 #include "xr/openxr/xr_loop.h"
 
 namespace {
@@ -17,13 +20,18 @@ int runXr(cli::Argv argv) {
   cli::Args args(
       "embody xr",
       "Puts you in the avatar through the active OpenXR runtime (a headset, or the headless runtime "
-      "selected by XR_RUNTIME_JSON). Until the body solver is connected the avatar stands in its rest "
-      "pose under your head and gizmos follow your hands.");
+      "selected by XR_RUNTIME_JSON). The avatar's body is solved from the HMD and the controllers "
+      "(three-point IK: head and hands tracked, hips and feet inferred, the feet step); gizmos mark the controllers.");
   args.option("avatar", "FILE|default",
               "a .gltf/.glb/.vrm file, or 'default' (the built-in humanoid avatar)", "default");
   args.option("frames", "N", "end the session after N submitted frames (0: until the runtime ends it)", "0");
   args.option("height", "METRES", "your standing eye height (skips the calibration from the HMD height)");
   args.option("stats", "FILE", "write a JSON report of the run (states, frames, tracking, validation)");
+  args.option("body", "ik|rest",
+              "ik: the body follows head and hands (AvatarBodySolver); rest: the rest pose placed under the head",
+              "ik");
+  args.option("record", "FILE.jsonl", "record the head and wrist trackers as a trace (replay with embody render --motion)");
+  args.option("ik-budget-ms", "MS", "IK time budget per frame", "1");
   args.flag("seated", "seated mode: the avatar follows your head down instead of standing on the floor");
   args.flag("recenter", "recenter at start (your position and heading become the origin)");
   args.flag(
@@ -52,6 +60,22 @@ int runXr(cli::Argv argv) {
   lo.vulkanValidation = args.has("validate");
   lo.verbose = args.has("verbose");
   lo.mirror = args.has("mirror");
+  const std::string bodyMode = args.get("body");
+  if (bodyMode != "ik" && bodyMode != "rest") {
+    std::fprintf(stderr, "error: --body must be ik or rest\n");
+    return 2;
+  }
+  double budgetMs = 1.0;
+  try {
+    budgetMs = args.number("ik-budget-ms");
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  }
+  if (!(budgetMs > 0.0 && budgetMs <= 100.0)) {
+    std::fprintf(stderr, "error: --ik-budget-ms must be > 0 and <= 100\n");
+    return 2;
+  }
 
   avatar::AvatarAsset asset;
   const std::string avatarArg = args.get("avatar");
@@ -66,6 +90,41 @@ int runXr(cli::Argv argv) {
     asset = std::move(loaded).value();
   }
   lo.avatar = &asset;
+
+  // The body: three-point PIK (head + controllers), solved synchronously each frame from the
+  // trackers predicted for the frame's display time, placed back in the tracking space.
+  tracking::TraceWriter recorder;
+  const bool record = !args.get("record").empty();
+  if (record)
+    if (auto s = recorder.open(args.get("record"), tracking::TrackerMask::threePoint(), "openxr", 0.0f); !s) {
+      std::fprintf(stderr, "error: %s\n", s.error().c_str());
+      return 1;
+    }
+  std::unique_ptr<runtime::TrackedAvatarBody> body;
+  runtime::StatsRecorder ikStats;  // per solved frame, for --stats (grows with the session)
+  const bool keepStats = args.has("stats");
+  if (bodyMode == "ik") {
+    runtime::TrackedBodyOptions bo;
+    bo.body.trackers = tracking::TrackerMask::threePoint();
+    bo.seated = lo.placement.seated;
+    const float eye = lo.placement.userEyeHeight;  // 0: from the first head sample (standing)
+    bo.standingEyeHeight = eye > 0.0f ? eye : 1.64f;
+    // The solver takes a body height; a seated user's head height says nothing about it.
+    bo.body.userHeight = eye > 0.0f ? eye / 0.936f : (bo.seated ? bo.standingEyeHeight / 0.936f : 0.0f);
+    bo.stage.budgetSeconds = budgetMs * 1e-3;
+    auto created = runtime::TrackedAvatarBody::create(asset, bo);
+    if (!created) {
+      std::fprintf(stderr, "error: avatar %s: %s\n", avatarArg.c_str(), created.error().c_str());
+      return 1;
+    }
+    body = std::move(created).value();
+    lo.bodyPose = [&](const tracking::PoseSample& sample, avatar::SkeletonPose& pose) {
+      if (record) (void)recorder.write(sample);
+      const bool ok = body->solve(sample, pose);
+      if (ok && keepStats) ikStats.add(body->frame().stats);
+      return ok;
+    };
+  }
 
   const xr::XrLoopReport r = xr::runXrLoop(lo);
   std::string states;
@@ -84,10 +143,15 @@ int runXr(cli::Argv argv) {
               static_cast<unsigned long long>(r.handValidFrames[1]),
               static_cast<unsigned long long>(r.handLostFrames[0]),
               static_cast<unsigned long long>(r.handLostFrames[1]));
+  std::printf("body: %s, %llu frames solved\n", bodyMode.c_str(), static_cast<unsigned long long>(r.bodyPoseFrames));
   std::printf("calibration: %s, avatar scale %.3f\n", r.calibrated ? "done" : "not done", r.calibratedScale);
   if (lo.mirror) std::printf("mirror: %llu frames shown\n", static_cast<unsigned long long>(r.mirrorFrames));
   if (lo.vulkanValidation) std::printf("validation messages: %u\n", r.vulkanValidationMessages);
 
+  const runtime::StatsSummary ik = ikStats.summary();
+  if (body)
+    std::printf("ik: p50 %.2f ms, p99 %.2f ms (budget %.2f ms), %zu deadline misses, %.1f iterations\n", ik.ikP50Ms,
+                ik.ikP99Ms, budgetMs, ik.deadlineMisses, ik.iterationsMean);
   if (args.has("stats")) {
     nlohmann::json j = {{"runtime", r.runtime},
                         {"system", r.system},
@@ -109,7 +173,10 @@ int runXr(cli::Argv argv) {
                         {"vulkan_validation_messages", r.vulkanValidationMessages},
                         {"mean_frame_ms", r.meanFrameMs},
                         {"mirror_frames", r.mirrorFrames},
+                        {"body", bodyMode},
+                        {"body_pose_frames", r.bodyPoseFrames},
                         {"error", r.error}};
+    if (body) runtime::toJson(j, ik);  // "ik" and "tracking" objects as in embody render's stats.json
     std::ofstream out(args.get("stats"));
     out << j.dump(2) << "\n";
     if (!out) {
@@ -126,4 +193,4 @@ int runXr(cli::Argv argv) {
 
 }  // namespace
 
-EMBODY_COMMAND("xr", "embody the user in an OpenXR headset (avatar in first person, hand gizmos)", runXr);
+EMBODY_COMMAND("xr", "embody the user in an OpenXR headset (three-point IK body in first person, hand gizmos)", runXr);

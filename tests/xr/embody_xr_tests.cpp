@@ -1,6 +1,7 @@
 // `embody xr` end to end against the headless runtime with the OpenXR core validation layer and
 // the Vulkan validation layer: the session reaches FOCUSED and ends cleanly, nothing is reported,
-// and in the captured left-eye image the hand gizmos are where the replayed controllers project.
+// and in the captured left-eye image the avatar's hands (solved by three-point IK) and the hand
+// gizmos are where the replayed controllers project.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
@@ -57,6 +58,11 @@ bool isCyan(const uint8_t* px) {
 }
 bool isMagenta(const uint8_t* px) {
   return px[0] > 200 && px[1] < 190 && px[2] > 190 && px[0] - px[1] > 60;
+}
+
+// The avatar's lit grey skin; the ground grid's lines (203, 206, 212) are bluer and excluded.
+bool isAvatar(const uint8_t* px) {
+  return px[0] >= 185 && std::abs(px[0] - px[1]) <= 4 && px[2] - px[0] >= 0 && px[2] - px[0] <= 6;
 }
 
 template <typename Pred>
@@ -158,6 +164,29 @@ TEST_CASE(
   CHECK(countNear(img, right, 14, isCyan) == 0);
   CHECK(countAll(img, isCyan) == countNear(img, left, 30, isCyan));
   CHECK(countAll(img, isMagenta) == countNear(img, right, 30, isMagenta));
+  // The avatar's own hands and forearms (not only the gizmos) reach the controllers: the body is
+  // solved every frame, and the avatar's skin fills the neighbourhood of each projected controller
+  // (the wrist sits a few centimetres behind the grip). Sky and floor away from the arms stay bare.
+  CHECK(r.stats["body"] == "ik");
+  CHECK(r.stats["body_pose_frames"] == 120);
+  CHECK(r.stats["tracking"]["non_finite_frames"] == 0);
+  CHECK(r.stats["tracking"]["hand_error_p95_m"].get<double>() < 0.02);  // avatar metres, wrists vs targets
+  CHECK(countNear(img, left, 16, isAvatar) >= 40);
+  CHECK(countNear(img, right, 16, isAvatar) >= 40);
+  CHECK(countNear(img, {img.width / 2.0f, 40.0f}, 16, isAvatar) == 0);
+  CHECK(countNear(img, {30.0f, 200.0f}, 16, isAvatar) == 0);
+  CHECK(countNear(img, {img.width / 2.0f, 235.0f}, 16, isAvatar) == 0);  // floor between the forearms
+}
+
+TEST_CASE("embody xr --body rest leaves the arms hanging: the controllers' neighbourhood shows no avatar", "[xr]") {
+  // The control for the check above: without the solver the rest pose stands under the head.
+  const XrRun r = runEmbodyXr("body_rest", {"--frames", "20", "--body", "rest"}, {});
+  INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
+  REQUIRE(r.process.exitCode == 0);
+  CHECK(r.stats["body_pose_frames"] == 0);
+  const auto img = capture(r, 19);
+  CHECK(countNear(img, projectLeftEye(kLeftHand, img.width, img.height), 16, isAvatar) < 10);
+  CHECK(countNear(img, projectLeftEye(kRightHand, img.width, img.height), 16, isAvatar) < 10);
 }
 
 TEST_CASE("embody xr handles tracking loss mid-run: the hands disappear and come back, nothing breaks",
@@ -183,6 +212,11 @@ TEST_CASE("embody xr handles tracking loss mid-run: the hands disappear and come
   CHECK(sawLostFrame);
   const auto last = capture(r, 89);
   CHECK(countNear(last, projectLeftEye(kRightHand, last.width, last.height), 14, isMagenta) >= 8);
+  // The body kept being solved through the loss (held, then eased hands; never NaN, which would
+  // have failed skinning) and the avatar's hands are back at the controllers at the end.
+  CHECK(r.stats["body_pose_frames"] == 90);
+  CHECK(countNear(last, projectLeftEye(kLeftHand, last.width, last.height), 16, isAvatar) >= 40);
+  CHECK(countNear(last, projectLeftEye(kRightHand, last.width, last.height), 16, isAvatar) >= 40);
 }
 
 TEST_CASE("embody xr ends cleanly when the runtime ends the session", "[xr]") {

@@ -57,6 +57,14 @@ Pose gripToWrist(const std::string& profile, bool leftHand) {
   return p;
 }
 
+glm::quat trackerHandOrientation(const glm::quat& xrWrist, bool leftHand) {
+  // Columns: the tracker's X, Y, Z in the wrist joint's frame. Left: X = +Y (back of the hand =
+  // away from the palm), Y = -Z (fingers), Z = X x Y = -X. Right: X = -Y (into the palm), Y = -Z, Z = +X.
+  static const glm::quat kLeft = glm::quat_cast(glm::mat3(glm::vec3(0, 1, 0), glm::vec3(0, 0, -1), glm::vec3(-1, 0, 0)));
+  static const glm::quat kRight = glm::quat_cast(glm::mat3(glm::vec3(0, -1, 0), glm::vec3(0, 0, -1), glm::vec3(1, 0, 0)));
+  return glm::normalize(xrWrist * (leftHand ? kLeft : kRight));
+}
+
 Result<std::unique_ptr<XrInput>> XrInput::create(XrSystem& system, XrSessionRunner& session) {
   std::unique_ptr<XrInput> in(new XrInput(system, session));
   if (auto s = in->init(); !s) return Error{s.error()};

@@ -32,6 +32,12 @@ struct HandState {
 // Measured from the controllers' geometry: the grip origin sits in the palm, about a palm's
 // length ahead of the wrist and turned by the handle's angle.
 Pose gripToWrist(const std::string& interactionProfile, bool leftHand);
+// The wrists XrInput reports (hand-tracking wrist joints, or grips moved to the wrist) have
+// OpenXR's hand-joint axes: -Z from the wrist towards the fingers, +Y out of the back of the hand.
+// The pose sources and the body solver (xr/tracking/tracker.h) use the grip convention instead:
+// +Y along the fingers, +X = -palm normal (left) / +palm normal (right). This turns one into the
+// other (a fixed rotation per hand).
+glm::quat trackerHandOrientation(const glm::quat& xrWrist, bool leftHand);
 
 class XrInput {
  public:

@@ -5,9 +5,9 @@
 #include <thread>
 
 #include "engine/avatar_renderer.h"
+#include "engine/desktop_window.h"
 #include "engine/device.h"
 #include "engine/overlay.h"
-#include "xr/openxr/mirror_window.h"
 #include "xr/openxr/xr_input.h"
 #include "xr/openxr/xr_pose_source.h"
 #include "xr/openxr/xr_session.h"
@@ -41,7 +41,7 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
   XrSystemOptions so;
   so.vulkanValidation = o.vulkanValidation;
   if (o.mirror) {
-    auto exts = MirrorWindow::requiredInstanceExtensions();
+    auto exts = gfx::DesktopWindow::requiredInstanceExtensions();
     if (!exts) return fail(exts.error());
     so.vulkanInstanceExtensions = *exts;
     so.vulkanDeviceExtensions = {VK_KHR_SWAPCHAIN_EXTENSION_NAME};
@@ -55,11 +55,11 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
   gfx::AdoptedDevice ad{sys.vkInstance(), sys.vkPhysicalDevice(), sys.vkDevice(), sys.queueFamily(), 0};
   auto device = gfx::Device::adopt(ad);
   if (!device) return fail(device.error());
-  std::unique_ptr<MirrorWindow> mirror;
+  std::unique_ptr<gfx::DesktopWindow> mirror;
   if (o.mirror) {
     const auto& v = sys.views()[0];
-    auto m = MirrorWindow::create(sys.vkInstance(), sys.vkPhysicalDevice(), sys.vkDevice(), sys.queueFamily(),
-                                  v.recommendedImageRectWidth, v.recommendedImageRectHeight);
+    auto m = gfx::DesktopWindow::create(**device, v.recommendedImageRectWidth, v.recommendedImageRectHeight,
+                                        "embody xr (mirror)", gfx::DesktopWindow::Keys{});
     if (!m) return fail(m.error());
     mirror = std::move(m).value();
   }
@@ -153,12 +153,15 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
     }
     rep.interactionProfile = in.interactionProfile();
     if (!firstDisplayTime) firstDisplayTime = t;
-    auto world = [&](TrackedPose p) {
+    // Wrists to the world, and from OpenXR's hand-joint axes to the trackers' grip axes.
+    auto wrist = [&](int h) {
+      TrackedPose p = in.hand(h).wrist;
       if (p.valid) p.pose = placement.toWorld(p.pose);
+      p.pose.orientation = trackerHandOrientation(p.pose.orientation, h == 0);
       return p;
     };
-    trackers.publish(double(t - firstDisplayTime) * 1e-9, TrackedPose{head, views.valid, views.tracked},
-                     world(in.hand(0).wrist), world(in.hand(1).wrist));
+    trackers.publish(double(t - firstDisplayTime) * 1e-9, TrackedPose{head, views.valid, views.tracked}, wrist(0),
+                     wrist(1));
 
     bool rendered = false;
     if (timing->shouldRender && views.valid) {
@@ -248,7 +251,11 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
                 ? ar.orbitAround(pose, 0.6f, 0.2f)
                 : gfx::cameraFromPose(views.eyes[0].pose.matrix(),
                                       gfx::FovAngles::symmetric(vfov, mirror->aspect()), kNear, kFar);
-        auto shown = mirror->draw(r, rendererFrames, cam, sync);
+        if (mirror->thirdPerson()) {  // the whole avatar from outside: the third-person draw list
+          scene.firstPerson = false;
+          st = r.setScene(scene);
+        }
+        auto shown = st ? mirror->draw(r, rendererFrames, cam, sync) : Result<bool>(false);
         if (!shown)
           st = Status(Error{shown.error()});
         else if (*shown)

@@ -2,8 +2,9 @@
 // The headset loop behind `embody xr`: OpenXR system + session + input, the avatar rendered in
 // first person into the runtime's swapchains (one pass per eye), gizmos at the tracked hands.
 //
-// Until the body/IK pipeline exists, the avatar stands in its rest pose under the head (scaled by
-// the HMD-height calibration, turned with the head's heading); only the gizmos follow the hands.
+// The body comes from `bodyPose` (embody xr: runtime::TrackedAvatarBody, three-point PIK); without
+// it the avatar stands in its rest pose under the head (scaled by the HMD-height calibration,
+// turned with the head's heading).
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -23,10 +24,10 @@ struct XrLoopOptions {
   PlacementOptions placement;
   bool recenterAtStart = false;
   bool verbose = false;  // print every session state change
-  bool mirror = false;   // a desktop window showing the left eye (V: third person)
+  bool mirror = false;   // a desktop window (gfx::DesktopWindow) showing the left eye (V: third person)
   // The body: given each frame's tracker sample (world space, recentered: head, wrists), fill
   // `pose` (starts at the rest pose) and return true; false or unset = the rest pose placed under
-  // the head. This is where the IK stage plugs in (runtime::IkStage::process).
+  // the head. Called on the render thread with the trackers predicted for this frame's display.
   std::function<bool(const tracking::PoseSample& sample, avatar::SkeletonPose& pose)> bodyPose;
 };
 

@@ -1,0 +1,62 @@
+#pragma once
+// The avatar's body solved from trackers and placed back in the tracking space: what a headset
+// (first person) needs, where the avatar's hands must be where the user's are. Synchronous (one
+// IkStage call per frame: filter -> tracking-loss guard -> budgeted AvatarBodySolver), so the
+// pose rendered this frame is solved from this frame's predicted trackers.
+//
+//   auto body = TrackedAvatarBody::create(avatar, options);
+//   each frame: body->solve(sample, pose);   // pose: model space = the tracking space
+//
+// AvatarBodySolver works in the avatar's model space (tracking metres scaled by avatar eye
+// height / user eye height, turned onto the avatar's forward); the inverse of that map is applied
+// to the skeleton's roots, which scales the avatar to the user.
+//
+// Seated mode: the trackers are lifted by (standing eye height - head height at the first valid
+// sample) before solving and the solved avatar is lowered by the same amount: the spine and arms
+// follow the head and hands, the legs keep the solver's standing stance (they are not bent into a
+// sitting pose; see docs/xr.md).
+#include <memory>
+
+#include "runtime/avatar_body_solver.h"
+#include "runtime/clock.h"
+#include "runtime/ik_stage.h"
+
+namespace embody::runtime {
+
+struct TrackedBodyOptions {
+  AvatarBodyOptions body;  // trackers: threePoint() for an HMD with two controllers
+  IkStageConfig stage;
+  bool seated = false;
+  float standingEyeHeight = 1.64f;  // seated mode: the user's eye height when standing (metres)
+};
+
+class TrackedAvatarBody {
+ public:
+  static Result<std::unique_ptr<TrackedAvatarBody>> create(const avatar::AvatarAsset& avatar,
+                                                           const TrackedBodyOptions& options);
+  // Solves `sample` (tracking space) into `pose` (resized to the skeleton). False, with `pose`
+  // left alone, until the first valid head sample (it calibrates the solver when no user height
+  // was given). Afterwards a lost head is the tracking-loss guard's business.
+  bool solve(const tracking::PoseSample& sample, avatar::SkeletonPose& pose);
+  // Forgets the seated lift and the warm start (after a recenter or recalibration).
+  void reset();
+
+  const AvatarBodySolver& solver() const { return *solver_; }
+  const SolvedFrame& frame() const { return frame_; }
+  // Avatar model space -> tracking space (a similarity: rotation, uniform scale, translation).
+  glm::mat4 avatarToTracking() const;
+
+ private:
+  TrackedAvatarBody() = default;
+  const avatar::AvatarAsset* avatar_ = nullptr;
+  TrackedBodyOptions options_;
+  std::unique_ptr<AvatarBodySolver> solver_;
+  const Clock* clock_ = &steadyClock();
+  std::unique_ptr<IkStage> stage_;
+  SolvedFrame frame_;
+  tracking::PoseSample lifted_;
+  float lift_ = -1.0f;  // seated: metres added to the trackers (< 0: not fixed yet)
+  bool seenHead_ = false;
+};
+
+}  // namespace embody::runtime
