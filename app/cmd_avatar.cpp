@@ -22,7 +22,9 @@ using namespace embody::avatar;
 
 nlohmann::json describe(const AvatarAsset& a, const GltfLoadReport& report) {
   const HumanoidMap& h = a.humanoid;
-  auto nodeName = [&](int j) { return j >= 0 ? a.skeleton.joints[static_cast<size_t>(j)].name : std::string(); };
+  auto nodeName = [&](int j) {
+    return j >= 0 ? a.skeleton.joints[static_cast<size_t>(j)].name : std::string();
+  };
   nlohmann::json j;
   j["file"] = a.sourcePath.empty() ? "default" : a.sourcePath;
   j["format"] = avatarFormatName(a.format);
@@ -30,7 +32,8 @@ nlohmann::json describe(const AvatarAsset& a, const GltfLoadReport& report) {
   j["bones"] = nlohmann::json::object();
   for (int b = 0; b < kHumanBoneCount; ++b)
     if (h.bones[static_cast<size_t>(b)] >= 0)
-      j["bones"][std::string(humanBoneName(static_cast<HumanBone>(b)))] = nodeName(h.bones[static_cast<size_t>(b)]);
+      j["bones"][std::string(humanBoneName(static_cast<HumanBone>(b)))] =
+          nodeName(h.bones[static_cast<size_t>(b)]);
   j["unmapped_required"] = nlohmann::json::array();
   for (HumanBone b : h.missingRequired) j["unmapped_required"].push_back(humanBoneName(b));
   j["joints"] = a.skinJointCount;
@@ -61,57 +64,73 @@ nlohmann::json describeBody(const AvatarAsset& a, const BodyModelOptions& option
   auto body = buildBodyModel(a, options);
   if (!body.ok()) return {{"error", body.error()}};
   const ik::Model& m = body->model;
-  nlohmann::json j = {{"spine_model", body->spineModel}, {"scale", body->scale}, {"dofs", m.dofs},
-                      {"joints", m.joints.size()}, {"equalities", m.equalities.size()},
-                      {"inequalities", m.inequalities.size()}, {"mass_kg", m.total_mass}, {"tasks", nlohmann::json::array()}};
-  for (const auto& t : m.tasks) j["tasks"].push_back(t.desc.name + " (level " + std::to_string(t.desc.level) + ")");
+  nlohmann::json j = {{"spine_model", body->spineModel},
+                      {"scale", body->scale},
+                      {"dofs", m.dofs},
+                      {"joints", m.joints.size()},
+                      {"equalities", m.equalities.size()},
+                      {"inequalities", m.inequalities.size()},
+                      {"mass_kg", m.total_mass},
+                      {"tasks", nlohmann::json::array()}};
+  for (const auto& t : m.tasks)
+    j["tasks"].push_back(t.desc.name + " (level " + std::to_string(t.desc.level) + ")");
   j["spine_sites"] = nlohmann::json::array();
   for (const SpineBone& s : body->spineSites) {
     nlohmann::json v = nlohmann::json::array();
     for (int l = s.firstLevel; l < s.endLevel; ++l) v.push_back(vertebralJointName(l));
-    j["spine_sites"].push_back({{"node", a.skeleton.joints[static_cast<size_t>(s.joint)].name}, {"vertebrae", v}});
+    j["spine_sites"].push_back(
+        {{"node", a.skeleton.joints[static_cast<size_t>(s.joint)].name}, {"vertebrae", v}});
   }
   return j;
 }
 
 void printText(const nlohmann::json& j) {
   auto s = [](const nlohmann::json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); };
-  std::printf("%s\n  format: %s, %s skin joints, %s nodes, %s triangles\n", s(j["file"]).c_str(), s(j["format"]).c_str(),
-              s(j["joints"]).c_str(), s(j["nodes"]).c_str(), s(j["triangles"]).c_str());
+  std::printf("%s\n  format: %s, %s skin joints, %s nodes, %s triangles\n", s(j["file"]).c_str(),
+              s(j["format"]).c_str(), s(j["joints"]).c_str(), s(j["nodes"]).c_str(),
+              s(j["triangles"]).c_str());
   std::printf("  humanoid mapping: %s\n", s(j["mapping"]).c_str());
-  for (const auto& [bone, node] : j["bones"].items()) std::printf("    %-24s %s\n", bone.c_str(), s(node).c_str());
-  if (j["unmapped_required"].empty()) std::printf("  all required bones mapped\n");
-  else std::printf("  UNMAPPED required bones: %s\n", j["unmapped_required"].dump().c_str());
+  for (const auto& [bone, node] : j["bones"].items())
+    std::printf("    %-24s %s\n", bone.c_str(), s(node).c_str());
+  if (j["unmapped_required"].empty())
+    std::printf("  all required bones mapped\n");
+  else
+    std::printf("  UNMAPPED required bones: %s\n", j["unmapped_required"].dump().c_str());
   std::printf("  spine (hips -> head), vertebral joints each bone stands for:\n");
   for (const auto& b : j["spine"]) {
     std::string v;
     for (const auto& x : b["vertebrae"]) v += (v.empty() ? "" : " ") + x.get<std::string>();
-    std::printf("    %-28s %-11s %s\n", s(b["node"]).c_str(), s(b["bone"]).c_str(), v.empty() ? "(rigid)" : v.c_str());
+    std::printf("    %-28s %-11s %s\n", s(b["node"]).c_str(), s(b["bone"]).c_str(),
+                v.empty() ? "(rigid)" : v.c_str());
   }
   const auto& fp = j["first_person"];
-  std::printf("  first person: %s, head '%s', %s triangles hidden, %s drawn\n", s(fp["mode"]).c_str(), s(fp["head"]).c_str(),
-              s(fp["removed_triangles"]).c_str(), s(fp["triangles"]).c_str());
+  std::printf("  first person: %s, head '%s', %s triangles hidden, %s drawn\n", s(fp["mode"]).c_str(),
+              s(fp["head"]).c_str(), s(fp["removed_triangles"]).c_str(), s(fp["triangles"]).c_str());
   for (const auto& a : fp["annotations"]) std::printf("    annotation %s\n", s(a).c_str());
   const auto& body = j["body_model"];
   if (body.contains("error")) {
     std::printf("  body model: not built (%s)\n", s(body["error"]).c_str());
   } else {
-    std::printf("  body model: %s joints, %s dofs, spine %s (%zu sites), %.1f kg, scale %.3f\n", s(body["joints"]).c_str(),
-                s(body["dofs"]).c_str(), s(body["spine_model"]).c_str(), body["spine_sites"].size(),
-                body["mass_kg"].get<double>(), body["scale"].get<double>());
+    std::printf("  body model: %s joints, %s dofs, spine %s (%zu sites), %.1f kg, scale %.3f\n",
+                s(body["joints"]).c_str(), s(body["dofs"]).c_str(), s(body["spine_model"]).c_str(),
+                body["spine_sites"].size(), body["mass_kg"].get<double>(), body["scale"].get<double>());
   }
   for (const auto& n : j["notes"]) std::printf("  note: %s\n", s(n).c_str());
   for (const auto& w : j["warnings"]) std::printf("  warning: %s\n", s(w).c_str());
 }
 
 int runInfo(cli::Argv argv) {
-  cli::Args args("embody avatar info", "Loads an avatar (.gltf, .glb, .vrm, or 'default' for the built-in mannequin) and "
-                                       "reports its format, humanoid bone mapping, spine vertebrae and first-person mode.");
+  cli::Args args("embody avatar info",
+                 "Loads an avatar (.gltf, .glb, .vrm, or 'default' for the built-in mannequin) and "
+                 "reports its format, humanoid bone mapping, spine vertebrae and first-person mode.");
   args.positional("FILE", "avatar file, or 'default'");
   args.flag("json", "print one JSON object instead of text");
-  args.option("bone-map", "FILE", "JSON object VRM-1.0-bone-name -> node name; its entries win over every other mapping");
-  args.option("spine", "MODE", "spine sites of the body model: full (one per vertebra bone), simplified (8 sites), "
-                               "auto (full when the avatar has vertebra bones, else its own spine bones)", "auto");
+  args.option("bone-map", "FILE",
+              "JSON object VRM-1.0-bone-name -> node name; its entries win over every other mapping");
+  args.option("spine", "MODE",
+              "spine sites of the body model: full (one per vertebra bone), simplified (8 sites), "
+              "auto (full when the avatar has vertebra bones, else its own spine bones)",
+              "auto");
   args.option("user-height", "METRES", "scale the body model to this user height");
   args.option("profile", "FILE", "calibration profile to read (written by 'embody avatar calibrate')");
   if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
@@ -169,22 +188,27 @@ int runInfo(cli::Argv argv) {
     bodyOptions.scale = p->scale;
   }
   j["body_model"] = describeBody(asset.value(), bodyOptions);
-  if (args.has("json")) std::printf("%s\n", j.dump(2).c_str());
-  else printText(j);
+  if (args.has("json"))
+    std::printf("%s\n", j.dump(2).c_str());
+  else
+    printText(j);
   return 0;
 }
 
 int runCalibrate(cli::Argv argv) {
-  cli::Args args("embody avatar calibrate", "Scales the avatar to the user and writes the calibration profile (JSON).");
+  cli::Args args("embody avatar calibrate",
+                 "Scales the avatar to the user and writes the calibration profile (JSON).");
   args.positional("FILE", "avatar file, or 'default'");
   args.option("user-height", "METRES", "the user's height");
-  args.option("eye-height", "METRES", "the user's eye height (e.g. the HMD at calibration), when the height is unknown");
+  args.option("eye-height", "METRES",
+              "the user's eye height (e.g. the HMD at calibration), when the height is unknown");
   args.option("arm-span", "METRES", "fingertip to fingertip (stored, not applied)");
   args.option("profile", "FILE", "where to write the profile");
   args.option("bone-map", "FILE", "JSON bone map, as for info");
   if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
   if (!args.has("profile") || (!args.has("user-height") && !args.has("eye-height"))) {
-    std::fprintf(stderr, "error: need --profile and --user-height or --eye-height\n\n%s", args.usage().c_str());
+    std::fprintf(stderr, "error: need --profile and --user-height or --eye-height\n\n%s",
+                 args.usage().c_str());
     return 2;
   }
   CalibrationInput in;
@@ -223,7 +247,8 @@ int runCalibrate(cli::Argv argv) {
 }
 
 int runExportDefault(cli::Argv argv) {
-  cli::Args args("embody avatar export-default", "Writes the built-in mannequin as a standard glTF 2.0 binary (GLB).");
+  cli::Args args("embody avatar export-default",
+                 "Writes the built-in mannequin as a standard glTF 2.0 binary (GLB).");
   args.positional("FILE", "output .glb path");
   if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
   const AvatarAsset a = buildDefaultAvatar();
@@ -240,7 +265,8 @@ int runAvatar(cli::Argv argv) {
   static const char* usage =
       "usage: embody avatar info FILE|default [--json] [--bone-map FILE] [--spine full|simplified|auto]\n"
       "                          [--user-height M] [--profile FILE]\n"
-      "       embody avatar calibrate FILE|default (--user-height M | --eye-height M) [--arm-span M] --profile OUT\n"
+      "       embody avatar calibrate FILE|default (--user-height M | --eye-height M) [--arm-span M] "
+      "--profile OUT\n"
       "       embody avatar export-default FILE.glb\n";
   if (argv.empty()) {
     std::fprintf(stderr, "error: missing action\n\n%s", usage);
@@ -259,4 +285,5 @@ int runAvatar(cli::Argv argv) {
 
 }  // namespace
 
-EMBODY_COMMAND("avatar", "inspect an avatar (info) or write the default mannequin (export-default)", runAvatar);
+EMBODY_COMMAND("avatar", "inspect an avatar (info) or write the default mannequin (export-default)",
+               runAvatar);

@@ -60,6 +60,10 @@ int runDoctor(embody::cli::Argv argv) {
                  {"runtime", xr.runtimeName}, {"runtime_manifest", xr.runtimeManifest}};
   if (!xr.runtimeVersion.empty()) j["openxr"]["runtime_version"] = xr.runtimeVersion;
   if (!xr.runtimeError.empty()) j["openxr"]["runtime_error"] = xr.runtimeError;
+  j["openxr"]["api_layers"] = xr.apiLayers;
+  j["openxr"]["runtime_extensions"] = xr.runtimeExtensions;
+  j["openxr"]["system"] = xr.systemName;
+  j["openxr"]["vulkan_enable2"] = xr.vulkanEnable2;
   const auto disp = probeDisplay();
   j["display"] = {{"DISPLAY", disp.display}, {"WAYLAND_DISPLAY", disp.wayland},
                   {"window_system_usable", disp.windowSystemUsable}};
@@ -85,6 +89,15 @@ int runDoctor(embody::cli::Argv argv) {
   if (!xr.runtimeManifest.empty()) std::printf(" (manifest %s)", xr.runtimeManifest.c_str());
   std::printf("\n");
   if (!xr.runtimeError.empty()) std::printf("  runtime error: %s\n", xr.runtimeError.c_str());
+  if (!xr.runtimeManifest.empty() && xr.runtimeError.empty()) {
+    std::printf("  system: %s\n", xr.systemName.empty() ? "(no headset connected)" : xr.systemName.c_str());
+    std::printf("  XR_KHR_vulkan_enable2: %s\n", xr.vulkanEnable2 ? "offered (embody xr can run)" : "missing (embody xr needs it)");
+    std::printf("  runtime extensions: %zu\n", xr.runtimeExtensions.size());
+  }
+  std::printf("  API layers: ");
+  if (xr.apiLayers.empty()) std::printf("none\n");
+  for (size_t i = 0; i < xr.apiLayers.size(); ++i)
+    std::printf("%s%s", xr.apiLayers[i].c_str(), i + 1 < xr.apiLayers.size() ? ", " : "\n");
   std::printf("Display\n  DISPLAY=%s WAYLAND_DISPLAY=%s: %s\n", disp.display.empty() ? "(unset)" : disp.display.c_str(),
               disp.wayland.empty() ? "(unset)" : disp.wayland.c_str(),
               disp.windowSystemUsable ? "a mirror window can open"

@@ -6,7 +6,7 @@
 
 #include "app/args.h"
 #include "avatar/gltf/gltf_loader.h"
-#include "engine/test_avatar.h"
+#include "avatar/procedural/default_avatar.h"
 #include "xr/openxr/xr_loop.h"
 
 namespace {
@@ -20,13 +20,15 @@ int runXr(cli::Argv argv) {
       "selected by XR_RUNTIME_JSON). Until the body solver is connected the avatar stands in its rest "
       "pose under your head and gizmos follow your hands.");
   args.option("avatar", "FILE|default",
-              "a .gltf/.glb/.vrm file, or 'default' (the built-in procedural avatar)", "default");
+              "a .gltf/.glb/.vrm file, or 'default' (the built-in humanoid avatar)", "default");
   args.option("frames", "N", "end the session after N submitted frames (0: until the runtime ends it)", "0");
   args.option("height", "METRES", "your standing eye height (skips the calibration from the HMD height)");
   args.option("stats", "FILE", "write a JSON report of the run (states, frames, tracking, validation)");
   args.flag("seated", "seated mode: the avatar follows your head down instead of standing on the floor");
   args.flag("recenter", "recenter at start (your position and heading become the origin)");
-  args.flag("mirror", "show the left eye in a desktop window (V: third-person view, R: recenter, Esc: quit)");
+  args.flag(
+      "mirror",
+      "show the left eye in a desktop window (V: third-person view, R: recenter, C: recalibrate, Esc: quit)");
   args.flag("validate", "enable the Khronos validation layer on the Vulkan device and count its messages");
   args.flag("verbose", "print every session state change");
   if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
@@ -54,7 +56,7 @@ int runXr(cli::Argv argv) {
   avatar::AvatarAsset asset;
   const std::string avatarArg = args.get("avatar");
   if (avatarArg == "default") {
-    asset = gfx::makeTestAvatar();
+    asset = avatar::buildDefaultAvatar();
   } else {
     auto loaded = avatar::loadAvatarFile(avatarArg);
     if (!loaded) {

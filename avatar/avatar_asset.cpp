@@ -4,10 +4,14 @@ namespace embody::avatar {
 
 std::string_view avatarFormatName(AvatarFormat f) {
   switch (f) {
-    case AvatarFormat::Vrm0: return "vrm0";
-    case AvatarFormat::Vrm1: return "vrm1";
-    case AvatarFormat::Procedural: return "procedural";
-    default: return "gltf";
+    case AvatarFormat::Vrm0:
+      return "vrm0";
+    case AvatarFormat::Vrm1:
+      return "vrm1";
+    case AvatarFormat::Procedural:
+      return "procedural";
+    default:
+      return "gltf";
   }
 }
 
@@ -18,8 +22,8 @@ void computeSkinningPalette(const AvatarAsset& asset, const std::vector<glm::mat
     palette[j] = j < asset.mesh.inverseBind.size() ? globals[j] * asset.mesh.inverseBind[j] : globals[j];
 }
 
-void skinOnCpu(const SkinnedMesh& mesh, const std::vector<glm::mat4>& palette, std::vector<glm::vec3>& positions,
-               std::vector<glm::vec3>& normals) {
+void skinOnCpu(const SkinnedMesh& mesh, const std::vector<glm::mat4>& palette,
+               std::vector<glm::vec3>& positions, std::vector<glm::vec3>& normals) {
   positions.resize(mesh.vertices.size());
   normals.resize(mesh.vertices.size());
   for (size_t i = 0; i < mesh.vertices.size(); ++i) {

@@ -47,15 +47,15 @@ struct Material {
 struct Primitive {
   uint32_t firstIndex = 0;
   uint32_t indexCount = 0;
-  int material = -1;  // index into AvatarAsset::materials, -1 for the default material
+  int material = -1;    // index into AvatarAsset::materials, -1 for the default material
   int sourceNode = -1;  // glTF node and mesh the triangles came from (VRM first-person annotations)
   int sourceMesh = -1;
 };
 
 struct SkinnedMesh {
   std::vector<SkinnedVertex> vertices;
-  std::vector<uint32_t> indices;       // triangle list, all primitives back to back
-  std::vector<Primitive> primitives;   // third-person draw list
+  std::vector<uint32_t> indices;      // triangle list, all primitives back to back
+  std::vector<Primitive> primitives;  // third-person draw list
   // First-person draw list: the same vertices, with triangles that belong to the user's own head
   // removed (VRM firstPerson annotations, or weights to the head and its descendants).
   std::vector<uint32_t> firstPersonIndices;
@@ -69,8 +69,8 @@ std::string_view avatarFormatName(AvatarFormat f);  // "gltf", "vrm0", "vrm1", "
 
 // How the first-person draw list was made.
 struct FirstPersonInfo {
-  std::string mode;          // "vrm" (meshAnnotations), "auto" (head-weighted triangles dropped), "none"
-  int headJoint = -1;        // the joint whose subtree is hidden in first person
+  std::string mode;             // "vrm" (meshAnnotations), "auto" (head-weighted triangles dropped), "none"
+  int headJoint = -1;           // the joint whose subtree is hidden in first person
   size_t removedTriangles = 0;  // triangles in the third-person list that first person does not draw
   std::vector<std::string> annotations;  // "node or mesh name: type" for VRM files
 };

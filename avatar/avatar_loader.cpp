@@ -19,8 +19,10 @@ Status prepareAvatar(AvatarAsset& asset, const std::string& boneMapJson) {
   in.jointHasWeights.assign(asset.skeleton.joints.size(), false);
   for (const auto& v : asset.mesh.vertices)
     for (int k = 0; k < 4; ++k) {
-      if (v.weights0[k] > 0.0f && v.joints0[k] < in.jointHasWeights.size()) in.jointHasWeights[v.joints0[k]] = true;
-      if (v.weights1[k] > 0.0f && v.joints1[k] < in.jointHasWeights.size()) in.jointHasWeights[v.joints1[k]] = true;
+      if (v.weights0[k] > 0.0f && v.joints0[k] < in.jointHasWeights.size())
+        in.jointHasWeights[v.joints0[k]] = true;
+      if (v.weights1[k] > 0.0f && v.joints1[k] < in.jointHasWeights.size())
+        in.jointHasWeights[v.joints1[k]] = true;
     }
   if (asset.mesh.vertices.empty()) in.jointHasWeights.clear();  // no mesh: weights say nothing
   auto map = mapHumanoid(in);
@@ -42,7 +44,8 @@ Result<std::string> readBoneMapFile(const std::string& path) {
   return ss.str();
 }
 
-Result<AvatarAsset> loadAvatarFile(const std::string& path, const AvatarLoadOptions& options, GltfLoadReport* report) {
+Result<AvatarAsset> loadAvatarFile(const std::string& path, const AvatarLoadOptions& options,
+                                   GltfLoadReport* report) {
   std::string boneMap;
   if (!options.boneMapFile.empty()) {
     auto text = readBoneMapFile(options.boneMapFile);

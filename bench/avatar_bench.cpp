@@ -50,7 +50,8 @@ static void BM_SolveAndRetargetDefault(benchmark::State& state) {
   auto body = buildBodyModel(a);
   ik::Data data(body->model);
   ik::kinematics(body->model, data, false);
-  for (ik::TaskId t : {body->leftFootTask, body->rightFootTask, body->headTask, body->leftHandTask, body->rightHandTask})
+  for (ik::TaskId t :
+       {body->leftFootTask, body->rightFootTask, body->headTask, body->leftHandTask, body->rightHandTask})
     (void)data.setTarget(t, data.jointFrame(body->model.tasks[static_cast<size_t>(t)].desc.joint));
   (void)data.setTarget(body->comTask, data.centerOfMass());
   const Eigen::Isometry3d hand0 = data.jointFrame(body->leftHand);

@@ -12,7 +12,11 @@ using namespace embody;
 
 // Solver state a few iterations into the isolated-spine experiment (neck pulled 12 cm left, head
 // orientation kept), so the clamping loop has the rows it has in practice.
-void iteration(benchmark::State& state, const spine::SpineDescription& d, bool coupled) {
+// whole = true: one full iteration (kinematics, Jacobians, every clamping pass, q += Δq);
+// whole = false: kinematics + one priority pass with only the equality rows active, i.e. the
+// cost of the solve itself without the clamping loop (how many passes that takes depends on
+// how many bands and limits a pose touches).
+void iteration(benchmark::State& state, const spine::SpineDescription& d, bool coupled, bool whole = true) {
   spine::SpineOptions o;
   o.coupled = coupled;
   auto s = spine::buildIsolatedSpine(d, o);
@@ -26,13 +30,17 @@ void iteration(benchmark::State& state, const spine::SpineDescription& d, bool c
   (void)data.setTarget(s->head_orientation, data.taskOrientation(s->head_orientation));
   (void)data.setTarget(s->neck_position, Eigen::Vector3d(neck + Eigen::Vector3d(0.12, 0, 0)));
   ik::SolveOptions so;
-  so.damping_max = so.damping_eps = 0.1;
   for (int i = 0; i < 3; ++i) ik::iterate(s->model, data, so);
   const Eigen::VectorXd q0 = data.q();
   for (auto _ : state) {
-    (void)data.setConfiguration(q0);
-    ik::iterate(s->model, data, so);
-    benchmark::DoNotOptimize(data.q().data());
+    if (whole) {
+      (void)data.setConfiguration(q0);
+      ik::iterate(s->model, data, so);
+      benchmark::DoNotOptimize(data.q().data());
+    } else {
+      ik::kinematics(s->model, data, true);
+      benchmark::DoNotOptimize(ik::priorityPass(s->model, data, so).data());
+    }
   }
   state.counters["dofs"] = s->model.dofs;
   state.counters["clamp_passes"] = data.report().clamp_passes;
@@ -42,6 +50,9 @@ void BM_IterationFullCoupled(benchmark::State& s) { iteration(s, spine::defaultF
 void BM_IterationFullUncoupled(benchmark::State& s) { iteration(s, spine::defaultFullSpine(), false); }
 void BM_IterationSimplifiedCoupled(benchmark::State& s) { iteration(s, spine::defaultSimplifiedSpine(), true); }
 void BM_IterationSimplifiedUncoupled(benchmark::State& s) { iteration(s, spine::defaultSimplifiedSpine(), false); }
+
+void BM_PriorityPassFullCoupled(benchmark::State& s) { iteration(s, spine::defaultFullSpine(), true, false); }
+void BM_PriorityPassFullUncoupled(benchmark::State& s) { iteration(s, spine::defaultFullSpine(), false, false); }
 
 void BM_BuildFullCoupledModel(benchmark::State& state) {
   for (auto _ : state) {
@@ -56,5 +67,7 @@ BENCHMARK(BM_IterationFullCoupled)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_IterationFullUncoupled)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_IterationSimplifiedCoupled)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_IterationSimplifiedUncoupled)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_PriorityPassFullCoupled)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_PriorityPassFullUncoupled)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_BuildFullCoupledModel)->Unit(benchmark::kMicrosecond);
 BENCHMARK_MAIN();

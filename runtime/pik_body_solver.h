@@ -26,6 +26,9 @@ struct PikBinding {
     Eigen::Isometry3d trackerToTask = Eigen::Isometry3d::Identity();
   };
   std::array<Target, tracking::kTrackerCount> targets{};
+  // The centre-of-mass task (balance), -1 for none. Off while feet are tracked (the performer's
+  // balance is in their targets); otherwise its target is the point under the head target.
+  ik::TaskId centerOfMass = -1;
   // Tracking space (OpenXR: +Y up, -Z forward, +X right) to the model's world frame; e.g. a
   // rotation of 180 degrees about Y for a model facing +Z with +X to its left.
   Eigen::Isometry3d modelFromTracking = Eigen::Isometry3d::Identity();
@@ -44,6 +47,13 @@ class PikBodySolver final : public BodySolver {
   PikBodySolver(std::shared_ptr<const ik::Model> model, PikBinding binding, ik::SolveOptions options = {},
                 PoseWriter writer = {});
 
+  // A warm start can lead the solver into a configuration it does not leave (a folded spine, a
+  // limb caught at its limits) while the targets stay reachable. When a bound task ends farther
+  // than this from its target, the solver restarts from the initial configuration (its root moved
+  // under the head target) within the same deadline, and keeps the better of the two.
+  double restartAboveResidual = 0.1;  // metres; <= 0 disables
+  int restarts() const { return restarts_; }
+
   SolveResult solve(const SolveRequest& request, avatar::SkeletonPose& pose) override;
   void resetWarmStart() override;
 
@@ -60,6 +70,11 @@ class PikBodySolver final : public BodySolver {
   ik::Data data_;
   Eigen::VectorXd initialQ_;
   IterationCostModel cost_;
+  int restarts_ = 0;
+
+  double worstResidual() const;
+  std::array<float, tracking::kTrackerCount> residuals() const;
+  void runSolve(const SolveRequest& request);
 };
 
 }  // namespace embody::runtime

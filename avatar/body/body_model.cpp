@@ -16,11 +16,11 @@ constexpr double kDeg = 3.14159265358979323846 / 180.0;
 // lateral bending to one side, axial rotation to one side, degrees. White & Panjabi (1990) as
 // transcribed in spine.md §1; where the transcriptions disagree the first value is used.
 constexpr std::array<std::array<double, 3>, kVertebralJointCount> kLevelRangeDeg = {{
-    {20, 3, 5},  {17, 6, 2}, {15, 8, 2}, {14, 6, 2}, {12, 6, 2},                        // L5-S1 .. L1-L2
-    {12, 8, 2},  {12, 9, 2}, {9, 7, 2},  {6, 6, 4},  {6, 6, 6}, {6, 6, 8}, {5, 6, 8},  // T12-L1 .. T6-T7
-    {4, 6, 8},   {4, 6, 9},  {4, 6, 9},  {4, 6, 9},  {4, 6, 9},                          // T5-T6 .. T1-T2
-    {9, 4, 2},   {17, 7, 6}, {20, 8, 7}, {20, 11, 7}, {15, 11, 7}, {10, 10, 3}, {20, 5, 40},  // C7-T1 .. C1-C2
-    {25, 5, 5},                                                                          // Occ-C1
+    {20, 3, 5}, {17, 6, 2}, {15, 8, 2}, {14, 6, 2},  {12, 6, 2},                           // L5-S1 .. L1-L2
+    {12, 8, 2}, {12, 9, 2}, {9, 7, 2},  {6, 6, 4},   {6, 6, 6},   {6, 6, 8},   {5, 6, 8},  // T12-L1 .. T6-T7
+    {4, 6, 8},  {4, 6, 9},  {4, 6, 9},  {4, 6, 9},   {4, 6, 9},                            // T5-T6 .. T1-T2
+    {9, 4, 2},  {17, 7, 6}, {20, 8, 7}, {20, 11, 7}, {15, 11, 7}, {10, 10, 3}, {20, 5, 40},  // C7-T1 .. C1-C2
+    {25, 5, 5},                                                                              // Occ-C1
 }};
 constexpr double kFlexionShare = 0.6;
 
@@ -40,10 +40,13 @@ double levelMassPercent(int level) {
   return 0.85 * kHeadNeck;
 }
 
-Eigen::Vector3d toEigen(const glm::vec3& v) { return {v.x, v.y, v.z}; }
+Eigen::Vector3d toEigen(const glm::vec3& v) {
+  return {v.x, v.y, v.z};
+}
 
 // +Y along the bone, +X = Y x forward (falls back to up x Y when the bone points forward).
-Eigen::Matrix3d boneFrame(const Eigen::Vector3d& dir, const Eigen::Vector3d& forward, const Eigen::Vector3d& up) {
+Eigen::Matrix3d boneFrame(const Eigen::Vector3d& dir, const Eigen::Vector3d& forward,
+                          const Eigen::Vector3d& up) {
   const Eigen::Vector3d y = dir.normalized();
   Eigen::Vector3d x = y.cross(forward);
   if (x.norm() < 0.3) x = up.cross(y);
@@ -65,10 +68,14 @@ struct SiteGroup {
 }  // namespace
 
 bool parseSpineMode(const std::string& text, SpineMode& out) {
-  if (text == "auto") out = SpineMode::Auto;
-  else if (text == "full") out = SpineMode::Full;
-  else if (text == "simplified") out = SpineMode::Simplified;
-  else return false;
+  if (text == "auto")
+    out = SpineMode::Auto;
+  else if (text == "full")
+    out = SpineMode::Full;
+  else if (text == "simplified")
+    out = SpineMode::Simplified;
+  else
+    return false;
   return true;
 }
 
@@ -77,7 +84,8 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
   const Skeleton& sk = avatar.skeleton;
   if (!map.usable()) {
     std::string missing;
-    for (HumanBone b : map.missingRequired) missing += (missing.empty() ? "" : ", ") + std::string(humanBoneName(b));
+    for (HumanBone b : map.missingRequired)
+      missing += (missing.empty() ? "" : ", ") + std::string(humanBoneName(b));
     return Error{"the avatar's humanoid mapping is incomplete; missing required bones: " +
                  (missing.empty() ? std::string("(no mapping)") : missing)};
   }
@@ -93,28 +101,33 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
     const glm::vec3 c0(globals[j][0]), c1(globals[j][1]), c2(globals[j][2]);
     const glm::vec3 s(glm::length(c0), glm::length(c1), glm::length(c2));
     body.avatarRestGlobalScale[j] = s;
-    body.avatarRestGlobalRotation[j] = glm::normalize(glm::quat_cast(glm::mat3(c0 / s.x, c1 / s.y, c2 / s.z)));
+    body.avatarRestGlobalRotation[j] =
+        glm::normalize(glm::quat_cast(glm::mat3(c0 / s.x, c1 / s.y, c2 / s.z)));
     pivot[j] = options.scale * toEigen(glm::vec3(globals[j][3]));
   }
   if (!(options.scale > 0.05 && options.scale < 20.0)) return Error{"body scale must be between 0.05 and 20"};
   body.scale = options.scale;
   const Eigen::Vector3d up = toEigen(map.up).normalized();
   const Eigen::Vector3d forward = toEigen(map.forward).normalized();
-  const double height = std::max(0.5, pivot[static_cast<size_t>(map.joint(HumanBone::head))].dot(up) -
-                                          std::min(pivot[static_cast<size_t>(map.joint(HumanBone::leftFoot))].dot(up),
-                                                   pivot[static_cast<size_t>(map.joint(HumanBone::rightFoot))].dot(up)) +
-                                          0.18);
+  const double height =
+      std::max(0.5, pivot[static_cast<size_t>(map.joint(HumanBone::head))].dot(up) -
+                        std::min(pivot[static_cast<size_t>(map.joint(HumanBone::leftFoot))].dot(up),
+                                 pivot[static_cast<size_t>(map.joint(HumanBone::rightFoot))].dot(up)) +
+                        0.18);
   const double massScale = options.totalMass / 100.0;
 
   // Spine sites: every spine bone that stands for a vertebra (full / the avatar's own bones), or
   // the eight groups of the simplified model when the avatar has a bone per vertebra.
-  bool perVertebra = std::count_if(map.spine.begin(), map.spine.end(), [](const SpineBone& b) { return b.levelCount() == 1; }) ==
-                     static_cast<long>(map.spine.size()) && map.spine.size() == kVertebralJointCount;
+  bool perVertebra = std::count_if(map.spine.begin(), map.spine.end(),
+                                   [](const SpineBone& b) { return b.levelCount() == 1; }) ==
+                         static_cast<long>(map.spine.size()) &&
+                     map.spine.size() == kVertebralJointCount;
   std::vector<SpineBone> sites;
   if (options.spine == SpineMode::Simplified && perVertebra) {
     // 3 lumbar, 3 thoracic, 2 cervical sites (Raunhardt & Boulic's simplified model) + the head.
     const int starts[] = {0, 2, 4, 5, 9, 13, 17, 20, 24, 25};
-    for (int g = 0; g + 1 < 10; ++g) sites.push_back({map.spine[static_cast<size_t>(starts[g])].joint, starts[g], starts[g + 1]});
+    for (int g = 0; g + 1 < 10; ++g)
+      sites.push_back({map.spine[static_cast<size_t>(starts[g])].joint, starts[g], starts[g + 1]});
     body.spineModel = "simplified";
   } else {
     for (const SpineBone& b : map.spine)
@@ -134,7 +147,8 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
     siteIndexOf[static_cast<size_t>(sites[s].joint)] = static_cast<int>(s);
   }
   auto mark = [&](HumanBone b, int tag) {
-    if (map.has(b) && sk.isAncestor(hips, map.joint(b)) && map.joint(b) != hips) kind[static_cast<size_t>(map.joint(b))] = tag;
+    if (map.has(b) && sk.isAncestor(hips, map.joint(b)) && map.joint(b) != hips)
+      kind[static_cast<size_t>(map.joint(b))] = tag;
   };
   mark(HumanBone::leftShoulder, Clavicle);
   mark(HumanBone::rightShoulder, Clavicle);
@@ -153,8 +167,9 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
   mark(HumanBone::leftToes, Toes);
   mark(HumanBone::rightToes, Toes);
   auto isLeft = [&](int j) {
-    for (HumanBone b : {HumanBone::leftShoulder, HumanBone::leftUpperArm, HumanBone::leftLowerArm, HumanBone::leftHand,
-                        HumanBone::leftUpperLeg, HumanBone::leftLowerLeg, HumanBone::leftFoot, HumanBone::leftToes})
+    for (HumanBone b :
+         {HumanBone::leftShoulder, HumanBone::leftUpperArm, HumanBone::leftLowerArm, HumanBone::leftHand,
+          HumanBone::leftUpperLeg, HumanBone::leftLowerLeg, HumanBone::leftFoot, HumanBone::leftToes})
       if (map.joint(b) == j) return true;
     return false;
   };
@@ -163,18 +178,26 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
   auto nextOf = [&](int j) -> int {
     auto pick = [&](HumanBone l, HumanBone r) { return map.joint(isLeft(j) ? l : r); };
     switch (kind[static_cast<size_t>(j)]) {
-      case Hips: return sites.empty() ? -1 : sites.front().joint;
+      case Hips:
+        return sites.empty() ? -1 : sites.front().joint;
       case Spine: {
         const int s = siteIndexOf[static_cast<size_t>(j)];
         return s + 1 < static_cast<int>(sites.size()) ? sites[static_cast<size_t>(s) + 1].joint : -1;
       }
-      case Clavicle: return pick(HumanBone::leftUpperArm, HumanBone::rightUpperArm);
-      case UpperArm: return pick(HumanBone::leftLowerArm, HumanBone::rightLowerArm);
-      case Elbow: return pick(HumanBone::leftHand, HumanBone::rightHand);
-      case UpperLeg: return pick(HumanBone::leftLowerLeg, HumanBone::rightLowerLeg);
-      case Knee: return pick(HumanBone::leftFoot, HumanBone::rightFoot);
-      case Ankle: return pick(HumanBone::leftToes, HumanBone::rightToes);
-      default: return -1;
+      case Clavicle:
+        return pick(HumanBone::leftUpperArm, HumanBone::rightUpperArm);
+      case UpperArm:
+        return pick(HumanBone::leftLowerArm, HumanBone::rightLowerArm);
+      case Elbow:
+        return pick(HumanBone::leftHand, HumanBone::rightHand);
+      case UpperLeg:
+        return pick(HumanBone::leftLowerLeg, HumanBone::rightLowerLeg);
+      case Knee:
+        return pick(HumanBone::leftFoot, HumanBone::rightFoot);
+      case Ankle:
+        return pick(HumanBone::leftToes, HumanBone::rightToes);
+      default:
+        return -1;
     }
   };
   auto direction = [&](int j) -> Eigen::Vector3d {
@@ -236,10 +259,13 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
   auto addCoupledSpine = [&]() -> Status {
     std::vector<SpineBone> vertebral;  // sites below the head
     for (const SpineBone& sb : sites)
-      if (sb.endLevel <= kVertebralJointCount - 1) vertebral.push_back(sb);
-      else if (sb.firstLevel < kVertebralJointCount - 1) vertebral.push_back({sb.joint, sb.firstLevel, kVertebralJointCount - 1});
+      if (sb.endLevel <= kVertebralJointCount - 1)
+        vertebral.push_back(sb);
+      else if (sb.firstLevel < kVertebralJointCount - 1)
+        vertebral.push_back({sb.joint, sb.firstLevel, kVertebralJointCount - 1});
     const SpineBone headSite = sites.back();
-    if (headSite.endLevel != kVertebralJointCount) return Error{"spine: the head bone does not close the spine"};
+    if (headSite.endLevel != kVertebralJointCount)
+      return Error{"spine: the head bone does not close the spine"};
     spine::SpineDescription desc;
     std::vector<int> siteJoint;  // avatar joint of each description site
     if (perVertebra && options.spine != SpineMode::Simplified) {
@@ -254,8 +280,10 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
           int to = sb.endLevel;
           for (int e : regionEnd)
             if (from < e && to > e) to = e;
-          specs.push_back({sk.joints[static_cast<size_t>(sb.joint)].name + (from == sb.firstLevel ? "" : "_" + std::string(vertebralJointName(from))),
-                           std::string(vertebralJointName(from)), std::string(vertebralJointName(to - 1)), true, true});
+          specs.push_back({sk.joints[static_cast<size_t>(sb.joint)].name +
+                               (from == sb.firstLevel ? "" : "_" + std::string(vertebralJointName(from))),
+                           std::string(vertebralJointName(from)), std::string(vertebralJointName(to - 1)),
+                           true, true});
           from = to;
         }
       auto d = spine::withSites(spine::defaultFullSpine(), specs);
@@ -266,7 +294,9 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
       int joint = -1;
       for (const SpineBone& sb : map.spine)
         if (sb.standsFor(site.first)) joint = sb.joint;
-      if (joint < 0) return Error{"spine: no avatar bone stands for " + desc.vertebrae[static_cast<size_t>(site.first)].name};
+      if (joint < 0)
+        return Error{"spine: no avatar bone stands for " +
+                     desc.vertebrae[static_cast<size_t>(site.first)].name};
       siteJoint.push_back(joint);
     }
     // World rest frames: at each site's bone pivot, +Y towards the next distinct pivot.
@@ -296,7 +326,9 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
       size_t k = 0;
       for (size_t m = 0; m < added->sites.size(); ++m) {
         const auto& sj = added->sites[m];
-        if (sj.swing == static_cast<int>(id) || sj.revolute == static_cast<int>(id) || sj.ball == static_cast<int>(id)) k = m;
+        if (sj.swing == static_cast<int>(id) || sj.revolute == static_cast<int>(id) ||
+            sj.ball == static_cast<int>(id))
+          k = m;
       }
       world.push_back(siteWorld[k]);
       body.avatarJoint.push_back(siteJoint[k]);
@@ -310,20 +342,22 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
       double mass = 0.0;
       for (int l = site.first; l < site.first + site.count; ++l) mass += levelMassPercent(l);
       const Eigen::Vector3d top = k + 1 < desc.sites.size() ? Eigen::Vector3d(siteWorld[k + 1].translation())
-                                                             : pivot[static_cast<size_t>(headJoint)];
+                                                            : pivot[static_cast<size_t>(headJoint)];
       const double length = (top - siteWorld[k].translation()).norm();
       b.setSegment(last, mass * massScale, Eigen::Vector3d(0, 0.5 * length, 0));
       body.spineSites.push_back({siteJoint[k], site.first, site.first + site.count});
     }
-    body.spineSites.push_back(headSite.firstLevel == kVertebralJointCount - 1 ? headSite
-                                                                              : SpineBone{headJoint, kVertebralJointCount - 1, kVertebralJointCount});
+    body.spineSites.push_back(headSite.firstLevel == kVertebralJointCount - 1
+                                  ? headSite
+                                  : SpineBone{headJoint, kVertebralJointCount - 1, kVertebralJointCount});
     body.spineEqualities = added->equalities;
     // The head: a Ball joint for Occ-C1 on top of the spine.
     ik::JointDesc h;
     h.name = sk.joints[static_cast<size_t>(headJoint)].name;
     h.type = ik::JointType::Ball;
     const auto& r = kLevelRangeDeg[kVertebralJointCount - 1];
-    limitsOf(h, {-(1.0 - kFlexionShare) * r[0] * kDeg, -r[2] * kDeg, -r[1] * kDeg}, {kFlexionShare * r[0] * kDeg, r[2] * kDeg, r[1] * kDeg});
+    limitsOf(h, {-(1.0 - kFlexionShare) * r[0] * kDeg, -r[2] * kDeg, -r[1] * kDeg},
+             {kFlexionShare * r[0] * kDeg, r[2] * kDeg, r[1] * kDeg});
     h.mass = levelMassPercent(kVertebralJointCount - 1) * massScale;
     h.com = Eigen::Vector3d(0, 0.06 * height / 1.75, 0);
     body.ikJointOfAvatar[static_cast<size_t>(headJoint)] = added->top;  // parent for add()
@@ -360,7 +394,8 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
         Eigen::Vector3d r = Eigen::Vector3d::Zero();
         double mass = 0.0;
         for (int l = s.firstLevel; l < s.endLevel; ++l) {
-          for (int k = 0; k < 3; ++k) r[k] += kLevelRangeDeg[static_cast<size_t>(l)][static_cast<size_t>(k)] * kDeg;
+          for (int k = 0; k < 3; ++k)
+            r[k] += kLevelRangeDeg[static_cast<size_t>(l)][static_cast<size_t>(k)] * kDeg;
           mass += levelMassPercent(l);
         }
         // exp-map components in the site frame: x flexion (+ forward), y torsion, z bending.
@@ -474,6 +509,14 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
     com.level = 1;
     body.comTask = b.addTask(com);
     body.headTask = pose("head", body.head, 2);
+    // A waist tracker, when there is one (off until the runtime binds and enables it).
+    ik::TaskDesc waist;
+    waist.name = "hips";
+    waist.type = ik::TaskType::Pose;
+    waist.joint = body.hips;
+    waist.level = 2;
+    waist.enabled = false;
+    body.hipsTask = b.addTask(waist);
     body.leftHandTask = pose("left_hand", body.leftHand, 3);
     body.rightHandTask = pose("right_hand", body.rightHand, 3);
   }
@@ -498,17 +541,19 @@ void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& 
     const int ikJoint = body.ikJointOfAvatar[a];
     if (ikJoint >= 0) {
       const Eigen::Isometry3d& frame = data.jointFrame(ikJoint);
-      const Eigen::Quaterniond delta =
-          Eigen::Quaterniond(frame.rotation()) * body.ikRestRotation[static_cast<size_t>(ikJoint)].conjugate();
-      const glm::quat d(static_cast<float>(delta.w()), static_cast<float>(delta.x()), static_cast<float>(delta.y()),
-                        static_cast<float>(delta.z()));
+      const Eigen::Quaterniond delta = Eigen::Quaterniond(frame.rotation()) *
+                                       body.ikRestRotation[static_cast<size_t>(ikJoint)].conjugate();
+      const glm::quat d(static_cast<float>(delta.w()), static_cast<float>(delta.x()),
+                        static_cast<float>(delta.y()), static_cast<float>(delta.z()));
       const glm::quat wanted = glm::normalize(d * body.avatarRestGlobalRotation[a]);
       const glm::vec3 c0(parent[0]), c1(parent[1]), c2(parent[2]);
-      const glm::quat parentRot = glm::normalize(glm::quat_cast(glm::mat3(glm::normalize(c0), glm::normalize(c1), glm::normalize(c2))));
+      const glm::quat parentRot = glm::normalize(
+          glm::quat_cast(glm::mat3(glm::normalize(c0), glm::normalize(c1), glm::normalize(c2))));
       local.rotation = glm::normalize(glm::inverse(parentRot) * wanted);
       if (ikJoint == body.hips) {
         const Eigen::Vector3d p = frame.translation() / body.scale;
-        local.translation = glm::vec3(glm::inverse(parent) * glm::vec4(float(p.x()), float(p.y()), float(p.z()), 1.0f));
+        local.translation =
+            glm::vec3(glm::inverse(parent) * glm::vec4(float(p.x()), float(p.y()), float(p.z()), 1.0f));
       }
     }
     pose.local[a] = local;

@@ -41,7 +41,7 @@ bool parseSpineMode(const std::string& text, SpineMode& out);  // "auto", "full"
 struct BodyModelOptions {
   SpineMode spine = SpineMode::Auto;
   double totalMass = 75.0;  // kg, distributed with de Leva's fractions
-  bool addTasks = true;     // feet (0), centre of mass (1), head (2), hands (3), as in PIK
+  bool addTasks = true;     // feet (0), centre of mass (1), head and hips (2), hands (3), as in PIK
   // Uniform scale from the avatar to the user (calibration.h): the IK model is built at the
   // user's size; retargeting divides the hips translation back, so the renderer draws the avatar
   // with this scale on its model matrix.
@@ -58,16 +58,19 @@ struct BodyModel {
   // Per avatar joint: the IK joint that sets its world rotation (the last one at its pivot), -1
   // when the bone is not driven. Precomputed rest data for retargeting (model space).
   std::vector<int> ikJointOfAvatar;
-  std::vector<Eigen::Quaterniond> ikRestRotation;      // per IK joint: world rotation at q = 0
-  std::vector<glm::quat> avatarRestGlobalRotation;     // per avatar joint
-  std::vector<glm::vec3> avatarRestGlobalScale;        // per avatar joint (columns' lengths)
+  std::vector<Eigen::Quaterniond> ikRestRotation;   // per IK joint: world rotation at q = 0
+  std::vector<glm::quat> avatarRestGlobalRotation;  // per avatar joint
+  std::vector<glm::vec3> avatarRestGlobalScale;     // per avatar joint (columns' lengths)
   // The spine sites: avatar joint of each and the vertebral joints it stands for.
   std::vector<SpineBone> spineSites;
-  double scale = 1.0;      // BodyModelOptions::scale
+  double scale = 1.0;       // BodyModelOptions::scale
   int spineEqualities = 0;  // coupling rows the spine added (0 for the uncoupled spine)
   std::string spineModel;  // "full" (every vertebra a site), "bones" (the avatar's spine bones), "simplified"
   ik::JointId hips = -1, head = -1, leftHand = -1, rightHand = -1, leftFoot = -1, rightFoot = -1;
-  ik::TaskId headTask = -1, leftHandTask = -1, rightHandTask = -1, leftFootTask = -1, rightFootTask = -1, comTask = -1;
+  // Task names follow runtime::PikBinding::byTaskNames: "head", "left_hand", "right_hand",
+  // "hips" (disabled until a waist tracker drives it), "left_foot", "right_foot", plus "com".
+  ik::TaskId headTask = -1, leftHandTask = -1, rightHandTask = -1, leftFootTask = -1, rightFootTask = -1,
+             comTask = -1, hipsTask = -1;
 };
 
 // Fails when the avatar's humanoid mapping is not usable (missing required bones, listed).

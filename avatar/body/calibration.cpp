@@ -9,7 +9,9 @@
 namespace embody::avatar {
 namespace {
 
-bool plausible(double metres) { return std::isfinite(metres) && metres >= 0.5 && metres <= 2.6; }
+bool plausible(double metres) {
+  return std::isfinite(metres) && metres >= 0.5 && metres <= 2.6;
+}
 
 }  // namespace
 
@@ -46,7 +48,8 @@ Result<BodyProfile> calibrate(const AvatarAsset& avatar, const CalibrationInput&
     p.userHeight = *in.userHeight;
     p.eyeHeight = kEyeHeightRatio * p.userHeight;
   } else if (in.eyeHeight) {
-    if (!plausible(*in.eyeHeight / kEyeHeightRatio)) return Error{"eye height must be between 0.47 and 2.4 m"};
+    if (!plausible(*in.eyeHeight / kEyeHeightRatio))
+      return Error{"eye height must be between 0.47 and 2.4 m"};
     p.eyeHeight = *in.eyeHeight;
     p.userHeight = p.eyeHeight / kEyeHeightRatio;
   } else {
@@ -64,7 +67,8 @@ Result<BodyProfile> calibrate(const AvatarAsset& avatar, const CalibrationInput&
     const double right = glm::length(at(HumanBone::rightLowerArm) - at(HumanBone::rightUpperArm)) +
                          glm::length(at(HumanBone::rightHand) - at(HumanBone::rightLowerArm));
     const double shoulders = glm::length(at(HumanBone::leftUpperArm) - at(HumanBone::rightUpperArm));
-    p.avatarArmSpan = left + right + shoulders + 2.0 * 0.108 * p.avatarHeight;  // hand length ~10.8 % of height
+    p.avatarArmSpan =
+        left + right + shoulders + 2.0 * 0.108 * p.avatarHeight;  // hand length ~10.8 % of height
   }
   if (in.armSpan) {
     if (!plausible(*in.armSpan)) return Error{"arm span must be between 0.5 and 2.6 m"};
@@ -110,13 +114,16 @@ Result<BodyProfile> loadProfile(const std::string& path) {
   };
   BodyProfile p;
   if (j.contains("avatar") && j["avatar"].is_string()) p.avatar = j["avatar"].get<std::string>();
-  for (auto [key, out, required] : {std::tuple{"user_height_m", &p.userHeight, true}, std::tuple{"eye_height_m", &p.eyeHeight, false},
-                                    std::tuple{"arm_span_m", &p.armSpan, false}, std::tuple{"avatar_height_m", &p.avatarHeight, false},
-                                    std::tuple{"avatar_arm_span_m", &p.avatarArmSpan, false}, std::tuple{"scale", &p.scale, true},
-                                    std::tuple{"arm_scale", &p.armScale, false}})
+  for (auto [key, out, required] :
+       {std::tuple{"user_height_m", &p.userHeight, true}, std::tuple{"eye_height_m", &p.eyeHeight, false},
+        std::tuple{"arm_span_m", &p.armSpan, false}, std::tuple{"avatar_height_m", &p.avatarHeight, false},
+        std::tuple{"avatar_arm_span_m", &p.avatarArmSpan, false}, std::tuple{"scale", &p.scale, true},
+        std::tuple{"arm_scale", &p.armScale, false}})
     if (auto s = number(key, *out, required); !s.ok()) return Error{s.error()};
-  if (!plausible(p.userHeight)) return Error{"profile '" + path + "': user_height_m must be between 0.5 and 2.6"};
-  if (!(p.scale > 0.05 && p.scale < 20.0)) return Error{"profile '" + path + "': scale must be between 0.05 and 20"};
+  if (!plausible(p.userHeight))
+    return Error{"profile '" + path + "': user_height_m must be between 0.5 and 2.6"};
+  if (!(p.scale > 0.05 && p.scale < 20.0))
+    return Error{"profile '" + path + "': scale must be between 0.05 and 20"};
   return p;
 }
 

@@ -24,14 +24,14 @@ struct CalibrationInput {
 };
 
 struct BodyProfile {
-  std::string avatar;           // source path or "default"
-  double userHeight = 0.0;      // metres
-  double eyeHeight = 0.0;       // metres
-  double armSpan = 0.0;         // metres, 0 when not measured
-  double avatarHeight = 0.0;    // metres, at the avatar's own scale
-  double avatarArmSpan = 0.0;   // metres, hand joint to hand joint along the arm chains + hands
-  double scale = 1.0;           // user / avatar, applied uniformly
-  double armScale = 1.0;        // user arm span / avatar arm span (stored, not applied)
+  std::string avatar;          // source path or "default"
+  double userHeight = 0.0;     // metres
+  double eyeHeight = 0.0;      // metres
+  double armSpan = 0.0;        // metres, 0 when not measured
+  double avatarHeight = 0.0;   // metres, at the avatar's own scale
+  double avatarArmSpan = 0.0;  // metres, hand joint to hand joint along the arm chains + hands
+  double scale = 1.0;          // user / avatar, applied uniformly
+  double armScale = 1.0;       // user arm span / avatar arm span (stored, not applied)
 };
 
 // Height of the avatar standing at rest: mesh bounds along up when it has a mesh, else from the

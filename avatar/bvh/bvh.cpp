@@ -49,7 +49,8 @@ bool parseDouble(std::string_view s, double& v) {
 bool iequals(std::string_view a, std::string_view b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i)
-    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i]))) return false;
+    if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i])))
+      return false;
   return true;
 }
 
@@ -77,7 +78,9 @@ class Parser {
   }
 
  private:
-  Error fail(const std::string& msg) const { return Error{name_ + ":" + std::to_string(lex_.line()) + ": " + msg}; }
+  Error fail(const std::string& msg) const {
+    return Error{name_ + ":" + std::to_string(lex_.line()) + ": " + msg};
+  }
 
   // Next non-empty line; false at the end of the file.
   bool next() {
@@ -88,7 +91,8 @@ class Parser {
 
   Status hierarchy() {
     if (!next()) return Error{name_ + ": empty file (expected HIERARCHY)"};
-    if (!iequals(tokens_[0], "HIERARCHY")) return fail("expected HIERARCHY, found '" + std::string(tokens_[0]) + "'");
+    if (!iequals(tokens_[0], "HIERARCHY"))
+      return fail("expected HIERARCHY, found '" + std::string(tokens_[0]) + "'");
     std::vector<int> stack;  // open joints
     bool expectBrace = false;
     bool anyRoot = false;
@@ -123,7 +127,8 @@ class Parser {
             return fail("a joint inside an End Site");
           if (clip_.joints.size() >= limits_.maxJoints)
             return fail("more than " + std::to_string(limits_.maxJoints) + " joints");
-          if (stack.size() >= limits_.maxDepth) return fail("hierarchy deeper than " + std::to_string(limits_.maxDepth));
+          if (stack.size() >= limits_.maxDepth)
+            return fail("hierarchy deeper than " + std::to_string(limits_.maxDepth));
           BvhJoint j;
           j.parent = stack.empty() ? -1 : stack.back();
           j.firstChannel = clip_.channelCount;
@@ -164,7 +169,8 @@ class Parser {
           if (stack.back() != static_cast<int>(clip_.joints.size()) - 1)
             return fail("CHANNELS of joint '" + cur.name + "' after its children");
           double n = 0;
-          if (i + 1 >= tokens_.size() || !parseDouble(tokens_[i + 1], n) || n < 0 || n > 6 || n != std::floor(n))
+          if (i + 1 >= tokens_.size() || !parseDouble(tokens_[i + 1], n) || n < 0 || n > 6 ||
+              n != std::floor(n))
             return fail("CHANNELS needs a count from 0 to 6");
           const size_t count = static_cast<size_t>(n);
           if (tokens_.size() - i - 2 < count)
@@ -210,7 +216,8 @@ class Parser {
     const size_t perFrame = static_cast<size_t>(clip_.channelCount);
     if (perFrame > 0 && declared > limits_.maxValues / perFrame)
       return fail("'Frames: " + std::to_string(declared) + "' with " + std::to_string(perFrame) +
-                  " channels is more than this loader accepts (" + std::to_string(limits_.maxValues) + " values)");
+                  " channels is more than this loader accepts (" + std::to_string(limits_.maxValues) +
+                  " values)");
     clip_.values.reserve(declared * perFrame);
     size_t frames = 0;
     while (perFrame > 0 && next()) {
@@ -272,7 +279,8 @@ Result<BvhClip> loadBvh(const std::string& path, const BvhLimits& limits) {
   f.seekg(0);
   // Every frame value takes at least 2 bytes of text, so a file far beyond the value limit is
   // refused before reading it into memory.
-  if (size < 0 || static_cast<size_t>(size) > limits.maxValues * 16) return Error{path + ": file too large for a BVH clip"};
+  if (size < 0 || static_cast<size_t>(size) > limits.maxValues * 16)
+    return Error{path + ": file too large for a BVH clip"};
   std::string text(static_cast<size_t>(size), '\0');
   f.read(text.data(), size);
   if (!f) return Error{path + ": read failed"};
@@ -290,8 +298,10 @@ void bvhGlobals(const BvhClip& clip, std::span<const float> frame, std::vector<B
       for (size_t c = 0; c < joint.channels.size(); ++c) {
         const double v = frame[static_cast<size_t>(joint.firstChannel) + c];
         const int ch = static_cast<int>(joint.channels[c]);
-        if (ch < 3) t[ch] += v;
-        else r = r * axisRotation(ch - 3, v);
+        if (ch < 3)
+          t[ch] += v;
+        else
+          r = r * axisRotation(ch - 3, v);
       }
     }
     if (joint.parent < 0) {

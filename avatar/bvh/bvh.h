@@ -25,11 +25,11 @@ namespace embody::avatar {
 enum class BvhChannel : uint8_t { Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation };
 
 struct BvhJoint {
-  std::string name;       // "End Site" children are named "<parent>_End"
-  int parent = -1;        // index into BvhClip::joints, < this joint's index
+  std::string name;  // "End Site" children are named "<parent>_End"
+  int parent = -1;   // index into BvhClip::joints, < this joint's index
   glm::dvec3 offset{0.0};
   std::vector<BvhChannel> channels;  // at most 6
-  int firstChannel = 0;   // index of channels[0] in a frame's values
+  int firstChannel = 0;              // index of channels[0] in a frame's values
   bool endSite = false;
 };
 
@@ -44,7 +44,7 @@ struct BvhClip {
   int channelCount = 0;          // values per frame
   double frameTime = 0.0;        // seconds
   size_t frameCount = 0;
-  std::vector<float> values;     // frameCount * channelCount
+  std::vector<float> values;  // frameCount * channelCount
   std::vector<std::string> warnings;
 
   std::span<const float> frame(size_t i) const {

@@ -82,7 +82,8 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
     doc["nodes"].push_back(node);
   }
   for (size_t i = 0; i < n; ++i)
-    if (sk.joints[i].parent >= 0) doc["nodes"][static_cast<size_t>(sk.joints[i].parent)]["children"].push_back(i);
+    if (sk.joints[i].parent >= 0)
+      doc["nodes"][static_cast<size_t>(sk.joints[i].parent)]["children"].push_back(i);
 
   // Vertex streams, one bufferView each (tightly packed).
   const size_t vc = mesh.vertices.size();
@@ -110,28 +111,38 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
   }
   json attributes;
   if (vc > 0) {
-    int a = accessor(doc, bin.view(positions.data(), positions.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC3");
+    int a = accessor(doc, bin.view(positions.data(), positions.size() * 4, kArrayBuffer, doc), 0, kFloat, vc,
+                     "VEC3");
     doc["accessors"][static_cast<size_t>(a)]["min"] = {lo.x, lo.y, lo.z};
     doc["accessors"][static_cast<size_t>(a)]["max"] = {hi.x, hi.y, hi.z};
     attributes["POSITION"] = a;
-    attributes["NORMAL"] = accessor(doc, bin.view(normals.data(), normals.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC3");
-    attributes["TEXCOORD_0"] = accessor(doc, bin.view(uvs.data(), uvs.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC2");
-    attributes["JOINTS_0"] = accessor(doc, bin.view(joints0.data(), joints0.size() * 2, kArrayBuffer, doc), 0, kUShort, vc, "VEC4");
-    attributes["WEIGHTS_0"] = accessor(doc, bin.view(weights0.data(), weights0.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC4");
+    attributes["NORMAL"] =
+        accessor(doc, bin.view(normals.data(), normals.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC3");
+    attributes["TEXCOORD_0"] =
+        accessor(doc, bin.view(uvs.data(), uvs.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC2");
+    attributes["JOINTS_0"] = accessor(doc, bin.view(joints0.data(), joints0.size() * 2, kArrayBuffer, doc), 0,
+                                      kUShort, vc, "VEC4");
+    attributes["WEIGHTS_0"] = accessor(doc, bin.view(weights0.data(), weights0.size() * 4, kArrayBuffer, doc),
+                                       0, kFloat, vc, "VEC4");
     if (eight) {
-      attributes["JOINTS_1"] = accessor(doc, bin.view(joints1.data(), joints1.size() * 2, kArrayBuffer, doc), 0, kUShort, vc, "VEC4");
-      attributes["WEIGHTS_1"] = accessor(doc, bin.view(weights1.data(), weights1.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC4");
+      attributes["JOINTS_1"] = accessor(doc, bin.view(joints1.data(), joints1.size() * 2, kArrayBuffer, doc),
+                                        0, kUShort, vc, "VEC4");
+      attributes["WEIGHTS_1"] = accessor(
+          doc, bin.view(weights1.data(), weights1.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC4");
     }
   }
   const int indexView = bin.view(mesh.indices.data(), mesh.indices.size() * 4, kElementArrayBuffer, doc);
   json primitives = json::array();
   for (const Primitive& p : mesh.primitives) {
     if (p.indexCount == 0) continue;
-    if (static_cast<size_t>(p.firstIndex) + p.indexCount > mesh.indices.size()) return Error{"primitive runs past the index buffer"};
-    json prim = {{"attributes", attributes},
-                 {"indices", accessor(doc, indexView, size_t{p.firstIndex} * 4, kUInt, p.indexCount, "SCALAR")},
-                 {"mode", 4}};
-    if (p.material >= 0 && static_cast<size_t>(p.material) < asset.materials.size()) prim["material"] = p.material;
+    if (static_cast<size_t>(p.firstIndex) + p.indexCount > mesh.indices.size())
+      return Error{"primitive runs past the index buffer"};
+    json prim = {
+        {"attributes", attributes},
+        {"indices", accessor(doc, indexView, size_t{p.firstIndex} * 4, kUInt, p.indexCount, "SCALAR")},
+        {"mode", 4}};
+    if (p.material >= 0 && static_cast<size_t>(p.material) < asset.materials.size())
+      prim["material"] = p.material;
     primitives.push_back(prim);
   }
 
@@ -153,11 +164,13 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
       const uint8_t white[4] = {255, 255, 255, 255};
       stbi_write_png_to_func(pngSink, &png, 1, 1, 4, white, 4);
     }
-    doc["images"].push_back({{"bufferView", bin.view(png.data(), png.size(), 0, doc)}, {"mimeType", "image/png"}});
+    doc["images"].push_back(
+        {{"bufferView", bin.view(png.data(), png.size(), 0, doc)}, {"mimeType", "image/png"}});
     doc["textures"].push_back({{"source", i}});
   }
   for (const Material& m : asset.materials) {
-    json pbr = {{"baseColorFactor", {m.baseColorFactor.r, m.baseColorFactor.g, m.baseColorFactor.b, m.baseColorFactor.a}},
+    json pbr = {{"baseColorFactor",
+                 {m.baseColorFactor.r, m.baseColorFactor.g, m.baseColorFactor.b, m.baseColorFactor.a}},
                 {"metallicFactor", 0.0},
                 {"roughnessFactor", 0.8}};
     if (m.baseColorImage >= 0 && static_cast<size_t>(m.baseColorImage) < asset.images.size())
@@ -176,7 +189,8 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
   json sceneNodes = json::array({root});
   if (!primitives.empty()) {
     doc["meshes"] = json::array({{{"name", "body"}, {"primitives", primitives}}});
-    doc["skins"] = json::array({{{"inverseBindMatrices", ibmAccessor}, {"joints", skinJoints}, {"skeleton", root}}});
+    doc["skins"] =
+        json::array({{{"inverseBindMatrices", ibmAccessor}, {"joints", skinJoints}, {"skeleton", root}}});
     doc["nodes"].push_back({{"name", "body"}, {"mesh", 0}, {"skin", 0}});
     sceneNodes.push_back(n);
   }

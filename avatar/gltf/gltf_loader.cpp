@@ -18,7 +18,9 @@
 namespace embody::avatar {
 namespace {
 
-Error fail(const std::string& what) { return Error{what}; }
+Error fail(const std::string& what) {
+  return Error{what};
+}
 
 // ---------------------------------------------------------------------------------------------
 // Images: decoded by us (stb) so that dimensions are checked before any pixel is allocated.
@@ -79,7 +81,8 @@ Result<GlbChunks> splitContainer(const std::vector<uint8_t>& bytes) {
   GlbChunks out;
   if (bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0) {
     out.isGlb = true;
-    if (bytes.size() < 20) return fail("truncated GLB: " + std::to_string(bytes.size()) + " bytes, header needs 20");
+    if (bytes.size() < 20)
+      return fail("truncated GLB: " + std::to_string(bytes.size()) + " bytes, header needs 20");
     const uint32_t version = readU32(&bytes[4]);
     const uint32_t total = readU32(&bytes[8]);
     if (version != 2) return fail("GLB version " + std::to_string(version) + " is not supported (need 2)");
@@ -112,23 +115,33 @@ Result<GlbChunks> splitContainer(const std::vector<uint8_t>& bytes) {
 int componentSize(int type) {
   switch (type) {
     case TINYGLTF_COMPONENT_TYPE_BYTE:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+      return 1;
     case TINYGLTF_COMPONENT_TYPE_SHORT:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+      return 2;
     case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
-    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
-    default: return 0;
+    case TINYGLTF_COMPONENT_TYPE_FLOAT:
+      return 4;
+    default:
+      return 0;
   }
 }
 
 int componentCount(int type) {
   switch (type) {
-    case TINYGLTF_TYPE_SCALAR: return 1;
-    case TINYGLTF_TYPE_VEC2: return 2;
-    case TINYGLTF_TYPE_VEC3: return 3;
-    case TINYGLTF_TYPE_VEC4: return 4;
-    case TINYGLTF_TYPE_MAT4: return 16;
-    default: return 0;
+    case TINYGLTF_TYPE_SCALAR:
+      return 1;
+    case TINYGLTF_TYPE_VEC2:
+      return 2;
+    case TINYGLTF_TYPE_VEC3:
+      return 3;
+    case TINYGLTF_TYPE_VEC4:
+      return 4;
+    case TINYGLTF_TYPE_MAT4:
+      return 16;
+    default:
+      return 0;
   }
 }
 
@@ -139,7 +152,8 @@ double readComponent(const uint8_t* p, int type, bool normalized) {
       std::memcpy(&v, p, 1);
       return normalized ? std::max(v / 127.0, -1.0) : v;
     }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? p[0] / 255.0 : p[0];
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+      return normalized ? p[0] / 255.0 : p[0];
     case TINYGLTF_COMPONENT_TYPE_SHORT: {
       int16_t v;
       std::memcpy(&v, p, 2);
@@ -189,12 +203,13 @@ class AccessorReader {
       if (!view.ok()) return Error{view.error()};
       const tinygltf::BufferView& bv = model_.bufferViews[a.bufferView];
       const size_t stride = bv.byteStride ? bv.byteStride : elemSize;
-      if (stride < elemSize) return fail(where + ": byteStride " + std::to_string(stride) + " < element size");
+      if (stride < elemSize)
+        return fail(where + ": byteStride " + std::to_string(stride) + " < element size");
       if (a.count > 0) {
         const uint64_t need = static_cast<uint64_t>(a.byteOffset) + (a.count - 1) * stride + elemSize;
         if (need > bv.byteLength)
-          return fail(where + ": reads " + std::to_string(need) + " bytes of a " + std::to_string(bv.byteLength) +
-                      "-byte bufferView");
+          return fail(where + ": reads " + std::to_string(need) + " bytes of a " +
+                      std::to_string(bv.byteLength) + "-byte bufferView");
       }
       const uint8_t* base = view.value() + a.byteOffset;
       const int cs = componentSize(a.componentType);
@@ -215,20 +230,25 @@ class AccessorReader {
       if (!iv.ok()) return Error{iv.error()};
       auto vv = bufferView(sp.values.bufferView, where + " sparse values");
       if (!vv.ok()) return Error{vv.error()};
-      if (sp.indices.byteOffset < 0 || sp.values.byteOffset < 0) return fail(where + ": negative sparse offset");
-      const uint64_t ineed = static_cast<uint64_t>(sp.indices.byteOffset) + static_cast<uint64_t>(sp.count) * ics;
-      const uint64_t vneed = static_cast<uint64_t>(sp.values.byteOffset) + static_cast<uint64_t>(sp.count) * elemSize;
+      if (sp.indices.byteOffset < 0 || sp.values.byteOffset < 0)
+        return fail(where + ": negative sparse offset");
+      const uint64_t ineed =
+          static_cast<uint64_t>(sp.indices.byteOffset) + static_cast<uint64_t>(sp.count) * ics;
+      const uint64_t vneed =
+          static_cast<uint64_t>(sp.values.byteOffset) + static_cast<uint64_t>(sp.count) * elemSize;
       if (ineed > model_.bufferViews[sp.indices.bufferView].byteLength ||
           vneed > model_.bufferViews[sp.values.bufferView].byteLength)
         return fail(where + ": sparse data runs past its bufferView");
       const int cs = componentSize(a.componentType);
       for (int s = 0; s < sp.count; ++s) {
         const auto target = static_cast<uint64_t>(
-            readComponent(iv.value() + sp.indices.byteOffset + static_cast<size_t>(s) * ics, sp.indices.componentType, false));
-        if (target >= a.count) return fail(where + ": sparse index " + std::to_string(target) + " out of range");
+            readComponent(iv.value() + sp.indices.byteOffset + static_cast<size_t>(s) * ics,
+                          sp.indices.componentType, false));
+        if (target >= a.count)
+          return fail(where + ": sparse index " + std::to_string(target) + " out of range");
         for (int c = 0; c < components; ++c)
-          out[target * components + c] =
-              readComponent(vv.value() + sp.values.byteOffset + s * elemSize + c * cs, a.componentType, a.normalized);
+          out[target * components + c] = readComponent(
+              vv.value() + sp.values.byteOffset + s * elemSize + c * cs, a.componentType, a.normalized);
       }
     }
     for (double v : out)
@@ -282,7 +302,8 @@ Result<Transform> nodeTransform(const tinygltf::Node& n, int index) {
   } else if (!n.matrix.empty()) {
     return fail(where + ": matrix must have 16 numbers");
   } else {
-    if (n.translation.size() == 3) t.translation = glm::vec3(n.translation[0], n.translation[1], n.translation[2]);
+    if (n.translation.size() == 3)
+      t.translation = glm::vec3(n.translation[0], n.translation[1], n.translation[2]);
     if (n.rotation.size() == 4) {
       glm::quat q(static_cast<float>(n.rotation[3]), static_cast<float>(n.rotation[0]),
                   static_cast<float>(n.rotation[1]), static_cast<float>(n.rotation[2]));
@@ -298,7 +319,8 @@ Result<Transform> nodeTransform(const tinygltf::Node& n, int index) {
 Status buildSkeleton(const tinygltf::Model& m, const GltfLimits& limits, AvatarAsset& asset) {
   const int n = static_cast<int>(m.nodes.size());
   if (n > limits.maxNodes)
-    return Error{"the file has " + std::to_string(n) + " nodes, more than the limit of " + std::to_string(limits.maxNodes)};
+    return Error{"the file has " + std::to_string(n) + " nodes, more than the limit of " +
+                 std::to_string(limits.maxNodes)};
   std::vector<int> parent(n, -1);
   for (int i = 0; i < n; ++i)
     for (int c : m.nodes[i].children) {
@@ -306,8 +328,8 @@ Status buildSkeleton(const tinygltf::Model& m, const GltfLimits& limits, AvatarA
         return Error{"node " + std::to_string(i) + " has child " + std::to_string(c) + ", out of range"};
       if (c == i) return Error{"node " + std::to_string(i) + " is its own child (cycle in the hierarchy)"};
       if (parent[c] != -1)
-        return Error{"node " + std::to_string(c) + " has two parents (" + std::to_string(parent[c]) + " and " +
-                     std::to_string(i) + "); the hierarchy must be a tree"};
+        return Error{"node " + std::to_string(c) + " has two parents (" + std::to_string(parent[c]) +
+                     " and " + std::to_string(i) + "); the hierarchy must be a tree"};
       parent[c] = i;
     }
   // Depth-first from every root; nodes never reached sit on a cycle (each has one parent, so a
@@ -335,7 +357,8 @@ Status buildSkeleton(const tinygltf::Model& m, const GltfLimits& limits, AvatarA
     }
   }
   for (int i = 0; i < n; ++i)
-    if (asset.gltfNodeToJoint[i] < 0) return Error{"node " + std::to_string(i) + " is part of a cycle in the hierarchy"};
+    if (asset.gltfNodeToJoint[i] < 0)
+      return Error{"node " + std::to_string(i) + " is part of a cycle in the hierarchy"};
   if (auto why = asset.skeleton.validate(); !why.empty()) return Error{why};
   return {};
 }
@@ -348,8 +371,10 @@ std::vector<uint32_t> triangulate(int mode, const std::vector<uint32_t>& idx) {
     tris.assign(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(idx.size() / 3 * 3));
   } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
     for (size_t i = 2; i < idx.size(); ++i) {
-      if (i % 2 == 0) tris.insert(tris.end(), {idx[i - 2], idx[i - 1], idx[i]});
-      else tris.insert(tris.end(), {idx[i - 1], idx[i - 2], idx[i]});
+      if (i % 2 == 0)
+        tris.insert(tris.end(), {idx[i - 2], idx[i - 1], idx[i]});
+      else
+        tris.insert(tris.end(), {idx[i - 1], idx[i - 2], idx[i]});
     }
   } else if (mode == TINYGLTF_MODE_TRIANGLE_FAN) {
     for (size_t i = 2; i < idx.size(); ++i) tris.insert(tris.end(), {idx[0], idx[i - 1], idx[i]});
@@ -357,7 +382,8 @@ std::vector<uint32_t> triangulate(int mode, const std::vector<uint32_t>& idx) {
   return tris;
 }
 
-void computeNormals(std::vector<SkinnedVertex>& verts, size_t firstVertex, const std::vector<uint32_t>& localTris) {
+void computeNormals(std::vector<SkinnedVertex>& verts, size_t firstVertex,
+                    const std::vector<uint32_t>& localTris) {
   std::vector<glm::vec3> acc(verts.size() - firstVertex, glm::vec3(0.0f));
   for (size_t t = 0; t + 2 < localTris.size(); t += 3) {
     const glm::vec3& a = verts[firstVertex + localTris[t]].position;
@@ -389,7 +415,8 @@ struct MeshBuilder {
       const std::string where = "skin " + std::to_string(s);
       std::vector<double> ibm;
       if (skin.inverseBindMatrices >= 0) {
-        auto r = reader.read(skin.inverseBindMatrices, 16, {TINYGLTF_COMPONENT_TYPE_FLOAT}, where + " inverseBindMatrices");
+        auto r = reader.read(skin.inverseBindMatrices, 16, {TINYGLTF_COMPONENT_TYPE_FLOAT},
+                             where + " inverseBindMatrices");
         if (!r.ok()) return Error{r.error()};
         ibm = std::move(r.value());
         if (ibm.size() / 16 < skin.joints.size())
@@ -407,10 +434,12 @@ struct MeshBuilder {
           for (int c = 0; c < 16; ++c) glm::value_ptr(inv)[c] = static_cast<float>(ibm[k * 16 + c]);
         if (inverseBindSet[joint]) {
           float diff = 0.0f;
-          for (int c = 0; c < 4; ++c) diff = std::max(diff, glm::length(inv[c] - asset.mesh.inverseBind[joint][c]));
+          for (int c = 0; c < 4; ++c)
+            diff = std::max(diff, glm::length(inv[c] - asset.mesh.inverseBind[joint][c]));
           if (diff > 1e-4f)
-            warnings.push_back(where + ": joint '" + asset.skeleton.joints[joint].name +
-                               "' has a different inverse bind matrix than in an earlier skin; the first is used");
+            warnings.push_back(
+                where + ": joint '" + asset.skeleton.joints[joint].name +
+                "' has a different inverse bind matrix than in an earlier skin; the first is used");
           continue;
         }
         asset.mesh.inverseBind[joint] = inv;
@@ -445,7 +474,8 @@ struct MeshBuilder {
     if (asset.mesh.vertices.size() + vcount > limits.maxTotalVertices)
       return Error{where + ": more than " + std::to_string(limits.maxTotalVertices) + " vertices in total"};
 
-    auto optional = [&](const char* name, int comps, std::initializer_list<int> types) -> Result<std::vector<double>> {
+    auto optional = [&](const char* name, int comps,
+                        std::initializer_list<int> types) -> Result<std::vector<double>> {
       const int acc = attr(name);
       if (acc < 0) return std::vector<double>{};
       auto r = reader.read(acc, comps, types, where + " " + name);
@@ -481,10 +511,12 @@ struct MeshBuilder {
         weights[set] = std::move(wr.value());
       }
       if (joints[0].empty()) {
-        warnings.push_back(where + ": node has a skin but the mesh has no JOINTS_0; drawn rigidly on its node");
+        warnings.push_back(where +
+                           ": node has a skin but the mesh has no JOINTS_0; drawn rigidly on its node");
         skin = nullptr;
       }
-      if (attr("JOINTS_2") >= 0) warnings.push_back(where + ": JOINTS_2 and beyond ignored (8 influences max)");
+      if (attr("JOINTS_2") >= 0)
+        warnings.push_back(where + ": JOINTS_2 and beyond ignored (8 influences max)");
     }
 
     // Indices.
@@ -547,7 +579,8 @@ struct MeshBuilder {
                          std::to_string(static_cast<uint64_t>(ji)) + " out of range (skin has " +
                          std::to_string(skin->joints.size()) + " joints)"};
           w[set * 4 + k] = wk;
-          jt[set * 4 + k] = static_cast<uint32_t>(asset.gltfNodeToJoint[skin->joints[static_cast<size_t>(ji)]]);
+          jt[set * 4 + k] =
+              static_cast<uint32_t>(asset.gltfNodeToJoint[skin->joints[static_cast<size_t>(ji)]]);
           sum += wk;
         }
       }
@@ -574,11 +607,13 @@ struct MeshBuilder {
     prim.sourceNode = node;
     prim.sourceMesh = m.nodes[node].mesh;
     if (p.material >= 0 && prim.material < 0)
-      warnings.push_back(where + ": material " + std::to_string(p.material) + " out of range; default material used");
+      warnings.push_back(where + ": material " + std::to_string(p.material) +
+                         " out of range; default material used");
     for (uint32_t i : tris) asset.mesh.indices.push_back(static_cast<uint32_t>(first) + i);
     if (prim.indexCount > 0) asset.mesh.primitives.push_back(prim);
     if (!p.targets.empty() && warnings.size() < 1000)
-      warnings.push_back(where + ": " + std::to_string(p.targets.size()) + " morph targets loaded as the base shape");
+      warnings.push_back(where + ": " + std::to_string(p.targets.size()) +
+                         " morph targets loaded as the base shape");
     return {};
   }
 
@@ -590,8 +625,8 @@ struct MeshBuilder {
         return Error{"node " + std::to_string(node) + ": mesh " + std::to_string(mesh) + " out of range"};
       const auto& prims = m.meshes[mesh].primitives;
       for (size_t pi = 0; pi < prims.size(); ++pi) {
-        const std::string where = "mesh " + std::to_string(mesh) + " ('" + m.meshes[mesh].name + "') primitive " +
-                                  std::to_string(pi);
+        const std::string where = "mesh " + std::to_string(mesh) + " ('" + m.meshes[mesh].name +
+                                  "') primitive " + std::to_string(pi);
         if (auto s = addPrimitive(static_cast<int>(node), prims[pi], where); !s.ok()) return s;
       }
     }
@@ -628,8 +663,10 @@ void addMaterialsAndImages(const tinygltf::Model& m, AvatarAsset& asset, std::ve
                            " or its image is out of range; untextured");
       }
     }
-    if (src.alphaMode == "MASK") mat.alphaMode = AlphaMode::Mask;
-    else if (src.alphaMode == "BLEND") mat.alphaMode = AlphaMode::Blend;
+    if (src.alphaMode == "MASK")
+      mat.alphaMode = AlphaMode::Mask;
+    else if (src.alphaMode == "BLEND")
+      mat.alphaMode = AlphaMode::Blend;
     mat.alphaCutoff = std::isfinite(src.alphaCutoff) ? static_cast<float>(src.alphaCutoff) : 0.5f;
     mat.doubleSided = src.doubleSided;
     asset.materials.push_back(std::move(mat));
@@ -653,7 +690,8 @@ Result<AvatarAsset> loadGltfFromMemory(const std::vector<uint8_t>& bytes, const 
   GltfLoadReport localReport;
   std::vector<std::string>& warnings = report ? report->warnings : localReport.warnings;
   if (bytes.empty()) return fail("empty file");
-  if (bytes.size() > limits.maxFileBytes) return fail("file larger than " + std::to_string(limits.maxFileBytes) + " bytes");
+  if (bytes.size() > limits.maxFileBytes)
+    return fail("file larger than " + std::to_string(limits.maxFileBytes) + " bytes");
   auto container = splitContainer(bytes);
   if (!container.ok()) return Error{container.error()};
 
@@ -666,7 +704,8 @@ Result<AvatarAsset> loadGltfFromMemory(const std::vector<uint8_t>& bytes, const 
   bool ok = false;
   try {
     if (container->isGlb)
-      ok = parser.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), static_cast<unsigned int>(bytes.size()), baseDir);
+      ok = parser.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(),
+                                       static_cast<unsigned int>(bytes.size()), baseDir);
     else
       ok = parser.LoadASCIIFromString(&model, &err, &warn, container->json.data(),
                                       static_cast<unsigned int>(container->json.size()), baseDir);
@@ -696,7 +735,8 @@ Result<AvatarAsset> loadGltfFile(const std::string& path, GltfLoadReport* report
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) return fail("cannot open '" + path + "': " + ec.message());
-  if (size > limits.maxFileBytes) return fail("'" + path + "' is larger than " + std::to_string(limits.maxFileBytes) + " bytes");
+  if (size > limits.maxFileBytes)
+    return fail("'" + path + "' is larger than " + std::to_string(limits.maxFileBytes) + " bytes");
   std::ifstream in(path, std::ios::binary);
   if (!in) return fail("cannot open '" + path + "'");
   std::vector<uint8_t> bytes(size);

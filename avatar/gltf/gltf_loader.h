@@ -35,12 +35,12 @@
 namespace embody::avatar {
 
 struct GltfLimits {
-  uint64_t maxFileBytes = 1ull << 30;          // 1 GiB
-  uint64_t maxAccessorCount = 1ull << 24;      // elements in one accessor
-  uint64_t maxTotalVertices = 1ull << 24;      // after merging every primitive
+  uint64_t maxFileBytes = 1ull << 30;      // 1 GiB
+  uint64_t maxAccessorCount = 1ull << 24;  // elements in one accessor
+  uint64_t maxTotalVertices = 1ull << 24;  // after merging every primitive
   uint64_t maxTotalIndices = 3ull << 24;
   int maxNodes = 1 << 16;
-  int maxImageDimension = 8192;                // width or height of a decoded image
+  int maxImageDimension = 8192;  // width or height of a decoded image
 };
 
 struct GltfLoadReport {

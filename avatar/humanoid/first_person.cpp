@@ -10,11 +10,16 @@ enum class Annotation { Auto, Both, ThirdPersonOnly, FirstPersonOnly };
 
 bool parseAnnotation(std::string s, Annotation& out) {
   for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (s == "auto") out = Annotation::Auto;
-  else if (s == "both") out = Annotation::Both;
-  else if (s == "thirdpersononly") out = Annotation::ThirdPersonOnly;
-  else if (s == "firstpersononly") out = Annotation::FirstPersonOnly;
-  else return false;
+  if (s == "auto")
+    out = Annotation::Auto;
+  else if (s == "both")
+    out = Annotation::Both;
+  else if (s == "thirdpersononly")
+    out = Annotation::ThirdPersonOnly;
+  else if (s == "firstpersononly")
+    out = Annotation::FirstPersonOnly;
+  else
+    return false;
   return true;
 }
 
@@ -44,17 +49,22 @@ void buildFirstPerson(AvatarAsset& asset) {
   int headNode = -1;
   if (!asset.rawJson.empty() && (asset.format == AvatarFormat::Vrm0 || asset.format == AvatarFormat::Vrm1)) {
     const auto doc = nlohmann::json::parse(asset.rawJson, nullptr, false);
-    const auto ext = doc.is_object() ? doc.value("extensions", nlohmann::json::object()) : nlohmann::json::object();
+    const auto ext =
+        doc.is_object() ? doc.value("extensions", nlohmann::json::object()) : nlohmann::json::object();
     const bool v1 = asset.format == AvatarFormat::Vrm1;
-    const auto vrm = ext.is_object() ? ext.value(v1 ? "VRMC_vrm" : "VRM", nlohmann::json::object()) : nlohmann::json();
+    const auto vrm =
+        ext.is_object() ? ext.value(v1 ? "VRMC_vrm" : "VRM", nlohmann::json::object()) : nlohmann::json();
     const auto fp = vrm.is_object() ? vrm.value("firstPerson", nlohmann::json::object()) : nlohmann::json();
-    const auto annotations = fp.is_object() ? fp.value("meshAnnotations", nlohmann::json::array()) : nlohmann::json();
+    const auto annotations =
+        fp.is_object() ? fp.value("meshAnnotations", nlohmann::json::array()) : nlohmann::json();
     if (annotations.is_array())
       for (const auto& a : annotations) {
         if (!a.is_object()) continue;
         const char* key = v1 ? "node" : "mesh";
         const char* typeKey = v1 ? "type" : "firstPersonFlag";
-        if (!a.contains(key) || !a[key].is_number_integer() || !a.contains(typeKey) || !a[typeKey].is_string()) continue;
+        if (!a.contains(key) || !a[key].is_number_integer() || !a.contains(typeKey) ||
+            !a[typeKey].is_string())
+          continue;
         Annotation t;
         if (!parseAnnotation(a[typeKey].get<std::string>(), t)) continue;
         (v1 ? byNode : byMesh)[a[key].get<int>()] = t;
@@ -83,12 +93,15 @@ void buildFirstPerson(AvatarAsset& asset) {
   std::vector<Primitive> third, first;
   for (const Primitive& p : all) {
     Annotation a = Annotation::Auto;
-    if (auto it = byNode.find(p.sourceNode); it != byNode.end()) a = it->second;
-    else if (auto im = byMesh.find(p.sourceMesh); im != byMesh.end()) a = im->second;
+    if (auto it = byNode.find(p.sourceNode); it != byNode.end())
+      a = it->second;
+    else if (auto im = byMesh.find(p.sourceMesh); im != byMesh.end())
+      a = im->second;
     if (a != Annotation::FirstPersonOnly) {
       Primitive q = p;
       q.firstIndex = static_cast<uint32_t>(thirdIdx.size());
-      thirdIdx.insert(thirdIdx.end(), indices.begin() + p.firstIndex, indices.begin() + p.firstIndex + p.indexCount);
+      thirdIdx.insert(thirdIdx.end(), indices.begin() + p.firstIndex,
+                      indices.begin() + p.firstIndex + p.indexCount);
       third.push_back(q);
     }
     Primitive q = p;

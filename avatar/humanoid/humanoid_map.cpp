@@ -10,31 +10,72 @@
 namespace embody::avatar {
 namespace {
 
-constexpr std::array<std::string_view, kHumanBoneCount> kBoneNames = {
-    "hips", "spine", "chest", "upperChest", "neck", "head", "leftEye", "rightEye", "jaw",
-    "leftUpperLeg", "leftLowerLeg", "leftFoot", "leftToes",
-    "rightUpperLeg", "rightLowerLeg", "rightFoot", "rightToes",
-    "leftShoulder", "leftUpperArm", "leftLowerArm", "leftHand",
-    "rightShoulder", "rightUpperArm", "rightLowerArm", "rightHand",
-    "leftThumbMetacarpal", "leftThumbProximal", "leftThumbDistal",
-    "leftIndexProximal", "leftIndexIntermediate", "leftIndexDistal",
-    "leftMiddleProximal", "leftMiddleIntermediate", "leftMiddleDistal",
-    "leftRingProximal", "leftRingIntermediate", "leftRingDistal",
-    "leftLittleProximal", "leftLittleIntermediate", "leftLittleDistal",
-    "rightThumbMetacarpal", "rightThumbProximal", "rightThumbDistal",
-    "rightIndexProximal", "rightIndexIntermediate", "rightIndexDistal",
-    "rightMiddleProximal", "rightMiddleIntermediate", "rightMiddleDistal",
-    "rightRingProximal", "rightRingIntermediate", "rightRingDistal",
-    "rightLittleProximal", "rightLittleIntermediate", "rightLittleDistal"};
+constexpr std::array<std::string_view, kHumanBoneCount> kBoneNames = {"hips",
+                                                                      "spine",
+                                                                      "chest",
+                                                                      "upperChest",
+                                                                      "neck",
+                                                                      "head",
+                                                                      "leftEye",
+                                                                      "rightEye",
+                                                                      "jaw",
+                                                                      "leftUpperLeg",
+                                                                      "leftLowerLeg",
+                                                                      "leftFoot",
+                                                                      "leftToes",
+                                                                      "rightUpperLeg",
+                                                                      "rightLowerLeg",
+                                                                      "rightFoot",
+                                                                      "rightToes",
+                                                                      "leftShoulder",
+                                                                      "leftUpperArm",
+                                                                      "leftLowerArm",
+                                                                      "leftHand",
+                                                                      "rightShoulder",
+                                                                      "rightUpperArm",
+                                                                      "rightLowerArm",
+                                                                      "rightHand",
+                                                                      "leftThumbMetacarpal",
+                                                                      "leftThumbProximal",
+                                                                      "leftThumbDistal",
+                                                                      "leftIndexProximal",
+                                                                      "leftIndexIntermediate",
+                                                                      "leftIndexDistal",
+                                                                      "leftMiddleProximal",
+                                                                      "leftMiddleIntermediate",
+                                                                      "leftMiddleDistal",
+                                                                      "leftRingProximal",
+                                                                      "leftRingIntermediate",
+                                                                      "leftRingDistal",
+                                                                      "leftLittleProximal",
+                                                                      "leftLittleIntermediate",
+                                                                      "leftLittleDistal",
+                                                                      "rightThumbMetacarpal",
+                                                                      "rightThumbProximal",
+                                                                      "rightThumbDistal",
+                                                                      "rightIndexProximal",
+                                                                      "rightIndexIntermediate",
+                                                                      "rightIndexDistal",
+                                                                      "rightMiddleProximal",
+                                                                      "rightMiddleIntermediate",
+                                                                      "rightMiddleDistal",
+                                                                      "rightRingProximal",
+                                                                      "rightRingIntermediate",
+                                                                      "rightRingDistal",
+                                                                      "rightLittleProximal",
+                                                                      "rightLittleIntermediate",
+                                                                      "rightLittleDistal"};
 
 constexpr std::array<std::string_view, kVertebralJointCount> kVertebralNames = {
-    "vl5", "vl4", "vl3", "vl2", "vl1", "vt12", "vt11", "vt10", "vt9", "vt8", "vt7", "vt6", "vt5",
-    "vt4", "vt3", "vt2", "vt1", "vc7", "vc6", "vc5", "vc4", "vc3", "vc2", "vc1", "skullbase"};
+    "vl5", "vl4", "vl3", "vl2", "vl1", "vt12", "vt11", "vt10", "vt9", "vt8", "vt7", "vt6",      "vt5",
+    "vt4", "vt3", "vt2", "vt1", "vc7", "vc6",  "vc5",  "vc4",  "vc3", "vc2", "vc1", "skullbase"};
 
 // Where each spine bone's range begins (spine.md §5 "pivot").
 constexpr int kLevelSpine = 0, kLevelChest = 5, kLevelUpperChest = 11, kLevelNeck = 17, kLevelHead = 24;
 
-HumanBone bone(int i) { return static_cast<HumanBone>(i); }
+HumanBone bone(int i) {
+  return static_cast<HumanBone>(i);
+}
 
 // Lower-case alphanumerics of the part after the last ':' or '|', known rig prefixes removed.
 std::string normalizeName(std::string_view raw) {
@@ -42,7 +83,8 @@ std::string normalizeName(std::string_view raw) {
   if (cut != std::string_view::npos) raw = raw.substr(cut + 1);
   std::string s;
   for (char c : raw)
-    if (std::isalnum(static_cast<unsigned char>(c))) s.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(c))));
+    if (std::isalnum(static_cast<unsigned char>(c)))
+      s.push_back(static_cast<char>(std::tolower(static_cast<unsigned char>(c))));
   for (std::string_view prefix : {"mixamorig", "bip001", "bip01", "jbipc", "jbip", "def", "ccbase"})
     if (s.size() > prefix.size() && s.compare(0, prefix.size(), prefix) == 0) {
       s.erase(0, prefix.size());
@@ -108,12 +150,9 @@ const std::vector<SidedAlias>& genericSided() {
 const std::vector<std::pair<HumanBone, std::vector<std::string>>>& hanimTable() {
   static const std::vector<std::pair<HumanBone, std::vector<std::string>>> t = [] {
     std::vector<std::pair<HumanBone, std::vector<std::string>>> v = {
-        {HumanBone::hips, {"humanoidroot"}},
-        {HumanBone::spine, {"vl5", "vl4", "vl3"}},
-        {HumanBone::chest, {"vt12", "vt11", "vt10"}},
-        {HumanBone::upperChest, {"vt6", "vt5"}},
-        {HumanBone::neck, {"vc7", "vc6", "vc4"}},
-        {HumanBone::head, {"skullbase"}},
+        {HumanBone::hips, {"humanoidroot"}},          {HumanBone::spine, {"vl5", "vl4", "vl3"}},
+        {HumanBone::chest, {"vt12", "vt11", "vt10"}}, {HumanBone::upperChest, {"vt6", "vt5"}},
+        {HumanBone::neck, {"vc7", "vc6", "vc4"}},     {HumanBone::head, {"skullbase"}},
         {HumanBone::jaw, {"temporomandibular"}},
     };
     struct S {
@@ -144,7 +183,9 @@ const std::vector<std::pair<HumanBone, std::vector<std::string>>>& hanimTable() 
   return t;
 }
 
-void addNote(HumanoidMap& m, std::string note) { m.notes.push_back(std::move(note)); }
+void addNote(HumanoidMap& m, std::string note) {
+  m.notes.push_back(std::move(note));
+}
 
 }  // namespace
 
@@ -164,21 +205,25 @@ bool parseHumanBone(std::string_view name, HumanBone& out) {
 
 const std::vector<HumanBone>& requiredHumanBones() {
   static const std::vector<HumanBone> r = {
-      HumanBone::hips, HumanBone::spine, HumanBone::head,
-      HumanBone::leftUpperLeg, HumanBone::leftLowerLeg, HumanBone::leftFoot,
-      HumanBone::rightUpperLeg, HumanBone::rightLowerLeg, HumanBone::rightFoot,
-      HumanBone::leftUpperArm, HumanBone::leftLowerArm, HumanBone::leftHand,
+      HumanBone::hips,          HumanBone::spine,         HumanBone::head,          HumanBone::leftUpperLeg,
+      HumanBone::leftLowerLeg,  HumanBone::leftFoot,      HumanBone::rightUpperLeg, HumanBone::rightLowerLeg,
+      HumanBone::rightFoot,     HumanBone::leftUpperArm,  HumanBone::leftLowerArm,  HumanBone::leftHand,
       HumanBone::rightUpperArm, HumanBone::rightLowerArm, HumanBone::rightHand};
   return r;
 }
 
 std::string_view mappingMethodName(MappingMethod m) {
   switch (m) {
-    case MappingMethod::BoneMap: return "bone-map";
-    case MappingMethod::Vrm: return "vrm";
-    case MappingMethod::Names: return "names";
-    case MappingMethod::Topology: return "topology";
-    default: return "none";
+    case MappingMethod::BoneMap:
+      return "bone-map";
+    case MappingMethod::Vrm:
+      return "vrm";
+    case MappingMethod::Names:
+      return "names";
+    case MappingMethod::Topology:
+      return "topology";
+    default:
+      return "none";
   }
 }
 
@@ -204,10 +249,14 @@ std::vector<SpineBone> assignVertebrae(const Skeleton& skeleton, const HumanoidM
     const int j = chain[i];
     int level = vertebralJointLevel(normalizeName(skeleton.joints[j].name));
     if (level < 0) {
-      if (j == map.joint(HumanBone::spine)) level = kLevelSpine;
-      else if (j == map.joint(HumanBone::chest)) level = kLevelChest;
-      else if (j == map.joint(HumanBone::upperChest)) level = kLevelUpperChest;
-      else if (j == map.joint(HumanBone::neck)) level = kLevelNeck;
+      if (j == map.joint(HumanBone::spine))
+        level = kLevelSpine;
+      else if (j == map.joint(HumanBone::chest))
+        level = kLevelChest;
+      else if (j == map.joint(HumanBone::upperChest))
+        level = kLevelUpperChest;
+      else if (j == map.joint(HumanBone::neck))
+        level = kLevelNeck;
     }
     anchor[i] = level;
   }
@@ -217,8 +266,10 @@ std::vector<SpineBone> assignVertebrae(const Skeleton& skeleton, const HumanoidM
   int last = -1;
   for (int i = 0; i < n - 1; ++i) {
     if (anchor[i] < 0) continue;
-    if (anchor[i] <= last || anchor[i] >= kLevelHead) anchor[i] = -1;
-    else last = anchor[i];
+    if (anchor[i] <= last || anchor[i] >= kLevelHead)
+      anchor[i] = -1;
+    else
+      last = anchor[i];
   }
   std::vector<int> level(n);
   int prev = 0;
@@ -264,7 +315,8 @@ void finishHumanoidMap(const Skeleton& skeleton, HumanoidMap& map) {
 HumanoidMap mapByNames(const Skeleton& skeleton) {
   HumanoidMap map;
   std::map<std::string, int> byName;
-  for (size_t j = 0; j < skeleton.joints.size(); ++j) byName.emplace(normalizeName(skeleton.joints[j].name), static_cast<int>(j));
+  for (size_t j = 0; j < skeleton.joints.size(); ++j)
+    byName.emplace(normalizeName(skeleton.joints[j].name), static_cast<int>(j));
   std::vector<bool> taken(skeleton.joints.size(), false);
   auto take = [&](HumanBone b, const std::vector<std::string>& aliases) {
     if (map.has(b)) return;
@@ -277,8 +329,8 @@ HumanoidMap mapByNames(const Skeleton& skeleton) {
       }
     }
   };
-  const bool hanim = byName.count("humanoidroot") || byName.count("sacroiliac") || byName.count("skullbase") ||
-                     byName.count("vl5");
+  const bool hanim = byName.count("humanoidroot") || byName.count("sacroiliac") ||
+                     byName.count("skullbase") || byName.count("vl5");
   if (hanim) {
     for (const auto& [b, aliases] : hanimTable()) take(b, aliases);
   } else {
@@ -300,7 +352,8 @@ HumanoidMap mapByNames(const Skeleton& skeleton) {
 
 namespace {
 
-HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const std::vector<int>& nodeToJoint, bool& present) {
+HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const std::vector<int>& nodeToJoint,
+                     bool& present) {
   HumanoidMap map;
   present = false;
   auto jointOf = [&](const nlohmann::json& node) -> int {
@@ -311,7 +364,9 @@ HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const 
   if (!doc.is_object() || !doc.contains("extensions") || !doc["extensions"].is_object()) return map;
   const auto& ext = doc["extensions"];
   if (ext.contains("VRMC_vrm") && ext["VRMC_vrm"].is_object()) {
-    const auto& hb = ext["VRMC_vrm"].value("humanoid", nlohmann::json::object()).value("humanBones", nlohmann::json::object());
+    const auto& hb = ext["VRMC_vrm"]
+                         .value("humanoid", nlohmann::json::object())
+                         .value("humanBones", nlohmann::json::object());
     if (hb.is_object() && !hb.empty()) {
       present = true;
       for (const auto& [name, entry] : hb.items()) {
@@ -321,12 +376,15 @@ HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const 
           continue;
         }
         const int j = entry.is_object() && entry.contains("node") ? jointOf(entry["node"]) : -1;
-        if (j < 0) addNote(map, "VRM 1.0 humanBones: '" + name + "' has no valid node");
-        else map.bones[static_cast<int>(b)] = j;
+        if (j < 0)
+          addNote(map, "VRM 1.0 humanBones: '" + name + "' has no valid node");
+        else
+          map.bones[static_cast<int>(b)] = j;
       }
     }
   } else if (ext.contains("VRM") && ext["VRM"].is_object()) {
-    const auto& hb = ext["VRM"].value("humanoid", nlohmann::json::object()).value("humanBones", nlohmann::json::array());
+    const auto& hb =
+        ext["VRM"].value("humanoid", nlohmann::json::object()).value("humanBones", nlohmann::json::array());
     if (hb.is_array() && !hb.empty()) {
       present = true;
       for (const auto& entry : hb) {
@@ -335,8 +393,10 @@ HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const 
         // VRM 0.x thumbs are Proximal/Intermediate/Distal where VRM 1.0 says Metacarpal/Proximal/Distal.
         for (const char* side : {"left", "right"}) {
           const std::string s = side;
-          if (name == s + "ThumbProximal") name = s + "ThumbMetacarpal";
-          else if (name == s + "ThumbIntermediate") name = s + "ThumbProximal";
+          if (name == s + "ThumbProximal")
+            name = s + "ThumbMetacarpal";
+          else if (name == s + "ThumbIntermediate")
+            name = s + "ThumbProximal";
         }
         HumanBone b;
         if (!parseHumanBone(name, b)) {
@@ -344,8 +404,10 @@ HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const 
           continue;
         }
         const int j = entry.contains("node") ? jointOf(entry["node"]) : -1;
-        if (j < 0) addNote(map, "VRM 0.x humanBones: '" + name + "' has no valid node");
-        else map.bones[static_cast<int>(b)] = j;
+        if (j < 0)
+          addNote(map, "VRM 0.x humanBones: '" + name + "' has no valid node");
+        else
+          map.bones[static_cast<int>(b)] = j;
       }
     }
   }
@@ -354,16 +416,20 @@ HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const 
   return map;
 }
 
-Status applyBoneMap(const std::string& text, const Skeleton& skeleton, const std::vector<int>& nodeToJoint, HumanoidMap& map) {
+Status applyBoneMap(const std::string& text, const Skeleton& skeleton, const std::vector<int>& nodeToJoint,
+                    HumanoidMap& map) {
   const auto doc = nlohmann::json::parse(text, nullptr, false);
-  if (doc.is_discarded() || !doc.is_object()) return Error{"bone map: not a JSON object of bone name -> node name"};
+  if (doc.is_discarded() || !doc.is_object())
+    return Error{"bone map: not a JSON object of bone name -> node name"};
   for (const auto& [name, value] : doc.items()) {
     HumanBone b;
-    if (!parseHumanBone(name, b)) return Error{"bone map: '" + name + "' is not a VRM 1.0 humanoid bone name"};
+    if (!parseHumanBone(name, b))
+      return Error{"bone map: '" + name + "' is not a VRM 1.0 humanoid bone name"};
     int j = -1;
     if (value.is_string()) {
       j = skeleton.find(value.get<std::string>());
-      if (j < 0) return Error{"bone map: " + name + " -> '" + value.get<std::string>() + "': no node has that name"};
+      if (j < 0)
+        return Error{"bone map: " + name + " -> '" + value.get<std::string>() + "': no node has that name"};
     } else if (value.is_number_integer()) {
       const auto i = value.get<int64_t>();
       if (i < 0 || static_cast<size_t>(i) >= nodeToJoint.size())
@@ -412,11 +478,13 @@ Result<HumanoidMap> mapHumanoid(const HumanoidInputs& in) {
     }
   }
   if (!in.boneMapJson.empty()) {
-    if (auto s = applyBoneMap(in.boneMapJson, skeleton, in.gltfNodeToJoint, best); !s.ok()) return Error{s.error()};
+    if (auto s = applyBoneMap(in.boneMapJson, skeleton, in.gltfNodeToJoint, best); !s.ok())
+      return Error{s.error()};
     best.method = MappingMethod::BoneMap;
     finishHumanoidMap(skeleton, best);
   }
-  if (std::all_of(best.bones.begin(), best.bones.end(), [](int j) { return j < 0; })) best.method = MappingMethod::None;
+  if (std::all_of(best.bones.begin(), best.bones.end(), [](int j) { return j < 0; }))
+    best.method = MappingMethod::None;
   return best;
 }
 

@@ -27,26 +27,66 @@ namespace embody::avatar {
 
 // VRM 1.0 humanoid bones (https://github.com/vrm-c/vrm-specification, VRMC_vrm-1.0/humanoid.md).
 enum class HumanBone : int {
-  hips, spine, chest, upperChest, neck, head, leftEye, rightEye, jaw,
-  leftUpperLeg, leftLowerLeg, leftFoot, leftToes,
-  rightUpperLeg, rightLowerLeg, rightFoot, rightToes,
-  leftShoulder, leftUpperArm, leftLowerArm, leftHand,
-  rightShoulder, rightUpperArm, rightLowerArm, rightHand,
-  leftThumbMetacarpal, leftThumbProximal, leftThumbDistal,
-  leftIndexProximal, leftIndexIntermediate, leftIndexDistal,
-  leftMiddleProximal, leftMiddleIntermediate, leftMiddleDistal,
-  leftRingProximal, leftRingIntermediate, leftRingDistal,
-  leftLittleProximal, leftLittleIntermediate, leftLittleDistal,
-  rightThumbMetacarpal, rightThumbProximal, rightThumbDistal,
-  rightIndexProximal, rightIndexIntermediate, rightIndexDistal,
-  rightMiddleProximal, rightMiddleIntermediate, rightMiddleDistal,
-  rightRingProximal, rightRingIntermediate, rightRingDistal,
-  rightLittleProximal, rightLittleIntermediate, rightLittleDistal,
+  hips,
+  spine,
+  chest,
+  upperChest,
+  neck,
+  head,
+  leftEye,
+  rightEye,
+  jaw,
+  leftUpperLeg,
+  leftLowerLeg,
+  leftFoot,
+  leftToes,
+  rightUpperLeg,
+  rightLowerLeg,
+  rightFoot,
+  rightToes,
+  leftShoulder,
+  leftUpperArm,
+  leftLowerArm,
+  leftHand,
+  rightShoulder,
+  rightUpperArm,
+  rightLowerArm,
+  rightHand,
+  leftThumbMetacarpal,
+  leftThumbProximal,
+  leftThumbDistal,
+  leftIndexProximal,
+  leftIndexIntermediate,
+  leftIndexDistal,
+  leftMiddleProximal,
+  leftMiddleIntermediate,
+  leftMiddleDistal,
+  leftRingProximal,
+  leftRingIntermediate,
+  leftRingDistal,
+  leftLittleProximal,
+  leftLittleIntermediate,
+  leftLittleDistal,
+  rightThumbMetacarpal,
+  rightThumbProximal,
+  rightThumbDistal,
+  rightIndexProximal,
+  rightIndexIntermediate,
+  rightIndexDistal,
+  rightMiddleProximal,
+  rightMiddleIntermediate,
+  rightMiddleDistal,
+  rightRingProximal,
+  rightRingIntermediate,
+  rightRingDistal,
+  rightLittleProximal,
+  rightLittleIntermediate,
+  rightLittleDistal,
   count
 };
 constexpr int kHumanBoneCount = static_cast<int>(HumanBone::count);
 
-std::string_view humanBoneName(HumanBone b);           // the VRM 1.0 name, e.g. "leftUpperArm"
+std::string_view humanBoneName(HumanBone b);                 // the VRM 1.0 name, e.g. "leftUpperArm"
 bool parseHumanBone(std::string_view name, HumanBone& out);  // accepts VRM 1.0 names
 // Required for a usable avatar: hips, spine, head, upper/lower legs, feet, upper/lower arms, hands.
 const std::vector<HumanBone>& requiredHumanBones();
@@ -58,7 +98,7 @@ std::string_view mappingMethodName(MappingMethod m);  // "none", "bone-map", "vr
 // (L5-S1) ... 23 = vc1 (C1-C2), 24 = skullbase (Occ-C1).
 constexpr int kVertebralJointCount = 25;
 std::string_view vertebralJointName(int level);  // "vl5" ... "vc1", "skullbase"
-int vertebralJointLevel(std::string_view name);   // -1 when not an H-Anim vertebral joint name
+int vertebralJointLevel(std::string_view name);  // -1 when not an H-Anim vertebral joint name
 
 // One avatar bone on the path hips -> head, with the vertebral joints it stands for
 // ([firstLevel, endLevel), possibly empty for a bone the spine model keeps rigid). A render bone
@@ -76,9 +116,9 @@ struct HumanoidMap {
   MappingMethod method = MappingMethod::None;
   std::vector<HumanBone> missingRequired;  // empty when the avatar can be driven
   std::vector<SpineBone> spine;            // hips (exclusive) up to head (inclusive), bottom first
-  glm::vec3 forward{0.0f, 0.0f, 1.0f};    // the way the rest pose faces (VRM 0.x: -Z)
+  glm::vec3 forward{0.0f, 0.0f, 1.0f};     // the way the rest pose faces (VRM 0.x: -Z)
   glm::vec3 up{0.0f, 1.0f, 0.0f};
-  std::vector<std::string> notes;          // why a method was skipped, conflicts resolved
+  std::vector<std::string> notes;  // why a method was skipped, conflicts resolved
 
   HumanoidMap() { bones.fill(-1); }
   int joint(HumanBone b) const { return bones[static_cast<int>(b)]; }
@@ -93,10 +133,10 @@ std::vector<SpineBone> assignVertebrae(const Skeleton& skeleton, const HumanoidM
 
 struct HumanoidInputs {
   const Skeleton* skeleton = nullptr;
-  std::string gltfJson;                // "" when not from glTF (no VRM extensions then)
-  std::vector<int> gltfNodeToJoint;    // glTF node index -> joint
-  std::string boneMapJson;             // the user's --bone-map contents, "" for none
-  std::vector<bool> jointHasWeights;   // per joint: some vertex is weighted to it (may be empty)
+  std::string gltfJson;               // "" when not from glTF (no VRM extensions then)
+  std::vector<int> gltfNodeToJoint;   // glTF node index -> joint
+  std::string boneMapJson;            // the user's --bone-map contents, "" for none
+  std::vector<bool> jointHasWeights;  // per joint: some vertex is weighted to it (may be empty)
 };
 
 // Maps the humanoid. Only a malformed user bone map (bad JSON, unknown bone or node names) is an

@@ -63,7 +63,8 @@ struct Shape {
   std::vector<int> followDown(int j) const {
     std::vector<int> chain{j};
     while (!children[j].empty()) {
-      j = *std::min_element(children[j].begin(), children[j].end(), [&](int a, int b) { return minY[a] < minY[b]; });
+      j = *std::min_element(children[j].begin(), children[j].end(),
+                            [&](int a, int b) { return minY[a] < minY[b]; });
       chain.push_back(j);
     }
     return chain;
@@ -71,7 +72,8 @@ struct Shape {
   std::vector<int> followUp(int j) const {
     std::vector<int> chain{j};
     while (!children[j].empty()) {
-      j = *std::max_element(children[j].begin(), children[j].end(), [&](int a, int b) { return maxY[a] < maxY[b]; });
+      j = *std::max_element(children[j].begin(), children[j].end(),
+                            [&](int a, int b) { return maxY[a] < maxY[b]; });
       chain.push_back(j);
     }
     return chain;
@@ -102,7 +104,8 @@ HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& joi
   map.method = MappingMethod::Topology;
   // Reach queries make this quadratic in the worst case; real rigs have well under 4096 nodes.
   if (skeleton.joints.size() < 10 || skeleton.joints.size() > 4096) {
-    map.notes.push_back("topology: needs 10 to 4096 joints, the skeleton has " + std::to_string(skeleton.joints.size()));
+    map.notes.push_back("topology: needs 10 to 4096 joints, the skeleton has " +
+                        std::to_string(skeleton.joints.size()));
     finishHumanoidMap(skeleton, map);
     return map;
   }
@@ -117,8 +120,10 @@ HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& joi
   for (int j = 0; j < n && hips < 0; ++j) {
     std::vector<int> down, up;
     for (int c : s.children[j]) {
-      if (s.goesDown(c, j)) down.push_back(c);
-      else if (s.goesUp(c, j)) up.push_back(c);
+      if (s.goesDown(c, j))
+        down.push_back(c);
+      else if (s.goesUp(c, j))
+        up.push_back(c);
     }
     if (down.size() == 1) {
       std::vector<int> inner;
@@ -194,7 +199,8 @@ HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& joi
       break;
     }
     if (s.children[j].empty()) break;
-    j = *std::max_element(s.children[j].begin(), s.children[j].end(), [&](int a, int b) { return s.maxY[a] < s.maxY[b]; });
+    j = *std::max_element(s.children[j].begin(), s.children[j].end(),
+                          [&](int a, int b) { return s.maxY[a] < s.maxY[b]; });
   }
   if (junction < 0) {
     map.notes.push_back("topology: the spine never branches into two arms and a neck");
@@ -209,7 +215,9 @@ HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& joi
   }
   // Neck and head: the chain above the junction; trailing unweighted end joints are not the head.
   std::vector<int> neck = s.followUp(neckRoot);
-  auto weighted = [&](int j) { return jointHasWeights.empty() || (static_cast<size_t>(j) < jointHasWeights.size() && jointHasWeights[j]); };
+  auto weighted = [&](int j) {
+    return jointHasWeights.empty() || (static_cast<size_t>(j) < jointHasWeights.size() && jointHasWeights[j]);
+  };
   while (neck.size() > 1 && !weighted(neck.back())) neck.pop_back();
   set(HumanBone::head, neck.back());
   if (neck.size() >= 2) set(HumanBone::neck, neck.front());

@@ -100,11 +100,20 @@ Workspace::Workspace(const Model& model)
     const Eigen::MatrixXd full = qr.householderQ();
     eq_nullspace.leftCols(n - eq_rank) = full.rightCols(n - eq_rank);
   }
+  eq_matrix.setZero(eq_rank, n);
+  eq_rhs.setZero(eq_rank);
+  for (int i = 0; i < eq_rank; ++i) {
+    eq_matrix.row(i) = a.row(eq_rows[i]);
+    eq_rhs(i) = model.equality_rhs(eq_rows[i]);
+  }
   basis.setZero(n, n);
   factor.setZero(n, n);
+  basis.leftCols(eq_rank) = eq_basis.leftCols(eq_rank);
+  factor.topLeftCorner(eq_rank, eq_rank) = eq_factor.topLeftCorner(eq_rank, eq_rank);
   active_rhs.setZero(n);
   mask.setOnes(n);
-  nullspace.setZero(n, n);
+  nullspace = eq_nullspace;
+  eq_projector0 = Eigen::MatrixXd::Identity(n, n) - eq_basis.leftCols(eq_rank) * eq_basis.leftCols(eq_rank).transpose();
   dq0.setZero(n);
   dq.setZero(n);
   tmp_n.setZero(n);
@@ -115,7 +124,7 @@ Workspace::Workspace(const Model& model)
   reduced_jacobian.setZero(rows, n);
   row_space.setZero(n, n);
   projector.setZero(n, n);
-  projector0.setZero(n, n);
+  projector0 = eq_projector0;
   for (const Model::Level& level : model.levels) {
     const int m = level.rows;
     level_j.emplace_back(Eigen::MatrixXd::Zero(m, n));
@@ -125,6 +134,10 @@ Workspace::Workspace(const Model& model)
     level_tmp.emplace_back(Eigen::VectorXd::Zero(m));
     level_jw.emplace_back(Eigen::MatrixXd::Zero(m, n));
     level_eig.emplace_back(m);
+    level_shifted.emplace_back(Eigen::MatrixXd::Zero(m, m));
+    level_llt.emplace_back(m);
+    level_llt2.emplace_back(m);
+    level_y.emplace_back(Eigen::VectorXd::Zero(m));
     level_svd.emplace_back(m, n, Eigen::ComputeThinU | Eigen::ComputeThinV);
   }
 
@@ -405,24 +418,26 @@ void kinematics(const Model& model, Data& data, bool jacobians) {
 
 namespace {
 
-void resetActiveSet(const Model& model, Workspace& w, Path path) {
+// Back to the equality rows only. The equality part of basis / factor is written once (in the
+// constructor) and pinned rows only append after it; the null-space basis and the reference
+// projector are restored only when pinned rows changed them.
+void resetActiveSet(Workspace& w, Path path) {
   const int r = w.eq_rank;
   w.rank = r;
   if (r > 0) {
-    w.basis.leftCols(r) = w.eq_basis.leftCols(r);
-    w.factor.topLeftCorner(r, r) = w.eq_factor.topLeftCorner(r, r);
-    for (int i = 0; i < r; ++i) {
-      const int row = w.eq_rows[i];
-      w.active_rhs(i) = model.equality_rhs(row) - model.equality_matrix.row(row).dot(w.q);
-    }
+    w.active_rhs.head(r) = w.eq_rhs;
+    w.active_rhs.head(r).noalias() -= w.eq_matrix * w.q;
   }
   w.mask_mode = r == 0;
   w.mask.setOnes();
   w.null_dim = w.n - r;
-  if (!w.mask_mode) w.nullspace.leftCols(w.null_dim) = w.eq_nullspace.leftCols(w.null_dim);
-  if (path == Path::Reference) {
-    w.projector0.setIdentity();
-    if (r > 0) w.projector0.noalias() -= w.basis.leftCols(r) * w.basis.leftCols(r).transpose();
+  if (!w.mask_mode && w.nullspace_dirty) {
+    w.nullspace.leftCols(w.null_dim) = w.eq_nullspace.leftCols(w.null_dim);
+    w.nullspace_dirty = false;
+  }
+  if (path == Path::Reference && w.projector0_dirty) {
+    w.projector0 = w.eq_projector0;
+    w.projector0_dirty = false;
   }
   std::fill(w.ineq_active.begin(), w.ineq_active.end(), 0);
   std::fill(w.ineq_reported.begin(), w.ineq_reported.end(), 0);
@@ -470,6 +485,7 @@ bool addActiveRow(Workspace& w, double rhs_delta, int single_dof, Path path, dou
   if (w.mask_mode && single_dof >= 0) {
     w.mask(single_dof) = 0.0;
   } else {
+    w.nullspace_dirty = true;
     if (w.mask_mode) {  // materialise the diagonal projector's basis: the unmasked unit vectors
       w.nullspace.setZero();
       int k = 0;
@@ -492,7 +508,10 @@ bool addActiveRow(Workspace& w, double rhs_delta, int single_dof, Path path, dou
     }
   }
   w.null_dim -= 1;
-  if (path == Path::Reference) w.projector0.noalias() -= w.basis.col(r) * w.basis.col(r).transpose();
+  if (path == Path::Reference) {
+    w.projector0.noalias() -= w.basis.col(r) * w.basis.col(r).transpose();
+    w.projector0_dirty = true;
+  }
   return true;
 }
 
@@ -506,6 +525,85 @@ bool levelActive(const Model::Level& level, const Workspace& w) {
   for (TaskId t : level.tasks)
     if (w.enabled[t]) return true;
   return false;
+}
+
+// The level's damping λ² from the smallest singular value of Ĵ, computed on G = Ĵ Ĵᵀ (the same
+// m x m matrix in both paths, so both damp identically). Cheap in the common cases:
+//   G - eps² I positive definite      -> σ_min > eps, λ = 0;
+//   G not positive definite           -> σ_min = 0, λ = λmax;
+//   otherwise inverse iteration on G (Cholesky) for σ_min² = λ_min(G).
+// Leaves the Cholesky factor of G in w.level_llt[k] (valid when gram_pd); sigma_min is eps when
+// undamped (a lower bound) and 0 when G is singular.
+constexpr int kInverseIterations = 8;
+
+// Triangular solves with the Cholesky factor (lower, column-major) for the small m x m systems of
+// one level: plain loops beat Eigen's blocked kernels at these sizes (m <= ~16).
+void solveLower(const Eigen::MatrixXd& l, double* x) {
+  const Eigen::Index m = l.rows();
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const double xj = (x[j] /= l(j, j));
+    for (Eigen::Index i = j + 1; i < m; ++i) x[i] -= l(i, j) * xj;
+  }
+}
+void solveLowerTransposed(const Eigen::MatrixXd& l, double* x) {
+  const Eigen::Index m = l.rows();
+  for (Eigen::Index j = m; j-- > 0;) {
+    double v = x[j];
+    for (Eigen::Index i = j + 1; i < m; ++i) v -= l(i, j) * x[i];
+    x[j] = v / l(j, j);
+  }
+}
+// x := G⁻¹ x with G = L Lᵀ.
+void choleskySolve(const Eigen::MatrixXd& l, double* x) {
+  solveLower(l, x);
+  solveLowerTransposed(l, x);
+}
+
+struct LevelDamping {
+  double lambda2 = 0.0;
+  double sigma_min = 0.0;
+  bool gram_pd = false;
+};
+
+LevelDamping levelDamping(const Eigen::MatrixXd& gram, Workspace& w, size_t k, const SolveOptions& o) {
+  LevelDamping d;
+  Eigen::MatrixXd& scratch = w.level_shifted[k];
+  auto& gramLlt = w.level_llt[k];
+  auto& otherLlt = w.level_llt2[k];
+  gramLlt.compute(gram);
+  d.gram_pd = gramLlt.info() == Eigen::Success;
+  if (!d.gram_pd) {
+    d.lambda2 = o.damping_max * o.damping_max;
+    return d;
+  }
+  scratch = gram;
+  scratch.diagonal().array() -= o.damping_eps * o.damping_eps;
+  otherLlt.compute(scratch);
+  if (otherLlt.info() == Eigen::Success) {
+    d.sigma_min = o.damping_eps;
+    return d;
+  }
+  // Inverse iteration: the Rayleigh quotient of G⁻¹ converges to 1/λ_min(G) as (σ1/σ2)^(2k).
+  // A fixed number of steps (no round-off-dependent stopping test) keeps both paths identical;
+  // the estimate lies between σ1 and σ2, and the rule only needs it to grow smoothly.
+  Eigen::VectorXd& x = w.level_coef[k];
+  Eigen::VectorXd& z = w.level_tmp[k];
+  const Eigen::Index m = gram.rows();
+  for (Eigen::Index i = 0; i < m; ++i) x(i) = 1.0 + 0.1 * static_cast<double>(i);  // deterministic start
+  x.normalize();
+  double mu = 0.0;
+  const Eigen::MatrixXd& l = gramLlt.matrixLLT();
+  for (int it = 0; it < kInverseIterations; ++it) {
+    z = x;
+    choleskySolve(l, z.data());
+    mu = x.dot(z);
+    const double zn = z.norm();
+    if (!(zn > 0) || !std::isfinite(zn)) break;
+    x = z / zn;
+  }
+  d.sigma_min = mu > 0 ? std::sqrt(1.0 / mu) : 0.0;
+  d.lambda2 = smoothDampingSquared(d.sigma_min, o);
+  return d;
 }
 
 void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
@@ -526,48 +624,71 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     res = w.error.segment(level.first_row, m);
     res.noalias() -= w.jacobian.middleRows(level.first_row, m) * w.dq;  // compensated error
     jhr = w.reduced_jacobian.block(level.first_row, 0, m, r);
-    if (s > 0) {
+    if (s > 0) {  // Ĵ = J N (I - W Wᵀ): the part of the level the higher levels left free
       auto jw = w.level_jw[k].leftCols(s);
       jw.noalias() = jhr * w.row_space.topLeftCorner(r, s);
       jhr.noalias() -= jw * w.row_space.topLeftCorner(r, s).transpose();
     }
-    w.level_gram[k].noalias() = jhr * jhr.transpose();
-    auto& eig = w.level_eig[k];
-    eig.compute(w.level_gram[k]);
-    const auto& values = eig.eigenvalues();
-    const auto& vectors = eig.eigenvectors();
-    Eigen::VectorXd& coef = w.level_coef[k];
-    coef.noalias() = vectors.transpose() * res;
-    for (int i = 0; i < m; ++i) {
-      const double s2 = std::max(values(i), 0.0);
-      const double sigma = std::sqrt(s2);
-      const double denom = s2 + smoothDampingSquared(sigma, o);
-      coef(i) = denom > 0 ? coef(i) / denom : 0.0;
+    Eigen::MatrixXd& gram = w.level_gram[k];  // lower triangle only: LLT and eig read just that
+    gram.setZero();
+    gram.selfadjointView<Eigen::Lower>().rankUpdate(jhr);
+    const LevelDamping d = levelDamping(gram, w, k, o);
+
+    // Damped step: Δz = Ĵᵀ (G + λ² I)⁻¹ res.
+    Eigen::VectorXd& y = w.level_y[k];
+    y = res;
+    if (d.lambda2 > 0) {
+      Eigen::MatrixXd& damped = w.level_shifted[k];
+      damped = gram;
+      damped.diagonal().array() += d.lambda2;
+      w.level_llt2[k].compute(damped);
+      choleskySolve(w.level_llt2[k].matrixLLT(), y.data());
+    } else {
+      choleskySolve(w.level_llt[k].matrixLLT(), y.data());  // λ = 0 only when G is positive definite
     }
-    Eigen::VectorXd& tmp = w.level_tmp[k];
-    tmp.noalias() = vectors * coef;
     auto dz = w.tmp_n.head(r);
-    dz.noalias() = jhr.transpose() * tmp;
+    dz.noalias() = jhr.transpose() * y;
     if (w.mask_mode)
       w.dq += dz;
     else
       w.dq.noalias() += w.nullspace.leftCols(r) * dz;
-    // Projector update (undamped, rank-thresholded): append the level's row space to W.
-    for (int i = m; i-- > 0 && s < r;) {
-      const double sigma = std::sqrt(std::max(values(i), 0.0));
-      if (!(sigma > o.rank_tolerance)) break;  // eigenvalues ascend
-      auto v = w.row_space.col(s).head(r);
-      v.noalias() = jhr.transpose() * vectors.col(i);
-      v /= sigma;
-      if (s > 0) {  // re-orthogonalise against W (round-off only)
-        auto proj = w.tmp_n2.head(s);
-        proj.noalias() = w.row_space.topLeftCorner(r, s).transpose() * v;
-        v.noalias() -= w.row_space.topLeftCorner(r, s) * proj;
+
+    // Projector update (undamped, rank-thresholded): append an orthonormal basis of Ĵ's rows to
+    // W. Full rank: with G = L Lᵀ, the rows of L⁻¹ Ĵ are that basis (no eigen-decomposition).
+    if (d.gram_pd && d.sigma_min > o.rank_tolerance && m <= r - s) {
+      auto mt = w.level_jw[k].leftCols(r);
+      mt = jhr;
+      w.level_llt[k].matrixL().solveInPlace(mt);
+      w.row_space.block(0, s, r, m) = mt.transpose();
+      s += m;
+      continue;
+    }
+    // Rank-deficient level: eigen-decompose G (σ² are its eigenvalues), keep σ > tolerance.
+    auto& eig = w.level_eig[k];
+    eig.compute(gram);
+    const auto& values = eig.eigenvalues();
+    const auto& vectors = eig.eigenvectors();
+    int rank = 0;
+    for (int i = m; i-- > 0 && rank < r - s;) {
+      if (!(std::sqrt(std::max(values(i), 0.0)) > o.rank_tolerance)) break;  // eigenvalues ascend
+      ++rank;
+    }
+    if (rank > 0) {
+      auto v = w.row_space.block(0, s, r, rank);
+      v.noalias() = jhr.transpose() * vectors.rightCols(rank);
+      for (int c = 0; c < rank; ++c) {
+        const double sigma = std::sqrt(values(m - rank + c));
+        auto col = v.col(c);
+        col /= sigma;
+        // Analytically orthogonal to W; round-off grows like eps/σ, so re-orthogonalise small σ.
+        if (sigma < 1e-3 && s > 0) {
+          auto proj = w.tmp_n2.head(s);
+          proj.noalias() = w.row_space.topLeftCorner(r, s).transpose() * col;
+          col.noalias() -= w.row_space.topLeftCorner(r, s) * proj;
+          col.normalize();
+        }
       }
-      const double vn = v.norm();
-      if (!(vn > 0.5)) continue;  // numerically inside W already
-      v /= vn;
-      ++s;
+      s += rank;
     }
   }
 }
@@ -585,15 +706,18 @@ void referencePass(const Model& model, Workspace& w, const SolveOptions& o) {
     res.noalias() -= j * w.dq;
     Eigen::MatrixXd& jh = w.level_j[k];
     jh.noalias() = j * w.projector;
+    Eigen::MatrixXd& gram = w.level_gram[k];
+    gram.noalias() = jh * jh.transpose();
+    const double lambda2 = levelDamping(gram, w, k, o).lambda2;
     auto& svd = w.level_svd[k];
     svd.compute(jh);
     const auto& sv = svd.singularValues();
-    Eigen::VectorXd& coef = w.level_coef[k];
+    Eigen::VectorXd& coef = w.level_y[k];
     const int p = static_cast<int>(sv.size());
     coef.head(p).noalias() = svd.matrixU().transpose() * res;
     for (int i = 0; i < p; ++i) {
       const double sigma = sv(i);
-      const double denom = sigma * sigma + smoothDampingSquared(sigma, o);
+      const double denom = sigma * sigma + lambda2;
       coef(i) = denom > 0 ? coef(i) * sigma / denom : 0.0;
     }
     w.dq.noalias() += svd.matrixV() * coef.head(p);
@@ -671,7 +795,7 @@ void reparameterize(const Model& model, Workspace& w) {
 bool step(const Model& model, Workspace& w, const SolveOptions& o) {
   w.report.active_clamps.clear();
   w.report.unsatisfiable.clear();
-  resetActiveSet(model, w, o.path);
+  resetActiveSet(w, o.path);
   computeDq0(w);
   runPass(model, w, o);
   int passes = 1;
@@ -734,7 +858,7 @@ bool allSatisfied(const Workspace& w) {
 const Eigen::VectorXd& priorityPass(const Model& model, Data& data, const SolveOptions& options) {
   Workspace& w = data.workspace();
   if (!sameShape(model, w)) return w.dq;
-  resetActiveSet(model, w, options.path);
+  resetActiveSet(w, options.path);
   computeDq0(w);
   runPass(model, w, options);
   return w.dq;

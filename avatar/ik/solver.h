@@ -9,8 +9,9 @@
 //   use(data.q());                            // warm start: the next solve starts from here
 //
 // Two implementations of the priority loop give the same Δq (to round-off):
-//   Path::Fast      orthonormal null-space basis of the active rows, reduced coordinates, small
-//                   m_k x m_k eigen-decompositions per level (the default);
+//   Path::Fast      orthonormal null-space basis of the active rows, reduced coordinates, a small
+//                   m_k x m_k Cholesky per level (eigen-decomposition only for rank-deficient
+//                   levels) (the default);
 //   Path::Reference plain n x n projectors and a JacobiSVD per level (what Fast is tested against).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -43,9 +44,10 @@ struct SolveOptions {
   int max_iterations = 100;
   int max_clamp_passes = 16;    // clamping-loop cap per iteration
   bool clamping = true;         // false: inequalities are ignored (tests of the priority loop)
-  // Smooth damping (iTaSC rule): for each singular value σ < eps, λ² = (1 - (σ/eps)²) λmax².
+  // Smooth damping (iTaSC rule), one λ per level from its smallest singular value σ:
+  // λ² = (1 - (σ/eps)²) λmax² when σ < eps, else 0. Projectors are never damped.
   double damping_max = 0.1;     // λmax
-  double damping_eps = 0.3;     // eps
+  double damping_eps = 0.2;     // eps
   double rank_tolerance = 1e-6; // singular values below this are rank-deficient (projectors)
   double inequality_tolerance = 1e-9;  // a row counts as violated above rhs + this
   // Scale the task part of the step down when it reverses the previous one (damps period-2

@@ -2,6 +2,7 @@
 // The solver's workspace (private to avatar/ik and its tests): every buffer is sized once in
 // Data's constructor, so an iteration only writes into existing storage.
 #include <Eigen/Core>
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
@@ -54,6 +55,8 @@ struct Workspace {
   Eigen::VectorXd active_rhs;
   int rank = 0;
   Eigen::MatrixXd eq_basis, eq_factor;
+  Eigen::MatrixXd eq_matrix;  // the independent equality rows (eq_rank x n) and their rhs
+  Eigen::VectorXd eq_rhs;
   std::vector<int> eq_rows;  // independent equality row indices
   int eq_rank = 0;
 
@@ -63,7 +66,8 @@ struct Workspace {
   Eigen::VectorXd mask;
   Eigen::MatrixXd nullspace;
   int null_dim = 0;
-  Eigen::MatrixXd eq_nullspace;  // equality-only null space, copied at each iteration's reset
+  Eigen::MatrixXd eq_nullspace;  // equality-only null space, restored when pinned rows changed it
+  bool nullspace_dirty = false;
 
   Eigen::VectorXd dq0, dq, tmp_n, tmp_n2, y;
   // Oscillation guard: the task part of the previous step and the current step scale.
@@ -80,9 +84,13 @@ struct Workspace {
   std::vector<Eigen::VectorXd> level_res, level_coef, level_tmp;
   std::vector<Eigen::MatrixXd> level_jw;     // m_k x n (J W)
   std::vector<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>> level_eig;
+  std::vector<Eigen::MatrixXd> level_shifted;  // G - eps² I
+  std::vector<Eigen::LLT<Eigen::MatrixXd>> level_llt, level_llt2;  // G; G ± scalar shifts
+  std::vector<Eigen::VectorXd> level_y;
 
   // Reference path scratch.
-  Eigen::MatrixXd projector, projector0;
+  Eigen::MatrixXd projector, projector0, eq_projector0;
+  bool projector0_dirty = false;
   std::vector<Eigen::JacobiSVD<Eigen::MatrixXd>> level_svd;
 
   // Inequalities in sparse form.

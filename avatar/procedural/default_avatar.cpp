@@ -34,7 +34,8 @@ float smoothstep(float e0, float e1, float x) {
 float profile(const std::vector<glm::vec2>& pts, float x) {
   if (x <= pts.front().x) return pts.front().y;
   for (size_t i = 1; i < pts.size(); ++i)
-    if (x <= pts[i].x) return glm::mix(pts[i - 1].y, pts[i].y, (x - pts[i - 1].x) / (pts[i].x - pts[i - 1].x));
+    if (x <= pts[i].x)
+      return glm::mix(pts[i - 1].y, pts[i].y, (x - pts[i - 1].x) / (pts[i].x - pts[i - 1].x));
   return pts.back().y;
 }
 
@@ -96,13 +97,15 @@ void addTube(MeshSink& sink, const std::vector<Station>& st, int radial, float s
     const int k = std::max(1, static_cast<int>(std::ceil(len / spacing)));
     for (int j = 0; j < k; ++j) {
       const float t = static_cast<float>(j) / static_cast<float>(k);
-      rings.push_back({glm::mix(st[i].centre, st[i + 1].centre, t), glm::normalize(glm::mix(tangentAt(i), tangentAt(i + 1), t)),
+      rings.push_back({glm::mix(st[i].centre, st[i + 1].centre, t),
+                       glm::normalize(glm::mix(tangentAt(i), tangentAt(i + 1), t)),
                        glm::mix(st[i].ru, st[i + 1].ru, t), glm::mix(st[i].rv, st[i + 1].rv, t),
                        lerp(st[i].weights, st[i + 1].weights, t), s + t * len});
     }
     s += len;
   }
-  rings.push_back({st.back().centre, tangentAt(st.size() - 1), st.back().ru, st.back().rv, st.back().weights, s});
+  rings.push_back(
+      {st.back().centre, tangentAt(st.size() - 1), st.back().ru, st.back().rv, st.back().weights, s});
   // Domes: rings shrinking on a quarter ellipse, then a pole vertex.
   constexpr int kDome = 4;
   std::vector<Ring> all;
@@ -134,7 +137,8 @@ void addTube(MeshSink& sink, const std::vector<Station>& st, int radial, float s
     for (int j = 0; j < radial; ++j) {
       const float th = glm::two_pi<float>() * static_cast<float>(j) / static_cast<float>(radial);
       const glm::vec3 p = r.c + r.ru * std::cos(th) * u + r.rv * std::sin(th) * v;
-      const uint32_t id = sink.vertex(p, {static_cast<float>(j) / static_cast<float>(radial), r.s}, weightsAt(p, r.w));
+      const uint32_t id =
+          sink.vertex(p, {static_cast<float>(j) / static_cast<float>(radial), r.s}, weightsAt(p, r.w));
       if (j == 0) ringStart.back() = id;
     }
   }
@@ -164,7 +168,8 @@ void addEllipsoid(MeshSink& sink, const glm::vec3& c, const glm::vec3& r, int st
   // Rings from bottom to top pole, as a tube along +Y whose domes close the poles.
   for (int i = 1; i < stacks; ++i) {
     const float phi = glm::pi<float>() * static_cast<float>(i) / static_cast<float>(stacks);
-    st.push_back({c + glm::vec3(0.0f, -std::cos(phi) * r.y, 0.0f), std::sin(phi) * r.x, std::sin(phi) * r.z, {}});
+    st.push_back(
+        {c + glm::vec3(0.0f, -std::cos(phi) * r.y, 0.0f), std::sin(phi) * r.x, std::sin(phi) * r.z, {}});
   }
   const float step = glm::pi<float>() / static_cast<float>(stacks);
   const float pole = r.y * (1.0f - std::cos(step));
@@ -187,27 +192,40 @@ std::vector<JointDef> jointTable() {
   std::vector<JointDef> t = {
       {"humanoid_root", nullptr, {0, 0.8240f, 0.0277f}},
       {"sacroiliac", "humanoid_root", {0, 0.9149f, 0.0016f}},
-      {"vl5", "humanoid_root", {0, 1.0568f, -0.0776f}},   {"vl4", "vl5", {0, 1.0925f, -0.0787f}},
-      {"vl3", "vl4", {0, 1.1276f, -0.0796f}},             {"vl2", "vl3", {0, 1.1546f, -0.0800f}},
-      {"vl1", "vl2", {0, 1.1912f, -0.0805f}},             {"vt12", "vl1", {0, 1.2278f, -0.0808f}},
-      {"vt11", "vt12", {0, 1.2679f, -0.0810f}},           {"vt10", "vt11", {0, 1.2848f, -0.0822f}},
-      {"vt9", "vt10", {0, 1.3126f, -0.0838f}},            {"vt8", "vt9", {0, 1.3382f, -0.0845f}},
-      {"vt7", "vt8", {0, 1.3625f, -0.0833f}},             {"vt6", "vt7", {0, 1.3866f, -0.0800f}},
-      {"vt5", "vt6", {0, 1.4102f, -0.0745f}},             {"vt4", "vt5", {0, 1.4320f, -0.0675f}},
-      {"vt3", "vt4", {0, 1.4583f, -0.0570f}},             {"vt2", "vt3", {0, 1.4761f, -0.0484f}},
-      {"vt1", "vt2", {0, 1.4951f, -0.0387f}},             {"vc7", "vt1", {0, 1.5132f, -0.0301f}},
-      {"vc6", "vc7", {0, 1.5357f, -0.0143f}},             {"vc5", "vc6", {0, 1.5520f, -0.0082f}},
-      {"vc4", "vc5", {0, 1.5662f, -0.0084f}},             {"vc3", "vc4", {0, 1.5800f, -0.0103f}},
-      {"vc2", "vc3", {0, 1.5928f, -0.0103f}},             {"vc1", "vc2", {0, 1.6144f, -0.0034f}},
+      {"vl5", "humanoid_root", {0, 1.0568f, -0.0776f}},
+      {"vl4", "vl5", {0, 1.0925f, -0.0787f}},
+      {"vl3", "vl4", {0, 1.1276f, -0.0796f}},
+      {"vl2", "vl3", {0, 1.1546f, -0.0800f}},
+      {"vl1", "vl2", {0, 1.1912f, -0.0805f}},
+      {"vt12", "vl1", {0, 1.2278f, -0.0808f}},
+      {"vt11", "vt12", {0, 1.2679f, -0.0810f}},
+      {"vt10", "vt11", {0, 1.2848f, -0.0822f}},
+      {"vt9", "vt10", {0, 1.3126f, -0.0838f}},
+      {"vt8", "vt9", {0, 1.3382f, -0.0845f}},
+      {"vt7", "vt8", {0, 1.3625f, -0.0833f}},
+      {"vt6", "vt7", {0, 1.3866f, -0.0800f}},
+      {"vt5", "vt6", {0, 1.4102f, -0.0745f}},
+      {"vt4", "vt5", {0, 1.4320f, -0.0675f}},
+      {"vt3", "vt4", {0, 1.4583f, -0.0570f}},
+      {"vt2", "vt3", {0, 1.4761f, -0.0484f}},
+      {"vt1", "vt2", {0, 1.4951f, -0.0387f}},
+      {"vc7", "vt1", {0, 1.5132f, -0.0301f}},
+      {"vc6", "vc7", {0, 1.5357f, -0.0143f}},
+      {"vc5", "vc6", {0, 1.5520f, -0.0082f}},
+      {"vc4", "vc5", {0, 1.5662f, -0.0084f}},
+      {"vc3", "vc4", {0, 1.5800f, -0.0103f}},
+      {"vc2", "vc3", {0, 1.5928f, -0.0103f}},
+      {"vc1", "vc2", {0, 1.6144f, -0.0034f}},
       {"skullbase", "vc1", {0, 1.6209f, 0.0236f}},
   };
   struct Side {
     const char* prefix;
     float sign;
   };
-  static const char* names[2][8] = {
-      {"l_hip", "l_knee", "l_ankle", "l_metatarsal", "l_sternoclavicular", "l_shoulder", "l_elbow", "l_wrist"},
-      {"r_hip", "r_knee", "r_ankle", "r_metatarsal", "r_sternoclavicular", "r_shoulder", "r_elbow", "r_wrist"}};
+  static const char* names[2][8] = {{"l_hip", "l_knee", "l_ankle", "l_metatarsal", "l_sternoclavicular",
+                                     "l_shoulder", "l_elbow", "l_wrist"},
+                                    {"r_hip", "r_knee", "r_ankle", "r_metatarsal", "r_sternoclavicular",
+                                     "r_shoulder", "r_elbow", "r_wrist"}};
   for (int side = 0; side < 2; ++side) {
     const float x = side == 0 ? 1.0f : -1.0f;  // left is +X when facing +Z
     const char* const* n = names[side];
@@ -260,32 +278,35 @@ AvatarAsset buildDefaultAvatar() {
     return {{stations.back().second, 1.0f}};
   };
   // Each vertebra bone's station is the middle of the bone (its joint to the next one up).
-  const char* spineNames[] = {"vl5", "vl4", "vl3", "vl2", "vl1", "vt12", "vt11", "vt10", "vt9", "vt8", "vt7", "vt6",
-                              "vt5", "vt4", "vt3", "vt2", "vt1", "vc7", "vc6", "vc5", "vc4", "vc3", "vc2", "vc1", "skullbase"};
+  const char* spineNames[] = {"vl5", "vl4", "vl3", "vl2", "vl1", "vt12", "vt11",     "vt10", "vt9",
+                              "vt8", "vt7", "vt6", "vt5", "vt4", "vt3",  "vt2",      "vt1",  "vc7",
+                              "vc6", "vc5", "vc4", "vc3", "vc2", "vc1",  "skullbase"};
   std::vector<std::pair<float, int>> spineStations = {{0.97f, J("sacroiliac")}};
   for (int i = 0; i + 1 < 25; ++i)
     spineStations.push_back({0.5f * (P(spineNames[i]).y + P(spineNames[i + 1]).y), J(spineNames[i])});
   spineStations.push_back({1.64f, J("skullbase")});
 
   // Torso: elliptical sections by height; upper outer vertices follow the clavicles.
-  const std::vector<glm::vec2> halfWidth = {{0.80f, 0.150f}, {0.88f, 0.170f}, {0.98f, 0.160f}, {1.08f, 0.132f},
-                                            {1.20f, 0.140f}, {1.32f, 0.158f}, {1.42f, 0.172f}, {1.47f, 0.150f},
-                                            {1.51f, 0.075f}};
-  const std::vector<glm::vec2> halfDepth = {{0.80f, 0.085f}, {0.90f, 0.105f}, {1.00f, 0.098f}, {1.08f, 0.090f},
-                                            {1.25f, 0.105f}, {1.35f, 0.108f}, {1.45f, 0.085f}, {1.51f, 0.055f}};
+  const std::vector<glm::vec2> halfWidth = {{0.80f, 0.150f}, {0.88f, 0.170f}, {0.98f, 0.160f},
+                                            {1.08f, 0.132f}, {1.20f, 0.140f}, {1.32f, 0.158f},
+                                            {1.42f, 0.172f}, {1.47f, 0.150f}, {1.51f, 0.075f}};
+  const std::vector<glm::vec2> halfDepth = {{0.80f, 0.085f}, {0.90f, 0.105f}, {1.00f, 0.098f},
+                                            {1.08f, 0.090f}, {1.25f, 0.105f}, {1.35f, 0.108f},
+                                            {1.45f, 0.085f}, {1.51f, 0.055f}};
   const std::vector<glm::vec2> centreZ = {{0.80f, 0.005f}, {0.95f, -0.005f}, {1.10f, -0.005f},
                                           {1.30f, 0.010f}, {1.45f, -0.015f}, {1.51f, -0.025f}};
   std::vector<Station> torso;
   for (float y = 0.80f; y <= 1.5101f; y += 0.015f)
     torso.push_back({{0.0f, y, profile(centreZ, y)}, profile(halfWidth, y), profile(halfDepth, y), {}});
   const int lClav = J("l_sternoclavicular"), rClav = J("r_sternoclavicular");
-  addTube(sink, torso, 36, 0.015f, glm::vec3(0, 0, 1), 0.04f, 0.02f, [&](const glm::vec3& p, const Influences&) {
-    Influences w = hat(spineStations, p.y);
-    const float s = smoothstep(0.09f, 0.17f, std::abs(p.x)) * smoothstep(1.34f, 1.43f, p.y);
-    for (auto& [j, x] : w) x *= 1.0f - s;
-    if (s > 0.0f) w.emplace_back(p.x > 0 ? lClav : rClav, s);
-    return w;
-  });
+  addTube(sink, torso, 36, 0.015f, glm::vec3(0, 0, 1), 0.04f, 0.02f,
+          [&](const glm::vec3& p, const Influences&) {
+            Influences w = hat(spineStations, p.y);
+            const float s = smoothstep(0.09f, 0.17f, std::abs(p.x)) * smoothstep(1.34f, 1.43f, p.y);
+            for (auto& [j, x] : w) x *= 1.0f - s;
+            if (s > 0.0f) w.emplace_back(p.x > 0 ? lClav : rClav, s);
+            return w;
+          });
 
   // Neck.
   std::vector<Station> neck;
@@ -305,7 +326,9 @@ AvatarAsset buildDefaultAvatar() {
     const float sx = side == 0 ? 1.0f : -1.0f;
     auto jn = [&](const char* n) { return J((p + n).c_str()); };
     auto ps = [&](const char* n) { return P((p + n).c_str()); };
-    auto along = [](const glm::vec3& a, const glm::vec3& b, float d) { return a + glm::normalize(b - a) * d; };
+    auto along = [](const glm::vec3& a, const glm::vec3& b, float d) {
+      return a + glm::normalize(b - a) * d;
+    };
     const int hipJ = jn("hip"), kneeJ = jn("knee"), ankleJ = jn("ankle"), toeJ = jn("metatarsal");
     const glm::vec3 hip = ps("hip"), knee = ps("knee"), ankle = ps("ankle");
     const int pelvis = J("sacroiliac");
@@ -347,8 +370,8 @@ AvatarAsset buildDefaultAvatar() {
     auto handOnly = [&](const glm::vec3&) { return Influences{{wrJ, 1.0f}}; };
     const glm::vec3 down = glm::normalize(wr - el);
     addEllipsoid(sink, wr + down * 0.085f, {0.020f, 0.092f, 0.045f}, 16, 20, handOnly);
-    addEllipsoid(sink, wr + down * 0.055f + glm::vec3(-sx * 0.004f, 0.0f, 0.042f), {0.012f, 0.036f, 0.013f}, 8, 12,
-                 handOnly);
+    addEllipsoid(sink, wr + down * 0.055f + glm::vec3(-sx * 0.004f, 0.0f, 0.042f), {0.012f, 0.036f, 0.013f},
+                 8, 12, handOnly);
   }
 
   // Normals from the generated surfaces (area-weighted; every part is a closed shell).

@@ -45,8 +45,7 @@ Result<ExperimentRun> runOne(const SpineDescription& d, bool coupled, const Expe
   if (Status s = data.setTarget(spine->neck_position, result.neck_target); !s) return Error{s.error()};
 
   ik::SolveOptions solveOptions;
-  solveOptions.damping_max = o.damping;
-  solveOptions.damping_eps = o.damping;
+  if (o.damping > 0) solveOptions.damping_max = solveOptions.damping_eps = o.damping;
   {  // warm caches and code on a copy, so the first timed iterations are not cold-start outliers
     ik::Data warm = data;
     for (int i = 0; i < 3; ++i) ik::iterate(model, warm, solveOptions);

@@ -20,10 +20,11 @@ struct ExperimentOptions {
   double pull = 0.12;        // metres the neck target is moved towards the character's left (+x)
   double height = 1.75;      // body height the spine is scaled to (m)
   bool axis_coupling = false;
-  // Damping of the solver (SolveOptions::damping_max and damping_eps). The spine's lever arms are
-  // short (singular values of the neck position task ~0.05-0.3 m/rad), so the solver's default
-  // 0.05 lets a near-singular direction take steps of tenths of a radian.
-  double damping = 0.1;
+  // > 0: the solver's damping_max and damping_eps both set to this; 0: the solver's defaults.
+  // (The spine's lever arms are short: singular values of the neck position task are ~0.05-0.3
+  // m/rad, so a damping threshold well below that lets a near-singular direction take steps of
+  // tenths of a radian.)
+  double damping = 0.0;
 };
 
 struct IterationSample {

@@ -197,7 +197,7 @@ Result<SpineDescription> parseSpineDescription(const json& j) {
   EMBODY_SPINE_TRY(readNumber(j, "reference_height_m", "document", d.reference_height));
   EMBODY_SPINE_TRY(readVector3(j, "origin_m", "document", d.origin));
   EMBODY_SPINE_TRY(readNumber(j, "flexion_share", "document", d.flexion_share, false));
-  double slackDeg = 1.0;
+  double slackDeg = 2.0;
   EMBODY_SPINE_TRY(readNumber(j, "band_slack_deg", "document", slackDeg, false));
   d.band_slack = slackDeg * kDeg;
   if (!j.contains("vertebrae") || !j["vertebrae"].is_array()) return fail("\"vertebrae\" must be an array");

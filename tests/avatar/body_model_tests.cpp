@@ -1,5 +1,4 @@
 #include <catch2/catch.hpp>
-
 #include <random>
 
 #include "avatar/avatar_loader.h"
@@ -35,13 +34,28 @@ AvatarAsset vrm1Avatar() {
 }
 
 AvatarAsset mixamoAvatar() {
-  std::map<std::string, std::string> m = {
-      {"hips", "Hips"}, {"spine", "Spine"}, {"chest", "Spine1"}, {"upperChest", "Spine2"}, {"neck", "Neck"},
-      {"head", "Head"}, {"leftShoulder", "LeftShoulder"}, {"leftUpperArm", "LeftArm"}, {"leftLowerArm", "LeftForeArm"},
-      {"leftHand", "LeftHand"}, {"rightShoulder", "RightShoulder"}, {"rightUpperArm", "RightArm"},
-      {"rightLowerArm", "RightForeArm"}, {"rightHand", "RightHand"}, {"leftUpperLeg", "LeftUpLeg"},
-      {"leftLowerLeg", "LeftLeg"}, {"leftFoot", "LeftFoot"}, {"leftToes", "LeftToeBase"}, {"rightUpperLeg", "RightUpLeg"},
-      {"rightLowerLeg", "RightLeg"}, {"rightFoot", "RightFoot"}, {"rightToes", "RightToeBase"}};
+  std::map<std::string, std::string> m = {{"hips", "Hips"},
+                                          {"spine", "Spine"},
+                                          {"chest", "Spine1"},
+                                          {"upperChest", "Spine2"},
+                                          {"neck", "Neck"},
+                                          {"head", "Head"},
+                                          {"leftShoulder", "LeftShoulder"},
+                                          {"leftUpperArm", "LeftArm"},
+                                          {"leftLowerArm", "LeftForeArm"},
+                                          {"leftHand", "LeftHand"},
+                                          {"rightShoulder", "RightShoulder"},
+                                          {"rightUpperArm", "RightArm"},
+                                          {"rightLowerArm", "RightForeArm"},
+                                          {"rightHand", "RightHand"},
+                                          {"leftUpperLeg", "LeftUpLeg"},
+                                          {"leftLowerLeg", "LeftLeg"},
+                                          {"leftFoot", "LeftFoot"},
+                                          {"leftToes", "LeftToeBase"},
+                                          {"rightUpperLeg", "RightUpLeg"},
+                                          {"rightLowerLeg", "RightLeg"},
+                                          {"rightFoot", "RightFoot"},
+                                          {"rightToes", "RightToeBase"}};
   for (auto& [bone, name] : m) name = "mixamorig:" + name;
   return fromFile(embody::test::HumanoidFile(m));
 }
@@ -80,7 +94,8 @@ void checkRetargeting(const AvatarAsset& avatar, SpineMode spine = SpineMode::Au
   double worstPos = 0.0, worstRot = 0.0, moved = 0.0;
   std::map<ik::JointId, Eigen::Vector3d> restPos;
   for (int trial = 0; trial < 20; ++trial) {
-    const Eigen::VectorXd q = trial == 0 ? Eigen::VectorXd::Zero(body->model.dofs) : randomPose(body->model, rng);
+    const Eigen::VectorXd q =
+        trial == 0 ? Eigen::VectorXd::Zero(body->model.dofs) : randomPose(body->model, rng);
     REQUIRE(data.setConfiguration(q).ok());
     ik::kinematics(body->model, data, false);
     retarget(body.value(), avatar, data, pose);
@@ -93,11 +108,12 @@ void checkRetargeting(const AvatarAsset& avatar, SpineMode spine = SpineMode::Au
       if (trial == 0) restPos[j] = ikPos;
       moved = std::max(moved, (ikPos - restPos[j]).norm());
       // The avatar bone turned by the same world rotation as its IK joint.
-      const Eigen::Quaterniond delta =
-          Eigen::Quaterniond(data.jointFrame(j).rotation()) * body->ikRestRotation[static_cast<size_t>(j)].conjugate();
+      const Eigen::Quaterniond delta = Eigen::Quaterniond(data.jointFrame(j).rotation()) *
+                                       body->ikRestRotation[static_cast<size_t>(j)].conjugate();
       const glm::vec3 c0(globals[static_cast<size_t>(a)][0]), c1(globals[static_cast<size_t>(a)][1]),
           c2(globals[static_cast<size_t>(a)][2]);
-      const glm::quat got = glm::quat_cast(glm::mat3(glm::normalize(c0), glm::normalize(c1), glm::normalize(c2)));
+      const glm::quat got =
+          glm::quat_cast(glm::mat3(glm::normalize(c0), glm::normalize(c1), glm::normalize(c2)));
       const glm::quat rest = body->avatarRestGlobalRotation[static_cast<size_t>(a)];
       const Eigen::Quaterniond want = delta * Eigen::Quaterniond(rest.w, rest.x, rest.y, rest.z);
       worstRot = std::max(worstRot, want.angularDistance(Eigen::Quaterniond(got.w, got.x, got.y, got.z)));
@@ -127,7 +143,8 @@ TEST_CASE("body model: the default avatar gets one spine site per vertebra and r
   CHECK(body->spineEqualities == 33);
   CHECK(body->model.equalities.size() == 33);
   for (int level = 0; level < kVertebralJointCount; ++level)
-    CHECK(a.skeleton.joints[static_cast<size_t>(body->spineSites[static_cast<size_t>(level)].joint)].name == vertebralJointName(level));
+    CHECK(a.skeleton.joints[static_cast<size_t>(body->spineSites[static_cast<size_t>(level)].joint)].name ==
+          vertebralJointName(level));
   checkRetargeting(a);
   checkRetargeting(a, SpineMode::Auto, /*coupled=*/false);
 }
@@ -154,7 +171,9 @@ TEST_CASE("body model: VRM 1.0 with non-identity rest rotations retargets within
   checkRetargeting(a);
 }
 
-TEST_CASE("body model: a Mixamo rig retargets within 1 mm", "[body]") { checkRetargeting(mixamoAvatar()); }
+TEST_CASE("body model: a Mixamo rig retargets within 1 mm", "[body]") {
+  checkRetargeting(mixamoAvatar());
+}
 
 TEST_CASE("body model: a VRM 0.x avatar facing -Z retargets within 1 mm", "[body]") {
   std::map<std::string, std::string> names;
@@ -194,7 +213,8 @@ TEST_CASE("body model: an unmapped avatar is refused with the missing bones", "[
 
 #include "avatar/body/calibration.h"
 
-TEST_CASE("calibration scales the body to the user and round-trips through the profile", "[body][calibration]") {
+TEST_CASE("calibration scales the body to the user and round-trips through the profile",
+          "[body][calibration]") {
   const AvatarAsset a = buildDefaultAvatar();
   CHECK(avatarHeight(a) == Approx(1.755).margin(0.01));
   CalibrationInput in;
@@ -214,7 +234,8 @@ TEST_CASE("calibration scales the body to the user and round-trips through the p
   absurd.userHeight = 17.0;
   CHECK_FALSE(calibrate(a, absurd).ok());
 
-  const auto file = std::filesystem::temp_directory_path() / ("embody_profile_" + std::to_string(::getpid()) + ".json");
+  const auto file =
+      std::filesystem::temp_directory_path() / ("embody_profile_" + std::to_string(::getpid()) + ".json");
   REQUIRE(saveProfile(p.value(), file.string()).ok());
   auto back = loadProfile(file.string());
   std::filesystem::remove(file);
@@ -244,14 +265,16 @@ TEST_CASE("calibration scales the body to the user and round-trips through the p
   }
 }
 
-TEST_CASE("body model: the solver reaches a hand target on the default avatar and retargeting follows", "[body][solve]") {
+TEST_CASE("body model: the solver reaches a hand target on the default avatar and retargeting follows",
+          "[body][solve]") {
   const AvatarAsset a = buildDefaultAvatar();
   auto body = buildBodyModel(a);
   REQUIRE(body.ok());
   ik::Data data(body->model);
   ik::kinematics(body->model, data, false);
   // Hold feet, balance and head where they are; reach 25 cm forward and 10 cm up with the left hand.
-  for (ik::TaskId t : {body->leftFootTask, body->rightFootTask, body->headTask, body->leftHandTask, body->rightHandTask})
+  for (ik::TaskId t :
+       {body->leftFootTask, body->rightFootTask, body->headTask, body->leftHandTask, body->rightHandTask})
     REQUIRE(data.setTarget(t, data.jointFrame(body->model.tasks[static_cast<size_t>(t)].desc.joint)).ok());
   REQUIRE(data.setTarget(body->comTask, data.centerOfMass()).ok());
   Eigen::Isometry3d hand = data.jointFrame(body->leftHand);

@@ -17,8 +17,8 @@ TEST_CASE("the default avatar is a 1.75 m H-Anim mannequin facing +Z with 10k-30
   for (const auto& v : a.mesh.vertices) {
     lo = glm::min(lo, v.position);
     hi = glm::max(hi, v.position);
-    const float sum = v.weights0.x + v.weights0.y + v.weights0.z + v.weights0.w + v.weights1.x + v.weights1.y +
-                      v.weights1.z + v.weights1.w;
+    const float sum = v.weights0.x + v.weights0.y + v.weights0.z + v.weights0.w + v.weights1.x +
+                      v.weights1.y + v.weights1.z + v.weights1.w;
     REQUIRE(sum == Approx(1.0f).margin(1e-6));
     REQUIRE(glm::length(v.normal) == Approx(1.0f).margin(1e-4));
   }
@@ -47,12 +47,14 @@ TEST_CASE("the default avatar is a 1.75 m H-Anim mannequin facing +Z with 10k-30
   for (const auto& v : a.mesh.vertices)
     for (int k = 0; k < 4; ++k)
       if (v.weights0[k] > 0.0f) used[v.joints0[k]] = true;
-  for (int level = 0; level < kVertebralJointCount; ++level) CHECK(used[a.skeleton.find(vertebralJointName(level))]);
+  for (int level = 0; level < kVertebralJointCount; ++level)
+    CHECK(used[a.skeleton.find(vertebralJointName(level))]);
   // First person: the head's triangles are gone, the hands remain.
   CHECK(a.firstPerson.mode == "auto");
   CHECK(a.firstPerson.removedTriangles > 1000);
   std::vector<bool> head(a.skeleton.joints.size());
-  for (size_t j = 0; j < head.size(); ++j) head[j] = a.skeleton.isAncestor(h.joint(HumanBone::head), static_cast<int>(j));
+  for (size_t j = 0; j < head.size(); ++j)
+    head[j] = a.skeleton.isAncestor(h.joint(HumanBone::head), static_cast<int>(j));
   for (size_t t = 0; t < a.mesh.firstPersonIndices.size() / 3; ++t)
     REQUIRE_FALSE(triangleTouches(a.mesh, a.mesh.firstPersonIndices, t, head));
 }

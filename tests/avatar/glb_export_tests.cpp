@@ -1,10 +1,10 @@
-#include <catch2/catch.hpp>
+#include <sys/wait.h>
 
+#include <catch2/catch.hpp>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
-#include <sys/wait.h>
 
 #include "avatar/avatar_loader.h"
 #include "avatar/gltf/glb_writer.h"
@@ -43,7 +43,8 @@ TEST_CASE("the exported default avatar reloads with the same skeleton, mesh and 
   for (size_t j = 0; j < a.skeleton.joints.size(); ++j) {
     const int k = b->skeleton.find(a.skeleton.joints[j].name);
     REQUIRE(k >= 0);
-    CHECK(glm::length(b->skeleton.joints[k].rest.translation - a.skeleton.joints[j].rest.translation) < 1e-6f);
+    CHECK(glm::length(b->skeleton.joints[k].rest.translation - a.skeleton.joints[j].rest.translation) <
+          1e-6f);
   }
   CHECK(b->mesh.triangleCount() == a.mesh.triangleCount());
   CHECK(b->skinJointCount == static_cast<int>(a.skeleton.joints.size()));
@@ -66,7 +67,8 @@ TEST_CASE("the exported default avatar reloads with the same skeleton, mesh and 
   CHECK(worst < 1e-5f);
 }
 
-TEST_CASE("the exported default avatar passes the Khronos glTF validator with zero errors", "[export][validator]") {
+TEST_CASE("the exported default avatar passes the Khronos glTF validator with zero errors",
+          "[export][validator]") {
   int rc = 0;
   runCapture("command -v node >/dev/null 2>&1", rc);
   if (rc != 0) {
@@ -76,13 +78,15 @@ TEST_CASE("the exported default avatar passes the Khronos glTF validator with ze
   const std::filesystem::path src = embody::test::kSourceDir;
   const std::filesystem::path tools = src / ".tools";
   if (!std::filesystem::exists(tools / "node_modules" / "gltf-validator" / "package.json")) {
-    WARN("SKIPPED: gltf-validator not installed under " << tools.string() << " (run scripts/install-deps.sh)");
+    WARN("SKIPPED: gltf-validator not installed under " << tools.string()
+                                                        << " (run scripts/install-deps.sh)");
     return;
   }
-  const auto file = std::filesystem::temp_directory_path() / ("embody_default_avatar_" + std::to_string(::getpid()) + ".glb");
+  const auto file = std::filesystem::temp_directory_path() /
+                    ("embody_default_avatar_" + std::to_string(::getpid()) + ".glb");
   REQUIRE(writeGlbFile(buildDefaultAvatar(), file.string()).ok());
-  const std::string out = runCapture("node '" + (src / "scripts" / "validate_gltf.js").string() + "' '" + file.string() +
-                                         "' '" + tools.string() + "' 2>&1",
+  const std::string out = runCapture("node '" + (src / "scripts" / "validate_gltf.js").string() + "' '" +
+                                         file.string() + "' '" + tools.string() + "' 2>&1",
                                      rc);
   std::filesystem::remove(file);
   INFO(out);

@@ -140,8 +140,10 @@ TEST_CASE("hostile glTF files give a clear error, never a crash or a huge alloca
     f.doc["buffers"][0]["byteLength"] = f.bin.size();
     f.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", jAt}, {"byteLength", 12}});
     f.doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", wAt}, {"byteLength", 48}});
-    f.doc["accessors"].push_back({{"bufferView", 2}, {"componentType", 5121}, {"count", 3}, {"type", "VEC4"}});
-    f.doc["accessors"].push_back({{"bufferView", 3}, {"componentType", 5126}, {"count", 3}, {"type", "VEC4"}});
+    f.doc["accessors"].push_back(
+        {{"bufferView", 2}, {"componentType", 5121}, {"count", 3}, {"type", "VEC4"}});
+    f.doc["accessors"].push_back(
+        {{"bufferView", 3}, {"componentType", 5126}, {"count", 3}, {"type", "VEC4"}});
     f.doc["meshes"][0]["primitives"][0]["attributes"]["JOINTS_0"] = 2;
     f.doc["meshes"][0]["primitives"][0]["attributes"]["WEIGHTS_0"] = 3;
     f.doc["skins"] = {{{"joints", {0}}}};
@@ -167,7 +169,8 @@ TEST_CASE("hostile glTF files give a clear error, never a crash or a huge alloca
 TEST_CASE("a 60000-node chain loads and maps quickly without deep recursion", "[gltf]") {
   TriangleFile f;
   const int n = 60000;
-  for (int i = 1; i < n; ++i) f.doc["nodes"].push_back({{"name", "n" + std::to_string(i)}, {"translation", {0, 0.001, 0}}});
+  for (int i = 1; i < n; ++i)
+    f.doc["nodes"].push_back({{"name", "n" + std::to_string(i)}, {"translation", {0, 0.001, 0}}});
   for (int i = 0; i + 1 < n; ++i) f.doc["nodes"][static_cast<size_t>(i)]["children"] = {i + 1};
   const auto start = std::chrono::steady_clock::now();
   auto a = loadGltfFromMemory(f.glb(), "");

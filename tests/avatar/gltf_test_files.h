@@ -18,7 +18,8 @@ inline std::vector<uint8_t> makeGlb(const nlohmann::json& doc, std::vector<uint8
   while (json.size() % 4) json.push_back(' ');
   while (bin.size() % 4) bin.push_back(0);
   std::vector<uint8_t> out;
-  const uint32_t total = 12 + 8 + static_cast<uint32_t>(json.size()) + (bin.empty() ? 0 : 8 + static_cast<uint32_t>(bin.size()));
+  const uint32_t total =
+      12 + 8 + static_cast<uint32_t>(json.size()) + (bin.empty() ? 0 : 8 + static_cast<uint32_t>(bin.size()));
   out.reserve(total);
   for (char c : std::string("glTF")) out.push_back(static_cast<uint8_t>(c));
   appendU32(out, 2);
@@ -49,7 +50,7 @@ struct TriangleFile {
   std::vector<uint8_t> bin;
   TriangleFile() {
     appendRaw(bin, std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0});  // 36 bytes
-    appendRaw(bin, std::vector<uint16_t>{0, 1, 2});                  // 6 bytes + 2 pad
+    appendRaw(bin, std::vector<uint16_t>{0, 1, 2});                 // 6 bytes + 2 pad
     doc = {
         {"asset", {{"version", "2.0"}}},
         {"scene", 0},
@@ -57,11 +58,17 @@ struct TriangleFile {
         {"nodes", {{{"name", "root"}, {"mesh", 0}, {"translation", {0, 1, 0}}}}},
         {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
         {"buffers", {{{"byteLength", bin.size()}}}},
-        {"bufferViews", {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 36}},
-                         {{"buffer", 0}, {"byteOffset", 36}, {"byteLength", 6}}}},
-        {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"},
-                        {"min", {0, 0, 0}}, {"max", {1, 1, 0}}},
-                       {{"bufferView", 1}, {"componentType", 5123}, {"count", 3}, {"type", "SCALAR"}}}},
+        {"bufferViews",
+         {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 36}},
+          {{"buffer", 0}, {"byteOffset", 36}, {"byteLength", 6}}}},
+        {"accessors",
+         {{{"bufferView", 0},
+           {"componentType", 5126},
+           {"count", 3},
+           {"type", "VEC3"},
+           {"min", {0, 0, 0}},
+           {"max", {1, 1, 0}}},
+          {{"bufferView", 1}, {"componentType", 5123}, {"count", 3}, {"type", "SCALAR"}}}},
     };
   }
   std::vector<uint8_t> glb() const { return makeGlb(doc, bin); }

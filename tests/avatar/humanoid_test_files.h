@@ -61,14 +61,15 @@ struct HumanoidFile {
     std::vector<HumanoidJointSpec> specs = humanoidJointSpecs();
     if (facesMinusZ)
       for (auto& j : specs) j.pos = glm::vec3(-j.pos.x, j.pos.y, -j.pos.z);
-    doc = {{"asset", {{"version", "2.0"}}}, {"scene", 0}, {"nodes", nlohmann::json::array()},
-           {"meshes", nlohmann::json::array()}, {"accessors", nlohmann::json::array()},
-           {"bufferViews", nlohmann::json::array()}};
+    doc = {{"asset", {{"version", "2.0"}}},        {"scene", 0},
+           {"nodes", nlohmann::json::array()},     {"meshes", nlohmann::json::array()},
+           {"accessors", nlohmann::json::array()}, {"bufferViews", nlohmann::json::array()}};
     // Rest rotations that are not identity: each joint turned by a different quaternion, the
     // child translations compensating so model-space positions stay as specified.
     std::vector<glm::quat> globalRot(specs.size());
     for (size_t i = 0; i < specs.size(); ++i) {
-      globalRot[i] = glm::angleAxis(0.3f + 0.17f * static_cast<float>(i), glm::normalize(glm::vec3(1.0f, 0.5f * i, -0.7f)));
+      globalRot[i] = glm::angleAxis(0.3f + 0.17f * static_cast<float>(i),
+                                    glm::normalize(glm::vec3(1.0f, 0.5f * i, -0.7f)));
       nodeOfBone[specs[i].bone] = static_cast<int>(i);
     }
     for (size_t i = 0; i < specs.size(); ++i) doc["nodes"].push_back(nlohmann::json::object());
@@ -146,7 +147,8 @@ struct HumanoidFile {
         const glm::vec3 p((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z);
         pos.insert(pos.end(), {p.x, p.y, p.z});
         const bool top = (k & 2) && topJoint >= 0;
-        joints.insert(joints.end(), {static_cast<uint16_t>(joint), static_cast<uint16_t>(top ? topJoint : 0), 0, 0});
+        joints.insert(joints.end(),
+                      {static_cast<uint16_t>(joint), static_cast<uint16_t>(top ? topJoint : 0), 0, 0});
         weights.insert(weights.end(), {top ? 0.5f : 1.0f, top ? 0.5f : 0.0f, 0.0f, 0.0f});
       }
       static const uint16_t faces[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
@@ -156,15 +158,18 @@ struct HumanoidFile {
   };
 
   template <class T>
-  int addAccessor(const std::vector<T>& data, int componentType, const char* type, size_t count, bool vertexAttr) {
+  int addAccessor(const std::vector<T>& data, int componentType, const char* type, size_t count,
+                  bool vertexAttr) {
     while (bin.size() % 4) bin.push_back(0);
     const size_t at = bin.size();
     appendRaw(bin, data);
     nlohmann::json view = {{"buffer", 0}, {"byteOffset", at}, {"byteLength", data.size() * sizeof(T)}};
     if (vertexAttr) view["target"] = 34962;
     doc["bufferViews"].push_back(view);
-    doc["accessors"].push_back({{"bufferView", doc["bufferViews"].size() - 1}, {"componentType", componentType},
-                                {"count", count}, {"type", type}});
+    doc["accessors"].push_back({{"bufferView", doc["bufferViews"].size() - 1},
+                                {"componentType", componentType},
+                                {"count", count},
+                                {"type", type}});
     return static_cast<int>(doc["accessors"].size() - 1);
   }
 
@@ -174,7 +179,8 @@ struct HumanoidFile {
                             {"JOINTS_0", addAccessor(b.joints, 5123, "VEC4", vc, true)},
                             {"WEIGHTS_0", addAccessor(b.weights, 5126, "VEC4", vc, true)}};
     const int indices = addAccessor(b.idx, 5123, "SCALAR", b.idx.size(), false);
-    doc["meshes"].push_back({{"name", name}, {"primitives", {{{"attributes", attrs}, {"indices", indices}}}}});
+    doc["meshes"].push_back(
+        {{"name", name}, {"primitives", {{{"attributes", attrs}, {"indices", indices}}}}});
     return static_cast<int>(doc["meshes"].size() - 1);
   }
 

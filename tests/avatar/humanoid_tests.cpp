@@ -98,7 +98,8 @@ void checkAllBonesMapped(const AvatarAsset& a, HumanoidFile& f) {
 }
 }  // namespace
 
-TEST_CASE("a VRM 1.0 file written from the specification maps by VRMC_vrm and honours firstPerson", "[humanoid][vrm]") {
+TEST_CASE("a VRM 1.0 file written from the specification maps by VRMC_vrm and honours firstPerson",
+          "[humanoid][vrm]") {
   HumanoidFile f(meaninglessNames());
   nlohmann::json bones = nlohmann::json::object();
   for (const auto& [bone, node] : f.nodeOfBone) bones[bone] = {{"node", node}};
@@ -148,9 +149,11 @@ TEST_CASE("a VRM 0.x file maps by its humanBones array and faces -Z", "[humanoid
   nlohmann::json bones = nlohmann::json::array();
   for (const auto& [bone, node] : f.nodeOfBone) bones.push_back({{"bone", bone}, {"node", node}});
   f.doc["extensionsUsed"] = {"VRM"};
-  f.doc["extensions"]["VRM"] = {{"humanoid", {{"humanBones", bones}}},
-                                {"firstPerson", {{"firstPersonBone", f.nodeOfBone["head"]},
-                                                 {"meshAnnotations", {{{"mesh", f.hairMesh}, {"firstPersonFlag", "ThirdPersonOnly"}}}}}}};
+  f.doc["extensions"]["VRM"] = {
+      {"humanoid", {{"humanBones", bones}}},
+      {"firstPerson",
+       {{"firstPersonBone", f.nodeOfBone["head"]},
+        {"meshAnnotations", {{{"mesh", f.hairMesh}, {"firstPersonFlag", "ThirdPersonOnly"}}}}}}};
   auto a = loadPrepared(f);
   REQUIRE(a.ok());
   CHECK(a->format == AvatarFormat::Vrm0);
@@ -161,13 +164,28 @@ TEST_CASE("a VRM 0.x file maps by its humanBones array and faces -Z", "[humanoid
 }
 
 TEST_CASE("a Mixamo-named skeleton maps by names", "[humanoid]") {
-  std::map<std::string, std::string> mixamo = {
-      {"hips", "Hips"}, {"spine", "Spine"}, {"chest", "Spine1"}, {"upperChest", "Spine2"}, {"neck", "Neck"},
-      {"head", "Head"}, {"leftShoulder", "LeftShoulder"}, {"leftUpperArm", "LeftArm"}, {"leftLowerArm", "LeftForeArm"},
-      {"leftHand", "LeftHand"}, {"rightShoulder", "RightShoulder"}, {"rightUpperArm", "RightArm"},
-      {"rightLowerArm", "RightForeArm"}, {"rightHand", "RightHand"}, {"leftUpperLeg", "LeftUpLeg"},
-      {"leftLowerLeg", "LeftLeg"}, {"leftFoot", "LeftFoot"}, {"leftToes", "LeftToeBase"}, {"rightUpperLeg", "RightUpLeg"},
-      {"rightLowerLeg", "RightLeg"}, {"rightFoot", "RightFoot"}, {"rightToes", "RightToeBase"}};
+  std::map<std::string, std::string> mixamo = {{"hips", "Hips"},
+                                               {"spine", "Spine"},
+                                               {"chest", "Spine1"},
+                                               {"upperChest", "Spine2"},
+                                               {"neck", "Neck"},
+                                               {"head", "Head"},
+                                               {"leftShoulder", "LeftShoulder"},
+                                               {"leftUpperArm", "LeftArm"},
+                                               {"leftLowerArm", "LeftForeArm"},
+                                               {"leftHand", "LeftHand"},
+                                               {"rightShoulder", "RightShoulder"},
+                                               {"rightUpperArm", "RightArm"},
+                                               {"rightLowerArm", "RightForeArm"},
+                                               {"rightHand", "RightHand"},
+                                               {"leftUpperLeg", "LeftUpLeg"},
+                                               {"leftLowerLeg", "LeftLeg"},
+                                               {"leftFoot", "LeftFoot"},
+                                               {"leftToes", "LeftToeBase"},
+                                               {"rightUpperLeg", "RightUpLeg"},
+                                               {"rightLowerLeg", "RightLeg"},
+                                               {"rightFoot", "RightFoot"},
+                                               {"rightToes", "RightToeBase"}};
   for (auto& [bone, name] : mixamo) name = "mixamorig:" + name;
   HumanoidFile f(mixamo);
   auto a = loadPrepared(f);
@@ -185,7 +203,8 @@ TEST_CASE("meaningless names without VRM data map by topology", "[humanoid]") {
   REQUIRE(a.ok());
   CHECK(a->humanoid.method == MappingMethod::Topology);
   CHECK(a->humanoid.missingRequired.empty());
-  for (const char* bone : {"hips", "head", "leftUpperArm", "leftHand", "rightLowerArm", "leftUpperLeg", "rightFoot", "leftToes"}) {
+  for (const char* bone : {"hips", "head", "leftUpperArm", "leftHand", "rightLowerArm", "leftUpperLeg",
+                           "rightFoot", "leftToes"}) {
     HumanBone b;
     REQUIRE(parseHumanBone(bone, b));
     INFO(bone);
@@ -229,8 +248,9 @@ TEST_CASE("randomly corrupted humanoid files load or fail cleanly, never crash",
   nlohmann::json bones = nlohmann::json::object();
   for (const auto& [bone, node] : f.nodeOfBone) bones[bone] = {{"node", node}};
   f.doc["extensionsUsed"] = {"VRMC_vrm"};
-  f.doc["extensions"]["VRMC_vrm"] = {{"humanoid", {{"humanBones", bones}}},
-                                     {"firstPerson", {{"meshAnnotations", {{{"node", f.bodyNode}, {"type", "auto"}}}}}}};
+  f.doc["extensions"]["VRMC_vrm"] = {
+      {"humanoid", {{"humanBones", bones}}},
+      {"firstPerson", {{"meshAnnotations", {{{"node", f.bodyNode}, {"type", "auto"}}}}}}};
   const std::vector<uint8_t> good = f.glb();
   std::mt19937 rng(1234);
   int loaded = 0, failed = 0;
@@ -240,9 +260,15 @@ TEST_CASE("randomly corrupted humanoid files load or fail cleanly, never crash",
     for (int k = 0; k < flips; ++k) {
       const size_t at = rng() % bytes.size();
       switch (rng() % 3) {
-        case 0: bytes[at] = static_cast<uint8_t>(rng()); break;            // random byte
-        case 1: bytes[at] = static_cast<uint8_t>('0' + rng() % 10); break;  // a digit (JSON numbers)
-        default: bytes[at] ^= 0x80; break;
+        case 0:
+          bytes[at] = static_cast<uint8_t>(rng());
+          break;  // random byte
+        case 1:
+          bytes[at] = static_cast<uint8_t>('0' + rng() % 10);
+          break;  // a digit (JSON numbers)
+        default:
+          bytes[at] ^= 0x80;
+          break;
       }
     }
     auto a = loadGltfFromMemory(bytes, "");

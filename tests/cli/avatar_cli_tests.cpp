@@ -1,6 +1,5 @@
 // `embody avatar` end to end: info --json fields, export-default, usage errors.
 #include <catch2/catch.hpp>
-
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -39,7 +38,8 @@ TEST_CASE("embody avatar info maps CesiumMan by topology", "[avatar]") {
 }
 
 TEST_CASE("embody avatar export-default writes a GLB that info reads back", "[avatar]") {
-  const auto file = std::filesystem::temp_directory_path() / ("embody_cli_default_" + std::to_string(::getpid()) + ".glb");
+  const auto file =
+      std::filesystem::temp_directory_path() / ("embody_cli_default_" + std::to_string(::getpid()) + ".glb");
   REQUIRE(runEmbody("avatar export-default '" + file.string() + "'").exitCode == 0);
   const auto r = runEmbody("avatar info '" + file.string() + "' --json");
   std::filesystem::remove(file);
@@ -70,9 +70,13 @@ TEST_CASE("embody avatar info reports the body model; --spine and calibration pr
   CHECK(j["body_model"]["spine_model"] == "simplified");
   CHECK(runEmbody("avatar info default --spine sideways").exitCode == 2);
 
-  const auto profile = std::filesystem::temp_directory_path() / ("embody_cli_profile_" + std::to_string(::getpid()) + ".json");
-  REQUIRE(runEmbody("avatar calibrate default --user-height 1.9 --profile '" + profile.string() + "'").exitCode == 0);
-  j = nlohmann::json::parse(runEmbody("avatar info default --json --profile '" + profile.string() + "'").output);
+  const auto profile =
+      std::filesystem::temp_directory_path() / ("embody_cli_profile_" + std::to_string(::getpid()) + ".json");
+  REQUIRE(
+      runEmbody("avatar calibrate default --user-height 1.9 --profile '" + profile.string() + "'").exitCode ==
+      0);
+  j = nlohmann::json::parse(
+      runEmbody("avatar info default --json --profile '" + profile.string() + "'").output);
   std::filesystem::remove(profile);
   CHECK(j["body_model"]["scale"].get<double>() == Approx(1.9 / 1.755).epsilon(0.01));
   CHECK(runEmbody("avatar calibrate default --profile /tmp/x.json").exitCode == 2);

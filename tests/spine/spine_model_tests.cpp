@@ -192,7 +192,7 @@ TEST_CASE("after random targets every equality holds to 1e-9 and torsion keeps i
   }
 }
 
-TEST_CASE("axis coupling ties torsion to bending: cervical same side, lumbar opposite; 7 free dofs") {
+TEST_CASE("axis coupling ties torsion to bending: cervical same side, lumbar opposite, 7 free dofs") {
   const SpineDescription& d = defaultFullSpine();
   SpineOptions o;
   o.axis_coupling = true;
@@ -214,7 +214,7 @@ TEST_CASE("axis coupling ties torsion to bending: cervical same side, lumbar opp
   }
 }
 
-TEST_CASE("--check-all-limits puts limits on every joint") {
+TEST_CASE("check_all_limits puts limits on every joint") {
   SpineOptions o;
   o.check_all_limits = true;
   const IsolatedSpine s = build(defaultFullSpine(), o);

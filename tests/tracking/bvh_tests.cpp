@@ -6,6 +6,7 @@
 
 #include "avatar/bvh/bvh.h"
 #include "test_paths.h"
+#include "xr/tracking/body_dimensions.h"
 #include "xr/tracking/bvh_source.h"
 
 using namespace embody;
@@ -162,7 +163,7 @@ TEST_CASE("BVH trackers in OpenXR conventions from CMU, Mixamo and Bandai-Namco 
     CHECK(s0[TrackerId::Hips].position.x == Approx(0.0f).margin(1e-6));
     CHECK(s0[TrackerId::Hips].position.z == Approx(0.0f).margin(1e-6));
     CHECK(s0[TrackerId::LeftFoot].position.y == Approx(2.0f * 1.75f / 45.0f).margin(1e-4));
-    CHECK(s0[TrackerId::Head].position.y == Approx(0.936f * 1.75f).margin(0.01));
+    CHECK(s0[TrackerId::Head].position.y == Approx(kEyeHeightRatio * 1.75f).margin(0.01));
     CHECK(s0[TrackerId::Head].position.z < s0[TrackerId::Hips].position.z);  // eyes ahead
     CHECK(std::abs(glm::angle(s0[TrackerId::Head].orientation)) < 1e-4f);   // rest = identity
     // T-pose hands: thumbs (grip -Z) forward.
@@ -201,7 +202,7 @@ TEST_CASE("a Z-up BVH is turned upright") {
   REQUIRE(trace.ok());
   CHECK(map.upAxis == "+Z");
   const PoseSample& s = trace->samples[0];
-  CHECK(s[TrackerId::Head].position.y == Approx(0.936f * 1.75f).margin(0.01));
+  CHECK(s[TrackerId::Head].position.y == Approx(kEyeHeightRatio * 1.75f).margin(0.01));
   CHECK(s[TrackerId::LeftHand].position.x < -0.3f);
 }
 

@@ -122,7 +122,7 @@ TEST_CASE("never-seen trackers: hands neutral, hips and feet absent, head at eye
   s[TrackerId::Head].position = glm::vec3(std::nanf(""));
   const GuardedSample& g = guard.update(s);
   CHECK(g[TrackerId::Head] == TrackerStatus::Neutral);
-  CHECK(g.pose[TrackerId::Head].position.y == Approx(0.936f * 1.75f));
+  CHECK(g.pose[TrackerId::Head].position.y == Approx(kEyeHeightRatio * 1.75f));
   CHECK(g[TrackerId::LeftHand] == TrackerStatus::Neutral);
   CHECK(g.pose[TrackerId::LeftHand].valid);
   CHECK(g.pose[TrackerId::LeftHand].position.y > 0.5f);  // not at the origin

@@ -78,8 +78,8 @@ TEST_CASE("synthetic motions scale with the user's height") {
   auto small = SyntheticSource::create("idle", 1.5f).value();
   const float ht = tall->sample(0.0)[TrackerId::Head].position.y;
   const float hs = small->sample(0.0)[TrackerId::Head].position.y;
-  CHECK(ht == Approx(0.936f * 1.9f).margin(0.02));
-  CHECK(hs == Approx(0.936f * 1.5f).margin(0.02));
+  CHECK(ht == Approx(kEyeHeightRatio * 1.9f).margin(0.02));
+  CHECK(hs == Approx(kEyeHeightRatio * 1.5f).margin(0.02));
   CHECK_FALSE(SyntheticSource::create("idle", 0.1f).ok());
 }
 

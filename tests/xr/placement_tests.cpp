@@ -36,7 +36,7 @@ TEST_CASE("calibration scales the avatar so its eyes are at the HMD, feet on the
         Approx(glm::radians(40.0f)).margin(1e-4));
 }
 
-TEST_CASE("a fixed eye height skips calibration; seated mode keeps the eyes at the HMD", "[xr]") {
+TEST_CASE("a fixed eye height skips calibration, and seated mode keeps the eyes at the HMD", "[xr]") {
   const glm::vec3 avatarEye{0.0f, 1.5f, 0.0f};
   AvatarPlacement fixed(avatarEye, {0, 0, 1}, {false, 1.65f});
   CHECK(fixed.calibrated());

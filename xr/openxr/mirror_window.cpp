@@ -12,6 +12,7 @@ void keyCallback(GLFWwindow* w, int key, int, int action, int) {
   auto* keys = static_cast<MirrorWindow::Keys*>(glfwGetWindowUserPointer(w));
   if (key == GLFW_KEY_V) keys->thirdPerson = !keys->thirdPerson;
   if (key == GLFW_KEY_R) keys->recenter = true;
+  if (key == GLFW_KEY_C) keys->calibrate = true;
   if (key == GLFW_KEY_ESCAPE) glfwSetWindowShouldClose(w, GLFW_TRUE);
 }
 }  // namespace

@@ -1,7 +1,8 @@
 #pragma once
 // The desktop mirror of `embody xr --mirror`: a GLFW window on the runtime's VkInstance/VkDevice
 // whose swapchain the renderer draws into as one more pass of the frame (the left eye again, or
-// a third-person view of the avatar; V switches). Keys: V view, R recenter, Esc/close: end the
+// a third-person view of the avatar; V switches). Keys: V view, R recenter (and recalibrate),
+// C recalibrate the height, Esc/close: end the
 // session.
 #include <vulkan/vulkan.h>
 // after Vulkan, so GLFW declares glfwCreateWindowSurface
@@ -34,6 +35,7 @@ class MirrorWindow {
   bool closeRequested() const;
   bool thirdPerson() const { return keys_.thirdPerson; }
   bool takeRecenterRequest() { return std::exchange(keys_.recenter, false); }
+  bool takeCalibrateRequest() { return std::exchange(keys_.calibrate, false); }
 
   // Inside an open renderer frame (`frameNumber`: renderer frames begun so far): acquires a
   // window image and draws `camera` into it. Returns false (no error) when the window cannot show
@@ -69,7 +71,7 @@ class MirrorWindow {
 
  public:
   struct Keys {
-    bool thirdPerson = false, recenter = false;
+    bool thirdPerson = false, recenter = false, calibrate = false;
   };
 
  private:

@@ -9,6 +9,7 @@
 #include "engine/overlay.h"
 #include "xr/openxr/mirror_window.h"
 #include "xr/openxr/xr_input.h"
+#include "xr/openxr/xr_pose_source.h"
 #include "xr/openxr/xr_session.h"
 #include "xr/openxr/xr_system.h"
 
@@ -82,6 +83,8 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
   const glm::vec3 avatarEye(ar.eyePose(rest)[3]);
   AvatarPlacement placement(avatarEye, ar.anchors().forward, o.placement);
   avatar::SkeletonPose pose = rest;
+  XrPoseSource trackers;  // this frame's head and wrists as a tracking sample
+  XrTime firstDisplayTime = 0;
   std::vector<gfx::LineVertex> lines, overlay;
   bool recentered = false;
 
@@ -127,8 +130,11 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
     }
     Views views = run.locateViews(t);
     const Pose headTracking = headFromViews(views);
-    const bool mirrorRecenter = mirror && mirror->takeRecenterRequest();
-    if (views.valid && ((o.recenterAtStart && !recentered) || in.recenterPressed() || mirrorRecenter)) {
+    // The recenter button (or R in the mirror) also recalibrates the height: the user stands
+    // up straight and presses it. C in the mirror recalibrates only.
+    const bool buttonRecenter = in.recenterPressed() || (mirror && mirror->takeRecenterRequest());
+    const bool recalibrate = buttonRecenter || (mirror && mirror->takeCalibrateRequest());
+    if (views.valid && ((o.recenterAtStart && !recentered) || buttonRecenter)) {
       placement.recenter(headTracking);
       recentered = true;
     }
@@ -137,7 +143,7 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
     const Pose head = headFromViews(views);
     if (views.tracked) {
       ++rep.headTrackedFrames;
-      if (!placement.calibrated()) placement.calibrate(head);
+      if (!placement.calibrated() || recalibrate) placement.calibrate(head);
     }
     for (int h = 0; h < 2; ++h) {
       if (in.hand(h).grip.valid)
@@ -146,11 +152,23 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
         ++rep.handLostFrames[h];
     }
     rep.interactionProfile = in.interactionProfile();
+    if (!firstDisplayTime) firstDisplayTime = t;
+    auto world = [&](TrackedPose p) {
+      if (p.valid) p.pose = placement.toWorld(p.pose);
+      return p;
+    };
+    trackers.publish(double(t - firstDisplayTime) * 1e-9, TrackedPose{head, views.valid, views.tracked},
+                     world(in.hand(0).wrist), world(in.hand(1).wrist));
 
     bool rendered = false;
     if (timing->shouldRender && views.valid) {
       pose = rest;
-      placement.place(o.avatar->skeleton, head, pose);
+      if (o.bodyPose && o.bodyPose(trackers.sample(0.0), pose)) {
+        ++rep.bodyPoseFrames;
+      } else {
+        pose = rest;
+        placement.place(o.avatar->skeleton, head, pose);
+      }
       if (auto s = ar.computePose(pose); !s) {
         error = s.error();
         break;
@@ -206,14 +224,15 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
                         VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
         if (run.submitsDepth()) {
           const auto& dc = run.depth()[e];
-          target.depth = gfx::TargetImage{dc.images[depth[e]].image,
-                                          dc.images[depth[e]].view,
-                                          dc.format,
-                                          dc.extent,
-                                          0,
-                                          1,
-                                          VK_IMAGE_LAYOUT_UNDEFINED,
-                                          VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL};
+          target.depth =
+              gfx::TargetImage{dc.images[depth[e]].image,
+                               dc.images[depth[e]].view,
+                               dc.format,
+                               dc.extent,
+                               0,
+                               1,
+                               VK_IMAGE_LAYOUT_UNDEFINED,
+                               VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};  // OpenXR's release layout
         }
         const gfx::Camera cam =
             gfx::cameraFromPose(views.eyes[e].pose.matrix(), fovOf(views.eyes[e].fov), kNear, kFar);

@@ -5,12 +5,14 @@
 // Until the body/IK pipeline exists, the avatar stands in its rest pose under the head (scaled by
 // the HMD-height calibration, turned with the head's heading); only the gizmos follow the hands.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "avatar/avatar_asset.h"
 #include "core/result.h"
 #include "xr/openxr/avatar_placement.h"
+#include "xr/tracking/tracker.h"
 
 namespace embody::xr {
 
@@ -22,6 +24,10 @@ struct XrLoopOptions {
   bool recenterAtStart = false;
   bool verbose = false;  // print every session state change
   bool mirror = false;   // a desktop window showing the left eye (V: third person)
+  // The body: given each frame's tracker sample (world space, recentered: head, wrists), fill
+  // `pose` (starts at the rest pose) and return true; false or unset = the rest pose placed under
+  // the head. This is where the IK stage plugs in (runtime::IkStage::process).
+  std::function<bool(const tracking::PoseSample& sample, avatar::SkeletonPose& pose)> bodyPose;
 };
 
 struct XrLoopReport {
@@ -38,9 +44,10 @@ struct XrLoopReport {
   float calibratedScale = 1.0f;
   bool calibrated = false;
   uint32_t vulkanValidationMessages = 0;
-  uint64_t mirrorFrames = 0;  // frames the mirror window presented
-  double meanFrameMs = 0.0;   // wall time per loop iteration while rendering
-  std::string error;          // "" when the run ended normally
+  uint64_t mirrorFrames = 0;    // frames the mirror window presented
+  uint64_t bodyPoseFrames = 0;  // frames whose pose came from options.bodyPose
+  double meanFrameMs = 0.0;     // wall time per loop iteration while rendering
+  std::string error;            // "" when the run ended normally
 };
 
 // Runs until the session ends. Setup failures, failing calls and a lost session (sessionLost)

@@ -7,6 +7,11 @@
 
 namespace embody::tracking {
 
+// Eye height over body height: H-Anim's 1.75 m humanoid has its eyes at 1.633 m. The same
+// ratio as avatar::kEyeHeightRatio (avatar/body/calibration.h), so a synthetic or BVH head target
+// and a calibrated avatar's eyes agree.
+inline constexpr float kEyeHeightRatio = 0.933f;
+
 struct BodyDimensions {
   float height = 1.75f;
   float eyeHeight = 0.0f;          // floor to the point between the eyes (head tracker), standing

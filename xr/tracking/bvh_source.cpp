@@ -165,20 +165,15 @@ Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, 
     // Fingers along the forearm (the first ancestor not on top of the wrist).
     int a = clip.joints[static_cast<size_t>(h)].parent;
     while (a >= 0 && glm::length(restXr(h) - restXr(a)) < 1e-4) a = clip.joints[static_cast<size_t>(a)].parent;
-    glm::dvec3 fingers = a >= 0 ? restXr(h) - restXr(a) : glm::dvec3(side == Side::Left ? -1 : 1, 0, 0);
-    fingers = glm::normalize(fingers);
-    // Palms down in a T-pose; with the arms hanging, palms towards the body.
-    const glm::dvec3 palm = std::abs(fingers.y) < 0.7 ? glm::dvec3(0, -1, 0)
-                                                      : glm::dvec3(side == Side::Left ? 1 : -1, 0, 0);
-    reference[static_cast<size_t>(index(id))] =
-        glm::dquat(gripOrientation(side, glm::vec3(fingers), glm::vec3(palm)));
+    const glm::dvec3 forearm = a >= 0 ? restXr(h) - restXr(a) : glm::dvec3(0.0);
+    reference[static_cast<size_t>(index(id))] = glm::dquat(restGripOrientation(side, glm::vec3(forearm)));
   }
   glm::dvec3 eyeOffset(0.0);
   if (joint(TrackerId::Head) >= 0) {
-    // Eyes at 0.936 of the standing height, ahead of the head joint (OpenXR axes, rest pose).
+    // Eyes at kEyeHeightRatio of the standing height, ahead of the head joint (OpenXR axes, rest pose).
     const double headAboveSole =
         (legHeight + glm::dot(rest[static_cast<size_t>(joint(TrackerId::Head))].position, up) - rootLevel) * m.scale;
-    const double rise = std::clamp(0.936 * performer - headAboveSole, -0.05 * performer, 0.1 * performer);
+    const double rise = std::clamp(kEyeHeightRatio * performer - headAboveSole, -0.05 * performer, 0.1 * performer);
     eyeOffset = glm::dvec3(0.0, rise, -static_cast<double>(body.eyeForward));
   }
 

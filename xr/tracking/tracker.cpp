@@ -60,6 +60,14 @@ glm::quat gripOrientation(Side side, const glm::vec3& fingers, const glm::vec3& 
   return glm::normalize(glm::quat_cast(glm::mat3(x, y, z)));
 }
 
+glm::quat restGripOrientation(Side side, const glm::vec3& forearm) {
+  const glm::vec3 fingers = glm::length(forearm) > 1e-9f ? glm::normalize(forearm)
+                                                        : glm::vec3(side == Side::Left ? -1.0f : 1.0f, 0.0f, 0.0f);
+  const glm::vec3 palm = std::abs(fingers.y) < 0.7f ? glm::vec3(0, -1, 0)
+                                                     : glm::vec3(side == Side::Left ? 1.0f : -1.0f, 0.0f, 0.0f);
+  return gripOrientation(side, fingers, palm);
+}
+
 glm::quat headingOf(const glm::quat& orientation) {
   const glm::vec3 fwd = orientation * glm::vec3(0, 0, -1);
   const glm::vec3 up = orientation * glm::vec3(0, 1, 0);

@@ -80,6 +80,11 @@ enum class Side { Left, Right };
 // Hands hanging at the sides, palms facing the thighs, give -Z_grip = forward.
 glm::quat gripOrientation(Side side, const glm::vec3& fingers, const glm::vec3& palmFacing);
 
+// The grip orientation of a hand in a rest pose, from its forearm direction (elbow to wrist): the
+// fingers continue the forearm, the palm faces down when the arm is raised (a T-pose) and towards
+// the body when it hangs (an A-pose). Calibrates sources and avatars the same way.
+glm::quat restGripOrientation(Side side, const glm::vec3& forearm);
+
 // Rotation about +Y (heading) of an orientation: the yaw-only frame used to express targets
 // "relative to the head" without them swinging when the user nods.
 glm::quat headingOf(const glm::quat& orientation);
