@@ -21,6 +21,10 @@ using tracking::TrackerId;
 
 namespace {
 
+// Per frame: far more than the solver needs here (tens of ms at worst on a loaded machine), also
+// under ThreadSanitizer (`make tsan` runs this suite), so any deadline miss is a real one.
+constexpr double kGenerousBudget = 1.0;
+
 const avatar::AvatarAsset& defaultAvatar() {
   static const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
   return a;
@@ -91,7 +95,7 @@ void checkFullBodyWalk(const avatar::AvatarAsset& avatar) {
   AvatarBodyOptions o;
   o.userHeight = 1.75f;
   const int frames = int(src->duration() * 60.0);
-  const Run r = drive(avatar, *src, o, frames, 60.0, 0.2);
+  const Run r = drive(avatar, *src, o, frames, 60.0, kGenerousBudget);
   INFO("head p95 " << r.summary.headErrorP95 << " hand p95 " << r.summary.handErrorP95 << " misses "
                    << r.summary.deadlineMisses << " ik p50 " << r.summary.ikP50Ms << " ms, iterations "
                    << r.summary.iterationsMean);
@@ -128,7 +132,7 @@ TEST_CASE("three-point walk: the avatar steps foot by foot, planted feet do not 
   o.userHeight = 1.75f;
   o.trackers = tracking::TrackerMask::threePoint();
   const int frames = int(src->duration() * 60.0);
-  const Run r = drive(defaultAvatar(), *src, o, frames, 60.0, 0.2);
+  const Run r = drive(defaultAvatar(), *src, o, frames, 60.0, kGenerousBudget);
   INFO("head p95 " << r.summary.headErrorP95 << " hand p95 " << r.summary.handErrorP95 << " steps " << r.steps);
   CHECK(r.nonFinitePoses == 0);
   CHECK(r.summary.headErrorP95 <= 0.01);
@@ -167,7 +171,7 @@ TEST_CASE("three-point standing still: the feet stay planted") {
   AvatarBodyOptions o;
   o.userHeight = 1.75f;
   o.trackers = tracking::TrackerMask::threePoint();
-  const Run r = drive(defaultAvatar(), *src, o, 180, 60.0, 0.2);
+  const Run r = drive(defaultAvatar(), *src, o, 180, 60.0, kGenerousBudget);
   CHECK(r.steps == 0);
   CHECK(r.nonFinitePoses == 0);
   CHECK(r.summary.headErrorP95 <= 0.01);
@@ -181,7 +185,7 @@ TEST_CASE("hands lost for 1 s: within arm's reach of the shoulder every frame, a
   std::vector<Eigen::Vector3d> hands[2];
   double worstReach = 0.0;
   const Run r = drive(
-      defaultAvatar(), *src, o, int(4.0 * fps), fps, 0.2,
+      defaultAvatar(), *src, o, int(4.0 * fps), fps, kGenerousBudget,
       [](tracking::PoseSample& s) {
         if (s.time >= 1.5 && s.time < 2.5) {
           s[TrackerId::LeftHand].valid = false;
