@@ -262,7 +262,8 @@ void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
   for (auto id : tracking::kAllTrackers) {
     const size_t i = size_t(tracking::index(id));
     const tracking::TrackerPose& tp = targets.pose[id];
-    const double w = tp.valid ? statusWeight(targets.status[i]) : 0.0;
+    double w = tp.valid ? statusWeight(targets.status[i]) : 0.0;
+    if (id == TrackerId::Hips && !options_.pelvisRow) w = 0.0;
     targetPoint_[i] = toAvatar(tp.position) + up_ * heightOffset_[i];
     targetRotation_[i] = (fromTracking_ * toEigen(tp.orientation)).normalized() * jointFromTracker_[i];
     if (positionTask_[i] >= 0 && body_.model.tasks[size_t(positionTask_[i])].desc.type == ik::TaskType::Pose) continue;
@@ -331,6 +332,7 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   // retargeting still fit before the deadline.
   ik::SolveOptions o;
   o.max_iterations = 1;
+  o.max_level_step = options_.maxLevelStep;
   o.clock = &clock;
   int iterations = 0;
   bool converged = false, broken = false;
