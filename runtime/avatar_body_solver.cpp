@@ -332,11 +332,16 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   // retargeting still fit before the deadline.
   ik::SolveOptions o;
   o.max_iterations = 1;
-  o.max_level_step = options_.maxLevelStep;
+  // A cold start (the first solve, or after resetWarmStart) begins far from the targets: the
+  // small trust region that keeps conflicting levels from pulling the feet would make it crawl,
+  // so it gets the library's default cap and four times the iterations (the budget still rules).
+  const bool cold = !solvedOnce_;
+  o.max_level_step = cold ? std::max(options_.maxLevelStep, ik::SolveOptions{}.max_level_step) : options_.maxLevelStep;
+  const int maxIterations = cold ? 4 * options_.maxIterations : options_.maxIterations;
   o.clock = &clock;
   int iterations = 0;
   bool converged = false, broken = false;
-  while (iterations < options_.maxIterations) {
+  while (iterations < maxIterations) {
     const TimePoint start = clock.now();
     if (start + fromSeconds(predictedIteration_ + predictedFinish_) > request.deadline && iterations > 0) break;
     if (start + fromSeconds(predictedFinish_) >= request.deadline) break;
