@@ -53,7 +53,8 @@ int runRender(cli::Argv argv) {
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (default: fit the clip to the user's height)");
   args.option("ik-budget-ms", "MS", "IK time budget per frame", "1");
   args.option("record", "FILE.jsonl", "also record the motion's samples as a JSON Lines trace");
-  args.flag("coupled-spine", "the coupled spine model (Raunhardt & Boulic) instead of independent spine sites");
+  args.flag("uncoupled-spine", "independent spine sites (one ball joint each) instead of the coupled spine (the default)");
+  args.flag("coupled-spine", "the coupled spine model (Raunhardt & Boulic 2008; the default, kept for old scripts)");
   args.flag("three-point", "keep only head and hands (HMD + controllers): the lower body is inferred, feet step");
   args.option("yaw", "DEGREES", "orbit camera yaw around the avatar (0 = from the front)", "30");
   args.option("pitch", "DEGREES", "orbit camera pitch (positive looks down)", "10");
@@ -123,7 +124,11 @@ int runRender(cli::Argv argv) {
       return 2;
     }
     job.threePoint = args.has("three-point");
-    job.coupledSpine = args.has("coupled-spine");
+    if (args.has("uncoupled-spine") && args.has("coupled-spine")) {
+      std::fprintf(stderr, "error: --coupled-spine and --uncoupled-spine exclude each other\n");
+      return 2;
+    }
+    job.coupledSpine = !args.has("uncoupled-spine");
     job.width = width;
     job.height = height;
     job.view = view;

@@ -250,6 +250,7 @@ int runRenderJob(const RenderJob& job) {
                       {"user_height_m", userHeight > 0.0f ? nlohmann::json(double(userHeight)) : nlohmann::json(nullptr)},
                       {"from_first_head_sample", body.calibratedFromHead()}};
   j["body"] = {{"spine_model", body.body().spineModel},
+               {"coupled_spine", job.coupledSpine},
                {"dofs", body.body().model.dofs},
                {"three_point", body.threePoint()},
                {"steps", body.feet().steps()}};

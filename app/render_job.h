@@ -12,7 +12,7 @@ struct RenderJob {
   std::string avatar = "default";  // FILE or "default"
   std::string boneMap;             // --bone-map FILE ("" none)
   std::string spine = "auto";      // auto | full | simplified
-  bool coupledSpine = false;       // --coupled-spine: avatar/spine's coupled joints
+  bool coupledSpine = true;        // avatar/spine's coupled joints; --uncoupled-spine: one ball per site
   std::string motion = "synthetic:figure8";
   std::string profile;             // --profile FILE (avatar/body/calibration.h: saveProfile)
   std::string record;              // --record FILE.jsonl ("" none)

@@ -262,7 +262,8 @@ void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
   for (auto id : tracking::kAllTrackers) {
     const size_t i = size_t(tracking::index(id));
     const tracking::TrackerPose& tp = targets.pose[id];
-    const double w = tp.valid ? statusWeight(targets.status[i]) : 0.0;
+    double w = tp.valid ? statusWeight(targets.status[i]) : 0.0;
+    if (id == TrackerId::Hips && !options_.pelvisRow) w = 0.0;
     targetPoint_[i] = toAvatar(tp.position) + up_ * heightOffset_[i];
     targetRotation_[i] = (fromTracking_ * toEigen(tp.orientation)).normalized() * jointFromTracker_[i];
     if (positionTask_[i] >= 0 && body_.model.tasks[size_t(positionTask_[i])].desc.type == ik::TaskType::Pose) continue;
@@ -331,10 +332,16 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   // retargeting still fit before the deadline.
   ik::SolveOptions o;
   o.max_iterations = 1;
+  // A cold start (the first solve, or after resetWarmStart) begins far from the targets: the
+  // small trust region that keeps conflicting levels from pulling the feet would make it crawl,
+  // so it gets the library's default cap and four times the iterations (the budget still rules).
+  const bool cold = !solvedOnce_;
+  o.max_level_step = cold ? std::max(options_.maxLevelStep, ik::SolveOptions{}.max_level_step) : options_.maxLevelStep;
+  const int maxIterations = cold ? 4 * options_.maxIterations : options_.maxIterations;
   o.clock = &clock;
   int iterations = 0;
   bool converged = false, broken = false;
-  while (iterations < options_.maxIterations) {
+  while (iterations < maxIterations) {
     const TimePoint start = clock.now();
     if (start + fromSeconds(predictedIteration_ + predictedFinish_) > request.deadline && iterations > 0) break;
     if (start + fromSeconds(predictedFinish_) >= request.deadline) break;

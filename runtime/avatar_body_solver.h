@@ -43,15 +43,24 @@ struct AvatarBodyOptions {
   FootPlannerConfig feet;
   // Balance in three-point mode is kept by stepping: a step starts as soon as the centre of mass
   // leaves the support polygon. The centre-of-mass row of the layout (an inequality: enabled only
-  // while the CoM is outside, target the nearest point of the polygon) is off by default: with
-  // the current PIK solver, a CoM row that conflicts with the head makes the solve diverge
-  // (measured on the CMU walk; docs/runtime.md).
+  // while the CoM is outside, target the nearest point of the polygon) no longer destabilises
+  // the solve (the solver's per-level trust region), but it shares level 1 with the planted
+  // feet, and trading the two in least squares let planted feet slide by up to 2.6 cm on the
+  // CMU walk (the limit is 2 cm); off by default until it gets a level of its own.
   bool balanceRow = false;
-  // The coupled spine (avatar/spine) or one uncoupled ball joint per spine site (default). With
-  // the coupled spine the head misses its target on the CMU walk (head p95 3.3 cm against
-  // < 1 cm uncoupled, default avatar, all trackers): the coupling rows keep the trunk from
-  // lengthening the reach the way independent sites can. docs/runtime.md.
-  bool coupledSpine = false;
+  // A tracked pelvis steers the trunk over the ground at the lowest level (it yields to the
+  // head and hands whenever the user's proportions differ from the avatar's).
+  bool pelvisRow = true;
+  // The coupled spine (avatar/spine, Raunhardt & Boulic 2008; default) or one uncoupled ball
+  // joint per spine site with its vertebrae's summed ranges (the escape hatch).
+  bool coupledSpine = true;
+  // ik::SolveOptions::max_level_step for this solver (the per-level trust region). Smaller than
+  // the library's 0.1: the pelvis, head and hand levels push against the feet's level every
+  // iteration on a walk, and their second-order pull on the feet shrinks with the cap (CMU walk,
+  // 30 Hz, coupled spine, feet p95: none 42/57 mm, 0.2: 16/35, 0.1: 17/26, 0.05: 10/17,
+  // 0.025: 1.2/8.5 mm; docs/runtime.md). 0.05 keeps a per-frame step far above what tracking
+  // needs.
+  double maxLevelStep = 0.05;
 };
 
 class AvatarBodySolver final : public BodySolver {

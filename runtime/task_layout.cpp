@@ -36,22 +36,26 @@ TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
   // support, and a walking user is balanced dynamically, not statically (the CoM runs ahead of
   // the stance foot), so a static balance row would hold the tracked body back.
   if (l.inferLowerBody) l.tasks.push_back({TaskKind::Balance, TrackerId::Hips, 1, 1.0f});
-  // 2: the head: the user's viewpoint; a mismatch is seen at once in first person.
-  if (trackers.has(TrackerId::Head)) {
-    l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Head, 2, 1.0f});
-    l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, 2, 1.0f});
-  }
+  // 2: the head position (the eyes): the user's viewpoint; a mismatch is seen at once in first
+  // person. Its orientation is a level lower (4): in first person the view turns with the HMD
+  // whatever the avatar's head does, and sharing a level with the position would let the
+  // orientation rows trade eye position for head angle (least squares) whenever the trunk is
+  // short of reach.
+  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Head, 2, 1.0f});
   // 3: hand positions.
   for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
     if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerPosition, hand, 3, 1.0f});
-  // 4: orientations that matter less than positions.
+  // 4: orientations, which matter less than positions.
+  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, 4, 1.0f});
   for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
     if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerOrientation, hand, 4, 1.0f});
-  // A tracked pelvis drives no task: with the head and both feet tracked, the pelvis is already
-  // determined by the avatar's own legs and spine, and any pelvis row (even orientation only, even
-  // at the lowest level) fights those whenever the user's proportions differ from the avatar's;
-  // measured on the CMU walk, it made the solve diverge. It is the pivot for scaling the user's
-  // strides to the avatar's legs instead (avatar_body_solver.h).
+  // 5: a tracked pelvis, over the ground only, the softest level: its height follows from the
+  // head and the legs, whose proportions differ between user and avatar, and when the scaled
+  // performer's trunk is longer than the avatar's the pelvis must yield, not the head. Strict
+  // priorities keep it from disturbing anything above to first order; its weight 0.1 damps it
+  // (a row scaled by √w is damped as if λ were λ/√w), so while it conflicts its steps, and with
+  // them their second-order pull on the levels above, stay small (docs/runtime.md).
+  if (trackers.has(TrackerId::Hips)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Hips, 5, 0.1f});
   return l;
 }
 

@@ -614,6 +614,12 @@ LevelDamping levelDamping(const Eigen::MatrixXd& gram, Workspace& w, size_t k, c
   return d;
 }
 
+// Scale for one level's contribution to Δq of norm `norm` (1 when within the trust region).
+double levelStepScale(double norm, const SolveOptions& o) {
+  if (!(o.max_level_step > 0) || !std::isfinite(o.max_level_step) || !(norm > o.max_level_step)) return 1.0;
+  return o.max_level_step / norm;
+}
+
 void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
   w.dq = w.dq0;
   const int r = w.mask_mode ? w.n : w.null_dim;
@@ -656,6 +662,7 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     }
     auto dz = w.tmp_n.head(r);
     dz.noalias() = jhr.transpose() * y;
+    if (const double cap = levelStepScale(dz.norm(), o); cap < 1.0) dz *= cap;
     if (w.mask_mode)
       w.dq += dz;
     else
@@ -728,6 +735,7 @@ void referencePass(const Model& model, Workspace& w, const SolveOptions& o) {
       const double denom = sigma * sigma + lambda2;
       coef(i) = denom > 0 ? coef(i) * sigma / denom : 0.0;
     }
+    if (const double cap = levelStepScale(coef.head(p).norm(), o); cap < 1.0) coef.head(p) *= cap;  // |V c| = |c|
     w.dq.noalias() += svd.matrixV() * coef.head(p);
     for (int i = 0; i < p; ++i)
       if (sv(i) > o.rank_tolerance) w.projector.noalias() -= svd.matrixV().col(i) * svd.matrixV().col(i).transpose();
@@ -842,7 +850,8 @@ bool step(const Model& model, Workspace& w, const SolveOptions& o) {
 bool validOptions(const SolveOptions& o) {
   return o.max_iterations >= 0 && std::isfinite(o.damping_max) && o.damping_max >= 0 &&
          std::isfinite(o.damping_eps) && o.damping_eps > 0 && std::isfinite(o.rank_tolerance) &&
-         o.rank_tolerance > 0 && std::isfinite(o.inequality_tolerance) && o.inequality_tolerance >= 0;
+         o.rank_tolerance > 0 && std::isfinite(o.inequality_tolerance) && o.inequality_tolerance >= 0 &&
+         !(o.max_level_step < 0) && !std::isnan(o.max_level_step);
 }
 
 void fillResiduals(const Model& model, Workspace& w) {

@@ -49,6 +49,14 @@ struct SolveOptions {
   double damping_max = 0.1;     // λmax
   double damping_eps = 0.2;     // eps
   double rank_tolerance = 1e-6; // singular values below this are rank-deficient (projectors)
+  // Trust region per level: the norm of one level's contribution to Δq is capped here (scaling a
+  // level's contribution keeps every level above it exact: it lies in their null space). A
+  // lower level that conflicts with higher ones keeps a large compensated error e_k - J_k Δq
+  // every iteration; near its singular directions the damped step can still reach
+  // |e|/(2 λmax), and steps that large make the second-order disturbance of the higher levels
+  // (the linear model only protects them to first order) large enough to drag them off and
+  // drift. 0 or infinity: no cap.
+  double max_level_step = 0.1;
   double inequality_tolerance = 1e-9;  // a row counts as violated above rhs + this
   // Scale the task part of the step down when it reverses the previous one (damps period-2
   // cycles near unreachable targets; priorities and pinned rows stay exact). See docs/ik.md.

@@ -115,10 +115,9 @@ TEST_CASE("BVH walk, every tracker, default avatar: head within 1 cm, hands with
   checkFullBodyWalk(defaultAvatar());
 }
 
-// [!mayfail]: measured head p95 ~4.4 cm on CesiumMan (hands pass, < 1 mm): its legs are
-// proportioned unlike the performer's, and with the feet at the top priority the head cannot
-// reach. Known gap, docs/runtime.md "Known limits".
-TEST_CASE("BVH walk, every tracker, CesiumMan: head within 1 cm, hands within 2 cm (p95), no NaN, no misses", "[!mayfail]") {
+// Was [!mayfail] (head p95 ~4.4 cm: the head could not be reached with the feet first); passes
+// since the per-level trust region and the head orientation one level below the eye position.
+TEST_CASE("BVH walk, every tracker, CesiumMan: head within 1 cm, hands within 2 cm (p95), no NaN, no misses") {
   EMBODY_REQUIRE_SHARED_ASSET(path, "CesiumMan.glb");
   auto a = avatar::loadAvatarFile(path);
   REQUIRE(a.ok());
@@ -248,10 +247,36 @@ TEST_CASE("the avatar solver given a deadline returns by the deadline plus at mo
     req.deadline = start + fromSeconds(1e-3);
     const SolveResult r = (*solver)->solve(req, pose);
     const TimePoint end = clock.now();
-    // Each solver iteration reads this clock once, so one iteration costs one tick: the solve
-    // may end past the deadline by at most that (plus the reads around it).
+    // One solver iteration reads this clock four times (twice in AvatarBodySolver's loop, twice
+    // in ik::solve), so it costs four ticks: the solve may end past the deadline by at most that
+    // plus the test's own read. (Before the pelvis row, every solve here converged well before
+    // the deadline, so this bound was never reached.)
     iterations += r.iterations;
-    CHECK(end <= req.deadline + fromSeconds(3 * 50e-6));
+    CHECK(end <= req.deadline + fromSeconds(5 * 50e-6));
   }
   CHECK(iterations > 0);
+}
+
+// Figures for docs/runtime.md (hidden: `embody_tests_runtime "[.figures]" -s`): the CMU walk on
+// the default avatar, spine and rows switched one at a time.
+TEST_CASE("figures: CMU walk, coupled and uncoupled spine, pelvis and balance rows", "[.figures]") {
+  EMBODY_REQUIRE_SHARED_ASSET(bvh, "cmu_12_01_walk.bvh");
+  for (int mode = 0; mode < 6; ++mode) {
+    const bool three = mode >= 4;
+    auto src = open(bvh, three ? tracking::TrackerMask::threePoint() : tracking::TrackerMask::all());
+    AvatarBodyOptions o;
+    o.userHeight = 1.75f;
+    o.coupledSpine = mode % 2 == 0;
+    o.pelvisRow = mode < 2;
+    o.balanceRow = true;
+    const int frames = int(src->duration() * 60.0);
+    const Run r = drive(defaultAvatar(), *src, o, frames, 60.0, kGenerousBudget);
+    WARN((three ? "three-point, balance row" : "all trackers") << (o.coupledSpine ? ", coupled" : ", uncoupled")
+                                                  << (three ? "" : o.pelvisRow ? ", pelvis row" : ", no pelvis row") << ": head p95 "
+                                                  << r.summary.headErrorP95 * 1000 << " mm, hand p95 "
+                                                  << r.summary.handErrorP95 * 1000 << " mm, iterations "
+                                                  << r.summary.iterationsMean << ", ik p50 " << r.summary.ikP50Ms
+                                                  << " ms, p99 " << r.summary.ikP99Ms << " ms, non-finite "
+                                                  << r.nonFinitePoses);
+  }
 }

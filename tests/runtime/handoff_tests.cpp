@@ -166,6 +166,19 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
   CHECK_FALSE(full.inferLowerBody);
   for (const auto& t : full.tasks) CHECK((t.kind != TaskKind::FootPlant && t.kind != TaskKind::InferredHips));
   CHECK(full.describe().find("1  position left_foot") != std::string::npos);
+  // All trackers: the eyes right after the feet, hands next, orientations below positions, the
+  // tracked pelvis the softest level (it yields to head and hands when proportions differ).
+  int headPos = 0, headRot = 0, handPos = 0, hips = 0;
+  for (const auto& t : full.tasks) {
+    if (t.tracker == tracking::TrackerId::Head) (t.kind == TaskKind::TrackerPosition ? headPos : headRot) = t.priority;
+    if (t.tracker == tracking::TrackerId::LeftHand && t.kind == TaskKind::TrackerPosition) handPos = t.priority;
+    if (t.tracker == tracking::TrackerId::Hips) hips = t.priority;
+  }
+  CHECK(headPos == 2);
+  CHECK(handPos == 3);
+  CHECK(headRot > handPos);
+  CHECK(hips == full.levels());
+  CHECK(hips > headRot);
   CHECK(statusWeight(tracking::TrackerStatus::Absent) == 0.0f);
   CHECK(statusWeight(tracking::TrackerStatus::Held) == 1.0f);
 }

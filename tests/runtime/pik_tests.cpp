@@ -90,7 +90,10 @@ TEST_CASE("PIK through the runtime reaches moved hand targets with head and feet
     s.time = i / 90.0;
     residuals.push_back(warm.process(s, frame).residual[1]);
   }
-  for (size_t i = 1; i < residuals.size(); ++i) CHECK(residuals[i] < 0.8f * residuals[i - 1]);
+  // Each frame's two iterations make progress from where the last frame stopped (at least 1 cm
+  // here: the solver's per-level trust region, ik::SolveOptions::max_level_step, bounds how far
+  // one iteration moves from a far-off warm start).
+  for (size_t i = 1; i < residuals.size(); ++i) CHECK(residuals[i] < residuals[i - 1] - 0.01f);
   warm.reset();  // forgets the warm start: back to the first frame's error
   CHECK(warm.process(s, frame).residual[1] == Approx(residuals[0]).epsilon(1e-3));
 }
