@@ -34,30 +34,7 @@ AvatarAsset vrm1Avatar() {
 }
 
 AvatarAsset mixamoAvatar() {
-  std::map<std::string, std::string> m = {{"hips", "Hips"},
-                                          {"spine", "Spine"},
-                                          {"chest", "Spine1"},
-                                          {"upperChest", "Spine2"},
-                                          {"neck", "Neck"},
-                                          {"head", "Head"},
-                                          {"leftShoulder", "LeftShoulder"},
-                                          {"leftUpperArm", "LeftArm"},
-                                          {"leftLowerArm", "LeftForeArm"},
-                                          {"leftHand", "LeftHand"},
-                                          {"rightShoulder", "RightShoulder"},
-                                          {"rightUpperArm", "RightArm"},
-                                          {"rightLowerArm", "RightForeArm"},
-                                          {"rightHand", "RightHand"},
-                                          {"leftUpperLeg", "LeftUpLeg"},
-                                          {"leftLowerLeg", "LeftLeg"},
-                                          {"leftFoot", "LeftFoot"},
-                                          {"leftToes", "LeftToeBase"},
-                                          {"rightUpperLeg", "RightUpLeg"},
-                                          {"rightLowerLeg", "RightLeg"},
-                                          {"rightFoot", "RightFoot"},
-                                          {"rightToes", "RightToeBase"}};
-  for (auto& [bone, name] : m) name = "mixamorig:" + name;
-  return fromFile(embody::test::HumanoidFile(m));
+  return fromFile(embody::test::HumanoidFile(embody::test::mixamoBoneNames()));
 }
 
 Eigen::VectorXd randomPose(const ik::Model& model, std::mt19937& rng) {

@@ -190,4 +190,19 @@ struct HumanoidFile {
   }
 };
 
+// VRM 1.0 humanoid bone -> Mixamo node name ("mixamorig:" prefix included).
+inline std::map<std::string, std::string> mixamoBoneNames() {
+  std::map<std::string, std::string> m = {
+      {"hips", "Hips"},           {"spine", "Spine"},           {"chest", "Spine1"},
+      {"upperChest", "Spine2"},   {"neck", "Neck"},             {"head", "Head"},
+      {"leftShoulder", "LeftShoulder"},   {"leftUpperArm", "LeftArm"},   {"leftLowerArm", "LeftForeArm"},
+      {"leftHand", "LeftHand"},           {"rightShoulder", "RightShoulder"}, {"rightUpperArm", "RightArm"},
+      {"rightLowerArm", "RightForeArm"},  {"rightHand", "RightHand"},   {"leftUpperLeg", "LeftUpLeg"},
+      {"leftLowerLeg", "LeftLeg"},        {"leftFoot", "LeftFoot"},     {"leftToes", "LeftToeBase"},
+      {"rightUpperLeg", "RightUpLeg"},    {"rightLowerLeg", "RightLeg"}, {"rightFoot", "RightFoot"},
+      {"rightToes", "RightToeBase"}};
+  for (auto& [bone, name] : m) name = "mixamorig:" + name;
+  return m;
+}
+
 }  // namespace embody::test

@@ -164,30 +164,7 @@ TEST_CASE("a VRM 0.x file maps by its humanBones array and faces -Z", "[humanoid
 }
 
 TEST_CASE("a Mixamo-named skeleton maps by names", "[humanoid]") {
-  std::map<std::string, std::string> mixamo = {{"hips", "Hips"},
-                                               {"spine", "Spine"},
-                                               {"chest", "Spine1"},
-                                               {"upperChest", "Spine2"},
-                                               {"neck", "Neck"},
-                                               {"head", "Head"},
-                                               {"leftShoulder", "LeftShoulder"},
-                                               {"leftUpperArm", "LeftArm"},
-                                               {"leftLowerArm", "LeftForeArm"},
-                                               {"leftHand", "LeftHand"},
-                                               {"rightShoulder", "RightShoulder"},
-                                               {"rightUpperArm", "RightArm"},
-                                               {"rightLowerArm", "RightForeArm"},
-                                               {"rightHand", "RightHand"},
-                                               {"leftUpperLeg", "LeftUpLeg"},
-                                               {"leftLowerLeg", "LeftLeg"},
-                                               {"leftFoot", "LeftFoot"},
-                                               {"leftToes", "LeftToeBase"},
-                                               {"rightUpperLeg", "RightUpLeg"},
-                                               {"rightLowerLeg", "RightLeg"},
-                                               {"rightFoot", "RightFoot"},
-                                               {"rightToes", "RightToeBase"}};
-  for (auto& [bone, name] : mixamo) name = "mixamorig:" + name;
-  HumanoidFile f(mixamo);
+  HumanoidFile f(embody::test::mixamoBoneNames());
   auto a = loadPrepared(f);
   REQUIRE(a.ok());
   CHECK(a->format == AvatarFormat::Gltf);
