@@ -4,8 +4,9 @@
 //                                  waited for (skinning + grid + gizmos, no readback)
 //   BM_Stereo/<avatar>/2x1440x1584/<multiview|twopass>/<cold|warm>
 //   BM_Readback/<avatar>/<WxH>     a warm frame plus the copy to host memory
-// Avatars: "default" (the procedural avatar `embody render --avatar default` draws), "dense20k"
-// (the same generator at ~20k triangles, the size style.md's lavapipe figure was measured with),
+// Avatars: "default" (the built-in H-Anim mannequin `embody render --avatar default` and `make
+// demo` draw, ~25k triangles), "dense20k" (the engine's procedural test mesh at ~20k triangles,
+// the size style.md's lavapipe figure was measured with),
 // and "cesiumman" (../shared/assets/CesiumMan.glb; skipped when absent).
 // Device: EMBODY_BENCH_DEVICE (same selectors as --device), default auto.
 #include <benchmark/benchmark.h>
@@ -17,6 +18,7 @@
 #include <string>
 
 #include "avatar/gltf/gltf_loader.h"
+#include "avatar/procedural/default_avatar.h"
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
 #include "engine/instance.h"
@@ -52,7 +54,7 @@ Context& context() {
       std::exit(1);
     }
     ctx->device = std::move(dev).value();
-    ctx->defaultAvatar = gfx::makeTestAvatar();
+    ctx->defaultAvatar = avatar::buildDefaultAvatar();
     gfx::TestAvatarOptions denseOptions;
     denseOptions.rings = 200;
     denseOptions.segments = 48;
