@@ -141,10 +141,13 @@ Workspace::Workspace(const Model& model)
     level_coef.emplace_back(Eigen::VectorXd::Zero(m));
     level_tmp.emplace_back(Eigen::VectorXd::Zero(m));
     level_jw.emplace_back(Eigen::MatrixXd::Zero(m, n));
-    level_eig.emplace_back(m);
+    // Each decomposition computes once here (on I, m <= a dozen rows): a never-computed Eigen
+    // decomposition holds an uninitialised status that copying a Data would read (UBSan).
+    const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(m, m);
+    level_eig.emplace_back(m).compute(identity);
     level_shifted.emplace_back(Eigen::MatrixXd::Zero(m, m));
-    level_llt.emplace_back(m);
-    level_llt2.emplace_back(m);
+    level_llt.emplace_back(m).compute(identity);
+    level_llt2.emplace_back(m).compute(identity);
     level_y.emplace_back(Eigen::VectorXd::Zero(m));
     level_svd.emplace_back(m, n, Eigen::ComputeThinU | Eigen::ComputeThinV);
   }
