@@ -43,17 +43,8 @@ int runMirrorCommand(cli::Argv argv) {
   app::MirrorJob mj;
   app::RenderJob& job = mj.run;
   try {
-    job.avatar = args.get("avatar");
-    job.motion = args.get("motion");
-    job.spine = args.get("spine");
-    job.boneMap = args.get("bone-map");
-    job.profile = args.get("profile");
-    if (args.has("user-height")) job.userHeight = float(args.number("user-height"));
-    if (args.has("bvh-scale")) job.bvhScale = args.number("bvh-scale");
-    if (args.has("bvh-scale") && !(job.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");
+    app::readSharedJobOptions(args, job);
     mj.frames = args.integer("frames");
-    job.fps = args.number("fps");
-    job.budgetMs = args.number("ik-budget-ms");
     job.yaw = glm::radians(float(args.number("yaw")));
     job.pitch = glm::radians(float(args.number("pitch")));
     const std::string size = args.get("size");

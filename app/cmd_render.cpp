@@ -106,19 +106,10 @@ int runRender(cli::Argv argv) {
   if (motion) {
     app::RenderJob job;
     try {
-      job.avatar = args.get("avatar");
-      job.boneMap = args.get("bone-map");
-      job.spine = args.get("spine");
-      job.motion = args.get("motion");
-      job.profile = args.get("profile");
+      app::readSharedJobOptions(args, job);
       job.record = args.get("record");
-      if (args.has("user-height")) job.userHeight = float(args.number("user-height"));
-      if (args.has("bvh-scale")) job.bvhScale = args.number("bvh-scale");
-      if (args.has("bvh-scale") && !(job.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");
       if (args.has("frames")) job.frames = args.integer("frames");
       if (args.has("frames") && job.frames < 1) throw std::invalid_argument("--frames must be at least 1");
-      job.fps = args.number("fps");
-      job.budgetMs = args.number("ik-budget-ms");
     } catch (const std::invalid_argument& e) {
       std::fprintf(stderr, "error: %s\n", e.what());
       return 2;

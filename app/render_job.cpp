@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <stdexcept>
 #include <glm/gtc/constants.hpp>
 #include <nlohmann/json.hpp>
 
@@ -264,6 +265,19 @@ int runRenderJob(const RenderJob& job) {
               sum.handErrorP95 * 1e3, sum.renderP50Ms);
   if (job.validate && instance->validationEnabled()) std::fprintf(stderr, "validation messages: %u\n", instance->messageCount());
   return 0;
+}
+
+void readSharedJobOptions(const cli::Args& args, RenderJob& job) {
+  job.avatar = args.get("avatar");
+  job.motion = args.get("motion");
+  job.spine = args.get("spine");
+  job.boneMap = args.get("bone-map");
+  job.profile = args.get("profile");
+  if (args.has("user-height")) job.userHeight = float(args.number("user-height"));
+  if (args.has("bvh-scale")) job.bvhScale = args.number("bvh-scale");
+  if (args.has("bvh-scale") && !(job.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");
+  job.fps = args.number("fps");
+  job.budgetMs = args.number("ik-budget-ms");
 }
 
 }  // namespace embody::app

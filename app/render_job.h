@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <string>
 
+#include "app/args.h"
+
 namespace embody::app {
 
 struct RenderJob {
@@ -35,5 +37,10 @@ struct RenderJob {
 // Runs the job; prints errors as "error: ..." and returns the process exit code (0, 1 runtime
 // error, 2 bad option values).
 int runRenderJob(const RenderJob& job);
+
+// Reads the options `embody render --motion` and `embody mirror` share (avatar, motion, spine,
+// bone map, profile, user height, BVH scale, fps, IK budget) into `job`; throws
+// std::invalid_argument with a message naming the option on a bad value.
+void readSharedJobOptions(const cli::Args& args, RenderJob& job);
 
 }  // namespace embody::app
