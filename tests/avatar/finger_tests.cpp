@@ -267,6 +267,20 @@ TEST_CASE("Mixamo, VRM 1.0 and VRM 0.x finger bones all map", "[fingers][humanoi
   }
 }
 
+TEST_CASE("a user bone map names finger bones the other methods cannot find", "[fingers][humanoid]") {
+  // Meaningless names, no VRM data: the body maps by topology, the fingers only through the map.
+  HumanoidFile f(meaninglessFingerNames(), false, true);
+  auto glb = f.glb();
+  auto a = loadGltfFromMemory(glb, "");
+  REQUIRE(a.ok());
+  nlohmann::json map = nlohmann::json::object();
+  for (const auto& s : embody::test::humanoidFingerSpecs()) map[s.bone] = meaninglessFingerNames()[s.bone];
+  REQUIRE(prepareAvatar(a.value(), map.dump()).ok());
+  CHECK(a->humanoid.method == MappingMethod::BoneMap);
+  CHECK(a->humanoid.missingRequired.empty());
+  checkFingersMapped(*a, f);
+}
+
 TEST_CASE("a tracked hand shaped like the avatar's rest hand leaves the fingers at rest", "[fingers]") {
   const AvatarAsset& a = fingerAvatar();
   const FingerRig rig = buildFingerRig(a.skeleton, a.humanoid);
