@@ -24,6 +24,17 @@ glm::quat globalRotation(const Skeleton& skeleton, const SkeletonPose& pose, int
   return glm::normalize(q);
 }
 
+// The same for a joint at or below `hand`, whose model-space rotation is already known: walks up
+// to the hand only (the chain above it, often 30 vertebrae deep, is composed once per hand).
+glm::quat rotationBelowHand(const Skeleton& skeleton, const SkeletonPose& pose, int joint, int hand,
+                            const glm::quat& handGlobal) {
+  glm::quat q(1.0f, 0.0f, 0.0f, 0.0f);
+  int j = joint;
+  for (; j >= 0 && j != hand; j = skeleton.joints[static_cast<size_t>(j)].parent)
+    q = pose.local[static_cast<size_t>(j)].rotation * q;
+  return glm::normalize(j == hand ? handGlobal * q : q);
+}
+
 // The smallest rotation taking unit vector a onto unit vector b (any axis when they are opposite).
 glm::quat fromTo(const glm::vec3& a, const glm::vec3& b) {
   const float c = glm::dot(a, b);
@@ -244,7 +255,8 @@ bool FingerRetargetJob::Run() const {
     }
     if (output) output->handTracked[static_cast<size_t>(h)] = frameOk;
     // Tracked model-free directions -> the avatar's model space, through the two hand frames.
-    const glm::quat avatarFrame = globalRotation(sk, p, rh.hand) * rh.handFrame;
+    const glm::quat handGlobal = globalRotation(sk, p, rh.hand);
+    const glm::quat avatarFrame = handGlobal * rh.handFrame;
     const glm::quat toAvatar = glm::normalize(avatarFrame * glm::conjugate(trackedFrame));
 
     for (int f = 0; f < kFingerCount; ++f) {
@@ -277,7 +289,8 @@ bool FingerRetargetJob::Run() const {
           continue;
         }
         const glm::quat restLocal = sk.joints[static_cast<size_t>(b.joint)].rest.rotation;
-        const glm::quat parentGlobal = globalRotation(sk, p, sk.joints[static_cast<size_t>(b.joint)].parent);
+        const glm::quat parentGlobal =
+            rotationBelowHand(sk, p, sk.joints[static_cast<size_t>(b.joint)].parent, rh.hand, handGlobal);
         const glm::quat restGlobal = glm::normalize(parentGlobal * restLocal);
         const glm::vec3 seg = t->position[static_cast<size_t>(b.trackedTo)] -
                               t->position[static_cast<size_t>(b.trackedFrom)];
