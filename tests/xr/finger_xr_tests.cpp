@@ -33,28 +33,10 @@ std::string triggerTrace(const std::string& name, float trigger) {
 }
 
 TrackedHandJoints locate(HeadlessSession& h, XrHandEXT hand) {
-  auto create = h.proc<PFN_xrCreateHandTrackerEXT>("xrCreateHandTrackerEXT");
-  auto locateJoints = h.proc<PFN_xrLocateHandJointsEXT>("xrLocateHandJointsEXT");
-  auto destroy = h.proc<PFN_xrDestroyHandTrackerEXT>("xrDestroyHandTrackerEXT");
-  REQUIRE(create);
-  REQUIRE(locateJoints);
-  REQUIRE(destroy);
-  XrHandTrackerCreateInfoEXT ci{XR_TYPE_HAND_TRACKER_CREATE_INFO_EXT};
-  ci.hand = hand;
-  ci.handJointSet = XR_HAND_JOINT_SET_DEFAULT_EXT;
-  XrHandTrackerEXT tracker = XR_NULL_HANDLE;
-  REQUIRE(create(h.session, &ci, &tracker) == XR_SUCCESS);
   std::array<XrHandJointLocationEXT, XR_HAND_JOINT_COUNT_EXT> joints{};
-  XrHandJointLocationsEXT locs{XR_TYPE_HAND_JOINT_LOCATIONS_EXT};
-  locs.jointCount = XR_HAND_JOINT_COUNT_EXT;
-  locs.jointLocations = joints.data();
-  XrHandJointsLocateInfoEXT li{XR_TYPE_HAND_JOINTS_LOCATE_INFO_EXT};
-  li.baseSpace = h.stage;
-  li.time = h.lastDisplayTime;
-  REQUIRE(locateJoints(tracker, &li, &locs) == XR_SUCCESS);
-  REQUIRE(destroy(tracker) == XR_SUCCESS);
+  const bool active = h.locateHand(hand, h.lastDisplayTime, joints);
   TrackedHandJoints t;
-  t.active = locs.isActive == XR_TRUE;
+  t.active = active;
   constexpr XrSpaceLocationFlags kValid = XR_SPACE_LOCATION_POSITION_VALID_BIT | XR_SPACE_LOCATION_ORIENTATION_VALID_BIT;
   for (size_t j = 0; j < joints.size(); ++j) {
     const auto& p = joints[j].pose;
