@@ -19,21 +19,6 @@
 
 namespace embody::xr {
 
-struct XrLoopOptions {
-  const avatar::AvatarAsset* avatar = nullptr;  // required; must outlive the loop
-  uint64_t frames = 0;  // request exit after this many submitted frames (0: until the runtime ends it)
-  bool vulkanValidation = false;
-  PlacementOptions placement;
-  bool recenterAtStart = false;
-  bool verbose = false;  // print every session state change
-  bool mirror = false;   // a desktop window (gfx::DesktopWindow) showing the left eye (V: third person)
-  // The body: given each frame's tracker sample (world space, recentered: head, wrists), fill
-  // `pose` (starts at the rest pose) and return true; false or unset = the rest pose placed under
-  // the head. Called on the render thread with the trackers predicted for this frame's display.
-  std::function<bool(const tracking::PoseSample& sample, avatar::SkeletonPose& pose)> bodyPose;
-  bool fingers = true;  // drive the avatar's finger bones from hand tracking when both exist
-};
-
 // What the fingers did over the run (all zero without hand tracking or finger bones).
 struct FingerReport {
   int drivenBones = 0;      // finger bones of the avatar that hand tracking drives (of 30)
@@ -42,6 +27,21 @@ struct FingerReport {
   // Curl: the mean bend of the driven index..little bones against the input pose (degrees),
   // over frames whose fingers were fully blended in.
   float curlMinDeg = 0.0f, curlMaxDeg = 0.0f, curlLastDeg = 0.0f;
+};
+
+struct XrLoopOptions {
+  const avatar::AvatarAsset* avatar = nullptr;  // required; must outlive the loop
+  uint64_t frames = 0;  // request exit after this many submitted frames (0: until the runtime ends it)
+  bool vulkanValidation = false;
+  PlacementOptions placement;
+  bool recenterAtStart = false;
+  bool verbose = false;  // print every session state change
+  bool mirror = false;   // a desktop window (gfx::DesktopWindow) showing the left eye (V: third person)
+  bool fingers = true;   // drive the avatar's finger bones from hand tracking when both exist
+  // The body: given each frame's tracker sample (world space, recentered: head, wrists), fill
+  // `pose` (starts at the rest pose) and return true; false or unset = the rest pose placed under
+  // the head. Called on the render thread with the trackers predicted for this frame's display.
+  std::function<bool(const tracking::PoseSample& sample, avatar::SkeletonPose& pose)> bodyPose;
 };
 
 struct XrLoopReport {
