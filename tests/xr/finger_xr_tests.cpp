@@ -5,6 +5,7 @@
 #include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <string>
 #include <fstream>
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -100,17 +101,21 @@ TEST_CASE("embody xr drives the finger bones of an avatar with fingers from hand
   const auto exported = runProcess({embodyBin(), "avatar", "export-default", "--fingers", glb}, {}, 60);
   INFO(exported.output);
   REQUIRE(exported.exitCode == 0);
-  // A 1 s loop (the runtime replays traces in a loop): triggers released for 0.4 s, squeezed
-  // within 0.1 s, held for 0.4 s, released: open hands and fists alternate. 150 frames at 90 Hz
-  // cover both phases whenever the session's first frame comes (start-up time varies).
-  const std::string trace = dir + "/trace.jsonl";
-  {
-    std::ofstream out(trace);
-    for (int i = 0; i <= 20; ++i) {
+  // Looping traces (the runtime replays a trace in a loop) whose triggers alternate between
+  // released (a relaxed hand) and squeezed (a fist), so every phase comes round whenever the
+  // session's first frame does (start-up time varies).
+  // `steady`: a 1 s loop, released 0.4 s, squeezed within 0.1 s, held 0.4 s, released.
+  // `lossy`: a 2 s loop whose first 0.5 s have both hands lost (invalid), then released 0.5 s,
+  // squeezed within 0.1 s, held 0.8 s, released.
+  auto writeLoop = [&](const std::string& name, double period, double lostUntil, double squeezeAt) {
+    const std::string path = dir + "/" + name + ".jsonl";
+    std::ofstream out(path);
+    for (int i = 0; i <= int(std::lround(period / 0.05)); ++i) {
       const double t = 0.05 * i;
-      const double squeeze = std::clamp(std::min((t - 0.4) / 0.1, (1.0 - t) / 0.1), 0.0, 1.0);
+      const double squeeze = std::clamp(std::min((t - squeezeAt) / 0.1, (period - t) / 0.1), 0.0, 1.0);
+      const bool valid = t >= lostUntil;
       auto hand = [&](double x) {
-        return nlohmann::json{{"p", {x, 1.3, -0.38}}, {"q", {0, 0, 0, 1}}, {"trigger", squeeze}};
+        return nlohmann::json{{"p", {x, 1.3, -0.38}}, {"q", {0, 0, 0, 1}}, {"trigger", squeeze}, {"valid", valid}};
       };
       out << nlohmann::json{{"t", t},
                             {"head", {{"p", {0, 1.6, 0}}, {"q", {0, 0, 0, 1}}}},
@@ -119,17 +124,20 @@ TEST_CASE("embody xr drives the finger bones of an avatar with fingers from hand
                  .dump()
           << "\n";
     }
-  }
+    return path;
+  };
+  const std::string steady = writeLoop("steady", 1.0, 0.0, 0.4);
+  const std::string lossy = writeLoop("lossy", 2.0, 0.5, 1.0);
   auto env = headlessRuntimeEnv();
-  env["EMBODY_XR_POSES"] = trace;
   env["EMBODY_XR_VIEW_SIZE"] = "256x280";
   // As the other embody xr tests, with the capture on: without it, `embody xr --validate --frames 30`
   // crashes inside a lavapipe thread on this machine (on main too; not a finger matter).
   env["EMBODY_XR_CAPTURE"] = dir + "/capture";
-  auto run = [&](const std::string& avatar, const std::string& name) {
+  auto run = [&](const std::string& avatar, const std::string& trace, int frames, const std::string& name) {
     const std::string stats = dir + "/" + name + ".json";
-    const auto p = runProcess({embodyBin(), "xr", "--validate", "--avatar", avatar, "--frames", "150",
-                               "--ik-budget-ms", "5", "--stats", stats},
+    env["EMBODY_XR_POSES"] = trace;
+    const auto p = runProcess({embodyBin(), "xr", "--validate", "--avatar", avatar, "--frames",
+                               std::to_string(frames), "--ik-budget-ms", "5", "--stats", stats},
                               env, 90);
     INFO(p.output.substr(p.output.size() > 3000 ? p.output.size() - 3000 : 0));
     REQUIRE_FALSE(p.timedOut);
@@ -137,7 +145,7 @@ TEST_CASE("embody xr drives the finger bones of an avatar with fingers from hand
     std::ifstream in(stats);
     return nlohmann::json::parse(in, nullptr, false);
   };
-  const auto s = run(glb, "with_fingers");
+  const auto s = run(glb, steady, 150, "with_fingers");
   REQUIRE(s.is_object());
   CHECK(s["hand_tracking"] == true);
   CHECK(s["vulkan_validation_messages"] == 0);
@@ -150,8 +158,22 @@ TEST_CASE("embody xr drives the finger bones of an avatar with fingers from hand
   // finger bones follow to within a few degrees (the mean over index..little, both hands).
   CHECK(f["curl_min_deg"].get<double>() == Approx(12.0).margin(3.0));
   CHECK(f["curl_max_deg"].get<double>() == Approx(72.0).margin(3.0));
+
+  // Hands lost for a quarter of each loop: the fingers blend back to rest (0.15 s) and stay there
+  // while the hands are gone, then follow the relaxed hand and the fist again; nothing turns NaN.
+  const auto l = run(glb, lossy, 250, "with_loss");
+  REQUIRE(l.is_object());
+  CHECK(l["vulkan_validation_messages"] == 0);
+  CHECK(l["tracking"]["non_finite_frames"] == 0);
+  CHECK(l["hand_lost_frames"][1].get<int>() >= 30);
+  const auto& lf = l["fingers"];
+  CHECK(lf["frames"].get<int>() <= 250 - 15);  // at rest (weight 0) for part of every loss
+  CHECK(lf["full_frames"].get<int>() >= 100);
+  CHECK(lf["curl_min_deg"].get<double>() == Approx(12.0).margin(3.0));
+  CHECK(lf["curl_max_deg"].get<double>() == Approx(72.0).margin(3.0));
+
   // The control: the default mannequin has no finger bones, nothing is driven.
-  const auto d = run("default", "default");
+  const auto d = run("default", steady, 30, "default");
   REQUIRE(d.is_object());
   CHECK(d["fingers"]["driven_bones"] == 0);
   CHECK(d["fingers"]["frames"] == 0);
