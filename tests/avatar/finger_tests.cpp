@@ -2,6 +2,7 @@
 // that drives them from XR_EXT_hand_tracking's 26 joints.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <tuple>
 
 #include "avatar/avatar_loader.h"
 #include "avatar/body/body_model.h"
@@ -264,6 +265,32 @@ TEST_CASE("Mixamo, VRM 1.0 and VRM 0.x finger bones all map", "[fingers][humanoi
     REQUIRE(a.ok());
     CHECK(a->humanoid.method == MappingMethod::Vrm);
     checkFingersMapped(*a, f);
+  }
+}
+
+TEST_CASE("finger bones do not turn the IK hand: it points at the middle knuckle, not at the thumb",
+          "[fingers][body]") {
+  // The synthetic file lists the thumb first, so the hand's first child is the thumb metacarpal.
+  HumanoidFile f(embody::test::mixamoBoneNames(), false, true);
+  auto a = loadPrepared(f);
+  REQUIRE(a.ok());
+  auto body = buildBodyModel(*a, {});
+  REQUIRE(body.ok());
+  std::vector<glm::mat4> g;
+  computeGlobals(a->skeleton, SkeletonPose::rest(a->skeleton), g);
+  auto pos = [&](HumanBone b) { return glm::vec3(g[static_cast<size_t>(a->humanoid.joint(b))][3]); };
+  for (const auto& [hand, lowerArm, middle, thumb] :
+       {std::tuple{HumanBone::leftHand, HumanBone::leftLowerArm, HumanBone::leftMiddleProximal,
+                   HumanBone::leftThumbMetacarpal},
+        std::tuple{HumanBone::rightHand, HumanBone::rightLowerArm, HumanBone::rightMiddleProximal,
+                   HumanBone::rightThumbMetacarpal}}) {
+    REQUIRE(a->skeleton.children(a->humanoid.joint(hand)).front() == a->humanoid.joint(thumb));
+    const int ik = body->ikJointOfAvatar[static_cast<size_t>(a->humanoid.joint(hand))];
+    REQUIRE(ik >= 0);
+    const Eigen::Vector3d y = body->ikRestRotation[static_cast<size_t>(ik)] * Eigen::Vector3d::UnitY();
+    const glm::vec3 axis(float(y.x()), float(y.y()), float(y.z()));
+    CHECK(angleDeg(axis, glm::normalize(pos(middle) - pos(hand))) < 0.1f);
+    CHECK(angleDeg(axis, glm::normalize(pos(hand) - pos(lowerArm))) < 5.0f);  // along the forearm
   }
 }
 
