@@ -106,7 +106,8 @@ void printText(const nlohmann::json& j) {
     std::printf("    %-24s %s\n", bone.c_str(), s(node).c_str());
   const auto& fb = j["finger_bones"];
   std::printf("  finger bones: %s of 30 mapped (left %s, right %s); %s driven by hand tracking\n",
-              s(fb["mapped"]).c_str(), s(fb["left"]).c_str(), s(fb["right"]).c_str(), s(fb["driven"]).c_str());
+              s(fb["mapped"]).c_str(), s(fb["left"]).c_str(), s(fb["right"]).c_str(),
+              s(fb["driven"]).c_str());
   for (const auto& n : fb["notes"]) std::printf("    %s\n", s(n).c_str());
   if (j["unmapped_required"].empty())
     std::printf("  all required bones mapped\n");
@@ -283,7 +284,8 @@ int runExportDefault(cli::Argv argv) {
 
 int runAvatar(cli::Argv argv) {
   static const char* usage =
-      "usage: embody avatar info FILE|default [--json] [--fingers] [--bone-map FILE] [--spine full|simplified|auto]\n"
+      "usage: embody avatar info FILE|default [--json] [--fingers] [--bone-map FILE] [--spine "
+      "full|simplified|auto]\n"
       "                          [--user-height M] [--profile FILE]\n"
       "       embody avatar calibrate FILE|default (--user-height M | --eye-height M) [--arm-span M] "
       "--profile OUT\n"

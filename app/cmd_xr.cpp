@@ -145,8 +145,9 @@ int runXr(cli::Argv argv) {
               static_cast<unsigned long long>(r.handLostFrames[1]));
   std::printf("body: %s, %llu frames solved\n", bodyMode.c_str(), static_cast<unsigned long long>(r.bodyPoseFrames));
   if (r.fingers.drivenBones > 0)
-    std::printf("fingers: %d bones, hand-tracked in %llu frames, curl %.1f..%.1f deg\n", r.fingers.drivenBones,
-                static_cast<unsigned long long>(r.fingers.frames), r.fingers.curlMinDeg, r.fingers.curlMaxDeg);
+    std::printf("fingers: %d bones, hand-tracked in %llu frames, curl %.1f..%.1f deg\n",
+                r.fingers.drivenBones, static_cast<unsigned long long>(r.fingers.frames),
+                r.fingers.curlMinDeg, r.fingers.curlMaxDeg);
   std::printf("calibration: %s, avatar scale %.3f\n", r.calibrated ? "done" : "not done", r.calibratedScale);
   if (lo.mirror) std::printf("mirror: %llu frames shown\n", static_cast<unsigned long long>(r.mirrorFrames));
   if (lo.vulkanValidation) std::printf("validation messages: %u\n", r.vulkanValidationMessages);

@@ -105,7 +105,8 @@ bool handFrameFromKnuckles(const glm::vec3& wrist, const std::array<glm::vec3, 4
   glm::vec3 f = mean / float(n) - wrist;  // towards the fingers
   if (!finite(f) || glm::length(f) < 1e-6f) return false;
   f = glm::normalize(f);
-  glm::vec3 s = knuckles[static_cast<size_t>(first)] - knuckles[static_cast<size_t>(last)];  // little -> index
+  glm::vec3 s =
+      knuckles[static_cast<size_t>(first)] - knuckles[static_cast<size_t>(last)];  // little -> index
   s -= glm::dot(s, f) * f;
   if (!finite(s) || glm::length(s) < 1e-6f) return false;
   s = glm::normalize(s);  // the thumb side
@@ -179,7 +180,8 @@ FingerRig buildFingerRig(const Skeleton& skeleton, const HumanoidMap& map) {
               dir = position(c) - position(j);
               break;
             }
-        if (glm::length(dir) < 1e-6f) dir = glm::length(previousDir) > 0.0f ? previousDir : position(j) - position(hand);
+        if (glm::length(dir) < 1e-6f)
+          dir = glm::length(previousDir) > 0.0f ? previousDir : position(j) - position(hand);
         if (glm::length(dir) < 1e-6f) {
           rig.notes.push_back(std::string(humanBoneName(fingerHumanBone(left, f, s))) +
                               ": no direction (zero-length bone), not driven");
@@ -292,8 +294,8 @@ bool FingerRetargetJob::Run() const {
         const glm::quat parentGlobal =
             rotationBelowHand(sk, p, sk.joints[static_cast<size_t>(b.joint)].parent, rh.hand, handGlobal);
         const glm::quat restGlobal = glm::normalize(parentGlobal * restLocal);
-        const glm::vec3 seg = t->position[static_cast<size_t>(b.trackedTo)] -
-                              t->position[static_cast<size_t>(b.trackedFrom)];
+        const glm::vec3 seg =
+            t->position[static_cast<size_t>(b.trackedTo)] - t->position[static_cast<size_t>(b.trackedFrom)];
         glm::quat delta(1.0f, 0.0f, 0.0f, 0.0f);  // in the bone's rest frame
         if (glm::length(seg) > 1e-6f) {
           const glm::vec3 d = glm::conjugate(restGlobal) * (toAvatar * glm::normalize(seg));
@@ -301,15 +303,16 @@ bool FingerRetargetJob::Run() const {
           const float spread =
               std::clamp(std::asin(std::clamp(xl, -1.0f, 1.0f)), -b.limits.maxSpread, b.limits.maxSpread);
           const float flexion = std::clamp(std::atan2(-xn, xa), b.limits.minFlexion, b.limits.maxFlexion);
-          const glm::vec3 clamped = std::cos(spread) * (std::cos(flexion) * b.axis - std::sin(flexion) * b.dorsal) +
-                                    std::sin(spread) * b.lateral;
+          const glm::vec3 clamped =
+              std::cos(spread) * (std::cos(flexion) * b.axis - std::sin(flexion) * b.dorsal) +
+              std::sin(spread) * b.lateral;
           delta = fromTo(b.axis, glm::normalize(clamped));
           if (b.limits.maxTwist > 0.0f) {
             // Twist about the bone: the tracked back of the finger (+Y) against the rig's dorsal.
             const glm::vec3 a = glm::normalize(clamped);
-            const glm::vec3 tracked = glm::conjugate(restGlobal) *
-                                      (toAvatar * (t->orientation[static_cast<size_t>(b.trackedFrom)] *
-                                                   glm::vec3(0.0f, 1.0f, 0.0f)));
+            const glm::vec3 tracked =
+                glm::conjugate(restGlobal) * (toAvatar * (t->orientation[static_cast<size_t>(b.trackedFrom)] *
+                                                          glm::vec3(0.0f, 1.0f, 0.0f)));
             glm::vec3 p1 = delta * b.dorsal, p2 = tracked;
             p1 -= glm::dot(p1, a) * a;
             p2 -= glm::dot(p2, a) * a;

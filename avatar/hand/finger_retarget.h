@@ -75,7 +75,7 @@ enum class HandJoint : int {
   count
 };
 constexpr int kTrackedHandJointCount = static_cast<int>(HandJoint::count);  // 26
-constexpr int kFingerCount = 5;                                             // thumb, index, middle, ring, little
+constexpr int kFingerCount = 5;  // thumb, index, middle, ring, little
 constexpr int kFingerSegments = 3;
 constexpr int kFingerBonesPerHand = kFingerCount * kFingerSegments;  // 15
 
@@ -110,9 +110,9 @@ struct FingerBone {
 };
 
 struct FingerRigHand {
-  int hand = -1;               // the avatar's hand joint; -1 when this hand has no usable fingers
+  int hand = -1;  // the avatar's hand joint; -1 when this hand has no usable fingers
   bool left = true;
-  glm::quat handFrame{1.0f, 0.0f, 0.0f, 0.0f};  // hand frame (OpenXR wrist axes) in the hand joint's frame
+  glm::quat handFrame{1.0f, 0.0f, 0.0f, 0.0f};   // hand frame (OpenXR wrist axes) in the hand joint's frame
   std::array<bool, kFingerCount> frameFinger{};  // the knuckles the hand frame is built from (index..little)
   std::array<FingerBone, kFingerBonesPerHand> bones;  // [finger * 3 + segment]
   int mappedBones = 0;
@@ -162,8 +162,8 @@ struct FingerRetargetJob {
   float deltaTime = 0.0f;                           // seconds since the last Run (>= 0)
   float blendTime = 0.15f;                          // seconds to blend fully in or out (> 0)
   FingerRetargetState* state = nullptr;
-  SkeletonPose* pose = nullptr;              // in: the posed skeleton (IK, animation); out: fingers set
-  FingerRetargetOutput* output = nullptr;    // optional
+  SkeletonPose* pose = nullptr;            // in: the posed skeleton (IK, animation); out: fingers set
+  FingerRetargetOutput* output = nullptr;  // optional
 
   // True when every pointer is set, the pose has one transform per joint, the rig's joints exist
   // and the times are finite and in range.

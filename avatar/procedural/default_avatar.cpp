@@ -333,7 +333,8 @@ void addFingeredHand(MeshSink& sink, const Skeleton& skeleton, const std::vector
   const HandGeometry g = handGeometry(wr, el);
   auto handOnly = [&](const glm::vec3&) { return Influences{{wristJoint, 1.0f}}; };
   addEllipsoid(sink, wr + g.down * 0.050f - g.across * 0.006f, {0.018f, 0.055f, 0.046f}, 14, 20, handOnly);
-  auto chainTube = [&](const std::array<int, 3>& joints, const glm::vec3& tip, float radius, float startInset) {
+  auto chainTube = [&](const std::array<int, 3>& joints, const glm::vec3& tip, float radius,
+                       float startInset) {
     std::vector<Station> st;
     const glm::vec3 p0 = pos[static_cast<size_t>(joints[0])];
     const glm::vec3 first = glm::normalize(pos[static_cast<size_t>(joints[1])] - p0);
@@ -357,7 +358,8 @@ void addFingeredHand(MeshSink& sink, const Skeleton& skeleton, const std::vector
     chainTube(j, tip, f.radius, 0.02f);
   }
   std::array<int, 3> thumb{};
-  for (int k = 0; k < 3; ++k) thumb[static_cast<size_t>(k)] = skeleton.find(prefix + "thumb" + std::to_string(k + 1));
+  for (int k = 0; k < 3; ++k)
+    thumb[static_cast<size_t>(k)] = skeleton.find(prefix + "thumb" + std::to_string(k + 1));
   chainTube(thumb, thumbPoints(wr, g)[3], 0.011f, 0.005f);
 }
 

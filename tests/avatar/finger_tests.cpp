@@ -41,10 +41,11 @@ TrackedHandJoints syntheticHand(bool left, float bendDeg, const glm::quat& q = g
     HandJoint first;
     float x, baseZ, knuckleZ, lengths[3];
   };
-  const Finger fingers[4] = {{HandJoint::IndexMetacarpal, -0.022f, 0.04f, -0.035f, {0.040f, 0.025f, 0.022f}},
-                             {HandJoint::MiddleMetacarpal, 0.0f, 0.04f, -0.038f, {0.045f, 0.028f, 0.024f}},
-                             {HandJoint::RingMetacarpal, 0.019f, 0.038f, -0.034f, {0.042f, 0.026f, 0.023f}},
-                             {HandJoint::LittleMetacarpal, 0.036f, 0.035f, -0.027f, {0.032f, 0.018f, 0.020f}}};
+  const Finger fingers[4] = {
+      {HandJoint::IndexMetacarpal, -0.022f, 0.04f, -0.035f, {0.040f, 0.025f, 0.022f}},
+      {HandJoint::MiddleMetacarpal, 0.0f, 0.04f, -0.038f, {0.045f, 0.028f, 0.024f}},
+      {HandJoint::RingMetacarpal, 0.019f, 0.038f, -0.034f, {0.042f, 0.026f, 0.023f}},
+      {HandJoint::LittleMetacarpal, 0.036f, 0.035f, -0.027f, {0.032f, 0.018f, 0.020f}}};
   const float bend = bendDeg / kRad;
   for (const auto& f : fingers) {
     const size_t first = idx(f.first);
@@ -125,7 +126,8 @@ struct Run {
 
 // Runs the job once with a step long enough to blend fully in.
 void runJob(const AvatarAsset& a, const FingerRig& rig, FingerRetargetState& state, SkeletonPose& pose,
-            const TrackedHandJoints* left, const TrackedHandJoints* right, float dt, FingerRetargetOutput* out) {
+            const TrackedHandJoints* left, const TrackedHandJoints* right, float dt,
+            FingerRetargetOutput* out) {
   FingerRetargetJob job;
   job.skeleton = &a.skeleton;
   job.rig = &rig;
@@ -139,8 +141,8 @@ void runJob(const AvatarAsset& a, const FingerRig& rig, FingerRetargetState& sta
 }
 
 glm::quat rotationOf(const glm::mat4& m) {
-  return glm::normalize(glm::quat_cast(glm::mat3(glm::normalize(glm::vec3(m[0])), glm::normalize(glm::vec3(m[1])),
-                                                 glm::normalize(glm::vec3(m[2])))));
+  return glm::normalize(glm::quat_cast(glm::mat3(
+      glm::normalize(glm::vec3(m[0])), glm::normalize(glm::vec3(m[1])), glm::normalize(glm::vec3(m[2])))));
 }
 
 // Model-space direction of a finger bone in a pose.
@@ -181,8 +183,8 @@ TEST_CASE("the mannequin with --fingers maps all 30 finger bones by H-Anim names
   for (size_t j = 0; j < plain.skeleton.joints.size(); ++j) {
     CHECK(fingers.skeleton.joints[j].name == plain.skeleton.joints[j].name);
     CHECK(fingers.skeleton.joints[j].parent == plain.skeleton.joints[j].parent);
-    CHECK(glm::length(fingers.skeleton.joints[j].rest.translation - plain.skeleton.joints[j].rest.translation) ==
-          0.0f);
+    CHECK(glm::length(fingers.skeleton.joints[j].rest.translation -
+                      plain.skeleton.joints[j].rest.translation) == 0.0f);
   }
   // Every finger bone carries skin (some vertex mostly weighted to it), and the body model is the
   // same size: the IK does not see the fingers.
@@ -341,7 +343,8 @@ TEST_CASE("a curled tracked hand (the headless runtime's curl) bends the avatar'
   SkeletonPose pose = SkeletonPose::rest(a.skeleton);
   pose.local[static_cast<size_t>(a.skeleton.find("l_wrist"))].rotation =
       glm::angleAxis(0.9f, glm::normalize(glm::vec3(0.2f, 1.0f, -0.4f)));
-  pose.local[static_cast<size_t>(a.skeleton.find("r_elbow"))].rotation = glm::angleAxis(-1.2f, glm::vec3(1, 0, 0));
+  pose.local[static_cast<size_t>(a.skeleton.find("r_elbow"))].rotation =
+      glm::angleAxis(-1.2f, glm::vec3(1, 0, 0));
   FingerRetargetState state;
   FingerRetargetOutput out;
   runJob(a, rig, state, pose, &left, &right, 1.0f, &out);
@@ -352,18 +355,20 @@ TEST_CASE("a curled tracked hand (the headless runtime's curl) bends the avatar'
     const TrackedHandJoints& t = h == 0 ? left : right;
     const FingerRigHand& rh = rig.hands[static_cast<size_t>(h)];
     glm::quat trackedFrame;
-    REQUIRE(handFrameFromKnuckles(t.position[idx(HandJoint::Wrist)],
-                                  {t.position[idx(HandJoint::IndexProximal)], t.position[idx(HandJoint::MiddleProximal)],
-                                   t.position[idx(HandJoint::RingProximal)], t.position[idx(HandJoint::LittleProximal)]},
-                                  {true, true, true, true}, h == 0, trackedFrame));
+    REQUIRE(handFrameFromKnuckles(
+        t.position[idx(HandJoint::Wrist)],
+        {t.position[idx(HandJoint::IndexProximal)], t.position[idx(HandJoint::MiddleProximal)],
+         t.position[idx(HandJoint::RingProximal)], t.position[idx(HandJoint::LittleProximal)]},
+        {true, true, true, true}, h == 0, trackedFrame));
     const glm::quat avatarFrame = rotationOf(g[static_cast<size_t>(rh.hand)]) * rh.handFrame;
     for (int f = 0; f < kFingerCount; ++f)
       for (int s = 0; s < kFingerSegments; ++s) {
         const FingerBone& b = rh.bones[static_cast<size_t>(f * 3 + s)];
         INFO("hand " << h << " finger " << f << " segment " << s);
         // Each segment points where the tracked one does, both seen from their own hand.
-        const glm::vec3 tracked = glm::conjugate(trackedFrame) *
-                                  glm::normalize(t.position[idx(b.trackedTo)] - t.position[idx(b.trackedFrom)]);
+        const glm::vec3 tracked =
+            glm::conjugate(trackedFrame) *
+            glm::normalize(t.position[idx(b.trackedTo)] - t.position[idx(b.trackedFrom)]);
         const glm::vec3 avatar = glm::conjugate(avatarFrame) * boneDirection(g, b);
         CHECK(angleDeg(tracked, avatar) < (f == 0 ? 6.0f : 3.0f));
         if (f == 0) continue;
@@ -372,16 +377,19 @@ TEST_CASE("a curled tracked hand (the headless runtime's curl) bends the avatar'
         if (s > 0) {
           const glm::vec3 prev = boneDirection(g, rh.bones[static_cast<size_t>(f * 3 + s - 1)]);
           CHECK(std::abs(angleDeg(prev, boneDirection(g, b)) - bend) < 1.0f);
-          CHECK(std::abs(out.bend[static_cast<size_t>(h)][static_cast<size_t>(f * 3 + s)] * kRad - bend) < 1.0f);
+          CHECK(std::abs(out.bend[static_cast<size_t>(h)][static_cast<size_t>(f * 3 + s)] * kRad - bend) <
+                1.0f);
         }
       }
   }
   // Bones keep the avatar's lengths: only rotations were written.
   const SkeletonPose rest = SkeletonPose::rest(a.skeleton);
-  for (size_t j = 0; j < pose.local.size(); ++j) CHECK(pose.local[j].translation == rest.local[j].translation);
+  for (size_t j = 0; j < pose.local.size(); ++j)
+    CHECK(pose.local[j].translation == rest.local[j].translation);
 }
 
-TEST_CASE("invalid joints, lost tracking and NaN input blend the fingers back to the input pose", "[fingers]") {
+TEST_CASE("invalid joints, lost tracking and NaN input blend the fingers back to the input pose",
+          "[fingers]") {
   const AvatarAsset& a = fingerAvatar();
   const FingerRig rig = buildFingerRig(a.skeleton, a.humanoid);
   const SkeletonPose rest = SkeletonPose::rest(a.skeleton);
@@ -430,7 +438,8 @@ TEST_CASE("invalid joints, lost tracking and NaN input blend the fingers back to
   CHECK_FALSE(out.handTracked[0]);
   CHECK_FALSE(out.handTracked[1]);
   for (int h = 0; h < 2; ++h)
-    for (int f = 0; f < kFingerCount; ++f) CHECK(out.weight[static_cast<size_t>(h)][static_cast<size_t>(f)] == 0.0f);
+    for (int f = 0; f < kFingerCount; ++f)
+      CHECK(out.weight[static_cast<size_t>(h)][static_cast<size_t>(f)] == 0.0f);
   for (size_t j = 0; j < pose.local.size(); ++j) CHECK(pose.local[j].rotation == rest.local[j].rotation);
 }
 

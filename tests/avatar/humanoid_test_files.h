@@ -55,9 +55,11 @@ inline const std::vector<HumanoidJointSpec>& humanoidFingerSpecs() {
     static const std::vector<std::string> names = [] {
       std::vector<std::string> n;
       for (const char* side : {"left", "right"}) {
-        for (const char* seg : {"Metacarpal", "Proximal", "Distal"}) n.push_back(std::string(side) + "Thumb" + seg);
+        for (const char* seg : {"Metacarpal", "Proximal", "Distal"})
+          n.push_back(std::string(side) + "Thumb" + seg);
         for (const char* f : {"Index", "Middle", "Ring", "Little"})
-          for (const char* seg : {"Proximal", "Intermediate", "Distal"}) n.push_back(std::string(side) + f + seg);
+          for (const char* seg : {"Proximal", "Intermediate", "Distal"})
+            n.push_back(std::string(side) + f + seg);
       }
       return n;
     }();
@@ -68,7 +70,8 @@ inline const std::vector<HumanoidJointSpec>& humanoidFingerSpecs() {
       const char* hand = side == 0 ? "leftHand" : "rightHand";
       const glm::vec3 thumb[3] = {{0.70f, 1.41f, 0.01f}, {0.73f, 1.40f, 0.04f}, {0.755f, 1.395f, 0.06f}};
       for (int j = 0; j < 3; ++j, ++k)
-        v.push_back({names[k].c_str(), j == 0 ? hand : names[k - 1].c_str(),
+        v.push_back({names[k].c_str(),
+                     j == 0 ? hand : names[k - 1].c_str(),
                      {sx * thumb[j].x, thumb[j].y, thumb[j].z}});
       const float across[4] = {0.005f, -0.015f, -0.034f, -0.05f};
       const float len[3] = {0.0f, 0.04f, 0.025f};
@@ -245,7 +248,8 @@ inline std::map<std::string, std::string> mixamoBoneNames() {
   for (const char* side : {"left", "right"}) {
     const std::string vrmSide = side, mixSide = vrmSide == "left" ? "Left" : "Right";
     const char* segs[3] = {"Metacarpal", "Proximal", "Distal"};
-    for (int k = 0; k < 3; ++k) m[vrmSide + "Thumb" + segs[k]] = mixSide + "HandThumb" + std::to_string(k + 1);
+    for (int k = 0; k < 3; ++k)
+      m[vrmSide + "Thumb" + segs[k]] = mixSide + "HandThumb" + std::to_string(k + 1);
     const char* fingerSegs[3] = {"Proximal", "Intermediate", "Distal"};
     const std::pair<const char*, const char*> fingers[] = {
         {"Index", "Index"}, {"Middle", "Middle"}, {"Ring", "Ring"}, {"Little", "Pinky"}};

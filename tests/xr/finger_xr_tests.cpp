@@ -5,11 +5,11 @@
 #include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <string>
 #include <fstream>
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "avatar/hand/finger_retarget.h"
 #include "avatar/procedural/default_avatar.h"
@@ -27,10 +27,11 @@ constexpr float kRad = 57.29578f;
 std::string triggerTrace(const std::string& name, float trigger) {
   const std::string t = std::to_string(trigger);
   return writeTraceFile(
-      name, {R"({"t":0,"head":{"p":[0,1.7,0],"q":[0,0,0,1]},"left":{"p":[-0.2,1.1,-0.3],"q":[0,0,0,1]},"right":{"p":[0.2,1.1,-0.3],"q":[0,0,0,1],"trigger":)" +
-                 t + "}}",
-             R"({"t":100,"head":{"p":[0,1.7,0],"q":[0,0,0,1]},"left":{"p":[-0.2,1.1,-0.3],"q":[0,0,0,1]},"right":{"p":[0.2,1.1,-0.3],"q":[0,0,0,1],"trigger":)" +
-                 t + "}}"});
+      name,
+      {R"({"t":0,"head":{"p":[0,1.7,0],"q":[0,0,0,1]},"left":{"p":[-0.2,1.1,-0.3],"q":[0,0,0,1]},"right":{"p":[0.2,1.1,-0.3],"q":[0,0,0,1],"trigger":)" +
+           t + "}}",
+       R"({"t":100,"head":{"p":[0,1.7,0],"q":[0,0,0,1]},"left":{"p":[-0.2,1.1,-0.3],"q":[0,0,0,1]},"right":{"p":[0.2,1.1,-0.3],"q":[0,0,0,1],"trigger":)" +
+           t + "}}"});
 }
 
 TrackedHandJoints locate(HeadlessSession& h, XrHandEXT hand) {
@@ -38,7 +39,8 @@ TrackedHandJoints locate(HeadlessSession& h, XrHandEXT hand) {
   const bool active = h.locateHand(hand, h.lastDisplayTime, joints);
   TrackedHandJoints t;
   t.active = active;
-  constexpr XrSpaceLocationFlags kValid = XR_SPACE_LOCATION_POSITION_VALID_BIT | XR_SPACE_LOCATION_ORIENTATION_VALID_BIT;
+  constexpr XrSpaceLocationFlags kValid =
+      XR_SPACE_LOCATION_POSITION_VALID_BIT | XR_SPACE_LOCATION_ORIENTATION_VALID_BIT;
   for (size_t j = 0; j < joints.size(); ++j) {
     const auto& p = joints[j].pose;
     t.position[j] = {p.position.x, p.position.y, p.position.z};
@@ -115,7 +117,8 @@ TEST_CASE("embody xr drives the finger bones of an avatar with fingers from hand
       const double squeeze = std::clamp(std::min((t - squeezeAt) / 0.1, (period - t) / 0.1), 0.0, 1.0);
       const bool valid = t >= lostUntil;
       auto hand = [&](double x) {
-        return nlohmann::json{{"p", {x, 1.3, -0.38}}, {"q", {0, 0, 0, 1}}, {"trigger", squeeze}, {"valid", valid}};
+        return nlohmann::json{
+            {"p", {x, 1.3, -0.38}}, {"q", {0, 0, 0, 1}}, {"trigger", squeeze}, {"valid", valid}};
       };
       out << nlohmann::json{{"t", t},
                             {"head", {{"p", {0, 1.6, 0}}, {"q", {0, 0, 0, 1}}}},

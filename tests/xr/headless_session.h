@@ -42,7 +42,8 @@ class HeadlessSession {
   XrTime lastDisplayTime = 0;
   // One hand's joints in STAGE at `time`, through a hand tracker created for the call; returns
   // the locations' isActive.
-  bool locateHand(XrHandEXT hand, XrTime time, std::array<XrHandJointLocationEXT, XR_HAND_JOINT_COUNT_EXT>& joints);
+  bool locateHand(XrHandEXT hand, XrTime time,
+                  std::array<XrHandJointLocationEXT, XR_HAND_JOINT_COUNT_EXT>& joints);
 
  private:
   std::unique_ptr<TestInstance> vk_;

@@ -226,7 +226,8 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
         job.skeleton = &o.avatar->skeleton;
         job.rig = &fingerRig;
         job.hands = {&trackedHands[0], &trackedHands[1]};
-        job.deltaTime = lastFingerTime ? std::clamp(float(double(t - lastFingerTime) * 1e-9), 0.0f, 0.1f) : 0.0f;
+        job.deltaTime =
+            lastFingerTime ? std::clamp(float(double(t - lastFingerTime) * 1e-9), 0.0f, 0.1f) : 0.0f;
         job.state = &fingerState;
         job.pose = &pose;
         job.output = &fingerOut;

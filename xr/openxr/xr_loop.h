@@ -61,8 +61,8 @@ struct XrLoopReport {
   uint64_t mirrorFrames = 0;    // frames the mirror window presented
   uint64_t bodyPoseFrames = 0;  // frames whose pose came from options.bodyPose
   FingerReport fingers;
-  double meanFrameMs = 0.0;     // wall time per loop iteration while rendering
-  std::string error;            // "" when the run ended normally
+  double meanFrameMs = 0.0;  // wall time per loop iteration while rendering
+  std::string error;         // "" when the run ended normally
 };
 
 // Runs until the session ends. Setup failures, failing calls and a lost session (sessionLost)
