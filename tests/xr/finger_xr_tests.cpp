@@ -89,9 +89,9 @@ TEST_CASE("the headless runtime's curled hand bends the avatar's finger bones by
   for (int f = 1; f < kFingerCount; ++f)
     for (int s = 0; s < kFingerSegments; ++s) {
       INFO("finger " << f << " segment " << s);
-      // The knuckle's angle also holds the hand-frame difference between the two hands (a few
-      // degrees); the finger's own joints match the runtime's curl closely.
-      CHECK(out.bend[1][size_t(f * 3 + s)] * kRad == Approx(bend).margin(s == 0 ? 5.0 : 1.0));
+      // The knuckle's angle also holds the small difference between the two hands' shapes (their
+      // knuckle lines differ by about 0.3 degrees); the finger's own joints match exactly.
+      CHECK(out.bend[1][size_t(f * 3 + s)] * kRad == Approx(bend).margin(s == 0 ? 0.5 : 0.05));
     }
   // The left hand is not driven (no joints given): its fingers stay at rest.
   for (float b : out.bend[0]) CHECK(b == 0.0f);
