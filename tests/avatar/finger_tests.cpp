@@ -473,6 +473,33 @@ TEST_CASE("finger flexion beyond the human range is clamped", "[fingers]") {
   }
 }
 
+TEST_CASE("a finger's twist follows the tracked joint's roll, clamped to a few degrees", "[fingers]") {
+  const AvatarAsset& a = fingerAvatar();
+  const FingerRig rig = buildFingerRig(a.skeleton, a.humanoid);
+  const FingerBone& index1 = rig.hands[1].bones[3];
+  const FingerLimits limits = defaultFingerLimits(1, 0);
+  for (const float rollDeg : {4.0f, -6.0f, 30.0f}) {
+    INFO("roll " << rollDeg);
+    TrackedHandJoints t = syntheticHand(false, 0.0f);
+    auto& q = t.orientation[idx(HandJoint::IndexProximal)];
+    q = q * glm::angleAxis(rollDeg / kRad, glm::vec3(0, 0, 1));  // about the bone (its -Z)
+    FingerRetargetState state;
+    SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+    runJob(a, rig, state, pose, nullptr, &t, 1.0f, nullptr);
+    const glm::quat delta =
+        glm::conjugate(a.skeleton.joints[static_cast<size_t>(index1.joint)].rest.rotation) *
+        pose.local[static_cast<size_t>(index1.joint)].rotation;
+    const float twist =
+        2.0f * std::atan2(glm::dot(glm::vec3(delta.x, delta.y, delta.z), index1.axis), delta.w);
+    const float expected = std::min(std::abs(rollDeg), limits.maxTwist * kRad);
+    CHECK(std::abs(twist) * kRad == Approx(expected).margin(0.5));
+    // The neighbours do not twist: the middle finger's knuckle stays at rest.
+    const int middle1 = rig.hands[1].bones[6].joint;
+    CHECK(std::abs(glm::dot(pose.local[static_cast<size_t>(middle1)].rotation,
+                            a.skeleton.joints[static_cast<size_t>(middle1)].rest.rotation)) > 0.9999f);
+  }
+}
+
 TEST_CASE("FingerRetargetJob::Validate rejects every malformed input", "[fingers]") {
   const AvatarAsset& a = fingerAvatar();
   const FingerRig rig = buildFingerRig(a.skeleton, a.humanoid);
