@@ -123,7 +123,7 @@ std::vector<std::string> boundComponents(Instance& inst, const Session& s, const
   for (const auto& [a, path] : it->second) {
     int h = -1;
     std::string comp;
-    if (a == action && splitBinding(inst.pathString(path), h, comp) && h == hand) out.push_back(comp);
+    if (a.get() == action && splitBinding(inst.pathString(path), h, comp) && h == hand) out.push_back(comp);
   }
   return out;
 }
@@ -147,20 +147,20 @@ XrResult XRAPI_CALL CreateActionSet(XrInstance instance, const XrActionSetCreate
   if (!validName(ci->actionSetName)) return XR_ERROR_PATH_FORMAT_INVALID;
   if (ci->localizedActionSetName[0] == '\0') return XR_ERROR_LOCALIZED_NAME_INVALID;
   std::lock_guard lock(inst->mutex);
-  for (ActionSet* s : inst->actionSets) {
+  for (const auto& [raw, s] : inst->actionSets) {
     if (s->name == ci->actionSetName) return XR_ERROR_NAME_DUPLICATED;
     if (s->localizedName == ci->localizedActionSetName) return XR_ERROR_LOCALIZED_NAME_DUPLICATED;
   }
-  auto* set = new ActionSet;
+  auto set = std::make_shared<ActionSet>();
   set->instance = inst;
   set->name = ci->actionSetName;
   set->localizedName = ci->localizedActionSetName;
   set->priority = ci->priority;
+  *out = reinterpret_cast<XrActionSet>(set.get());
   {
     std::lock_guard rlock(registry().mutex);
-    inst->actionSets.insert(set);
+    inst->actionSets.emplace(set.get(), std::move(set));
   }
-  *out = reinterpret_cast<XrActionSet>(set);
   return XR_SUCCESS;
 }
 EMBODY_XR_ENTRY(CreateActionSet)
@@ -170,14 +170,13 @@ XrResult XRAPI_CALL DestroyActionSet(XrActionSet actionSet) {
   ActionSet* set = findActionSet(actionSet, &inst);
   if (!set) return XR_ERROR_HANDLE_INVALID;
   std::lock_guard lock(inst->mutex);
+  // The handles of the set and its actions become invalid. The set itself is freed here only if
+  // nothing else holds it: a session it is attached to still locates its actions' spaces, and the
+  // session's teardown must not touch freed memory (spec: xrDestroyActionSet must not free
+  // resources other valid handles use).
   std::lock_guard rlock(registry().mutex);
-  for (Action* a : set->actions) {
-    inst->actions.erase(a);
-    for (Session* s : inst->sessions) s->actionStates.erase(a);
-    delete a;
-  }
-  inst->actionSets.erase(set);
-  delete set;
+  for (const auto& a : set->actions) inst->actions.erase(a.get());
+  inst->actionSets.erase(set);  // the instance's reference
   return XR_SUCCESS;
 }
 EMBODY_XR_ENTRY(DestroyActionSet)
@@ -201,7 +200,8 @@ XrResult XRAPI_CALL CreateAction(XrActionSet actionSet, const XrActionCreateInfo
   }
   std::lock_guard lock(inst->mutex);
   if (set->attached) return XR_ERROR_ACTIONSETS_ALREADY_ATTACHED;
-  for (Action* a : set->actions) {
+  for (const auto& a : set->actions) {
+    if (!inst->actions.count(a.get())) continue;  // a destroyed handle frees its names
     if (a->name == ci->actionName) return XR_ERROR_NAME_DUPLICATED;
     if (a->localizedName == ci->localizedActionName) return XR_ERROR_LOCALIZED_NAME_DUPLICATED;
   }
@@ -213,13 +213,14 @@ XrResult XRAPI_CALL CreateAction(XrActionSet actionSet, const XrActionCreateInfo
     if (std::find(subs.begin(), subs.end(), p) != subs.end()) return XR_ERROR_PATH_UNSUPPORTED;
     subs.push_back(p);
   }
-  auto* a = new Action;
+  auto owned = std::make_unique<Action>();
+  Action* a = owned.get();
   a->set = set;
   a->name = ci->actionName;
   a->localizedName = ci->localizedActionName;
   a->type = ci->actionType;
   a->subactionPaths = std::move(subs);
-  set->actions.push_back(a);
+  set->actions.push_back(std::move(owned));
   {
     std::lock_guard rlock(registry().mutex);
     inst->actions.insert(a);
@@ -234,14 +235,10 @@ XrResult XRAPI_CALL DestroyAction(XrAction action) {
   Action* a = findAction(action, &inst);
   if (!a) return XR_ERROR_HANDLE_INVALID;
   std::lock_guard lock(inst->mutex);
+  // Only the handle goes (spec: the action's resources still make its action spaces locatable and
+  // take part in xrSyncActions); its set frees it.
   std::lock_guard rlock(registry().mutex);
-  auto& v = a->set->actions;
-  v.erase(std::remove(v.begin(), v.end(), a), v.end());
-  for (auto& [profile, bindings] : inst->suggested)
-    std::erase_if(bindings, [&](const auto& b) { return b.first == a; });
-  for (Session* s : inst->sessions) s->actionStates.erase(a);
   inst->actions.erase(a);
-  delete a;
   return XR_SUCCESS;
 }
 EMBODY_XR_ENTRY(DestroyAction)
@@ -258,7 +255,7 @@ XrResult XRAPI_CALL SuggestInteractionProfileBindings(XrInstance instance,
     return XR_ERROR_PATH_INVALID;
   const ProfileInfo* profile = findProfile(inst->pathString(sb->interactionProfile));
   if (!profile) return XR_ERROR_PATH_UNSUPPORTED;
-  std::vector<std::pair<Action*, XrPath>> bindings;
+  std::vector<std::pair<ActionRef, XrPath>> bindings;
   for (uint32_t i = 0; i < sb->countSuggestedBindings; ++i) {
     const auto& b = sb->suggestedBindings[i];
     Action* a = reinterpret_cast<Action*>(b.action);
@@ -269,7 +266,7 @@ XrResult XRAPI_CALL SuggestInteractionProfileBindings(XrInstance instance,
     std::string comp;
     if (!splitBinding(inst->pathString(b.binding), hand, comp) || !bindingSupported(*profile, hand, comp))
       return XR_ERROR_PATH_UNSUPPORTED;
-    bindings.emplace_back(a, b.binding);
+    bindings.emplace_back(actionRef(a), b.binding);
   }
   inst->suggested[sb->interactionProfile] = std::move(bindings);  // replaces earlier suggestions
   return XR_SUCCESS;
@@ -289,10 +286,11 @@ XrResult XRAPI_CALL AttachSessionActionSets(XrSession session, const XrSessionAc
     if (!inst->actionSets.count(reinterpret_cast<ActionSet*>(info->actionSets[i])))
       return XR_ERROR_HANDLE_INVALID;
   for (uint32_t i = 0; i < info->countActionSets; ++i) {
-    auto* set = reinterpret_cast<ActionSet*>(info->actionSets[i]);
+    const std::shared_ptr<ActionSet>& set =
+        inst->actionSets[reinterpret_cast<ActionSet*>(info->actionSets[i])];
     set->attached = true;
     s->attachedSets.push_back(set);
-    for (Action* a : set->actions) s->actionStates[a] = {};
+    for (const auto& a : set->actions) s->actionStates[a.get()] = {};
   }
   s->actionSetsAttached = true;
   // Pick the emulated controller.
@@ -356,7 +354,8 @@ XrResult XRAPI_CALL SyncActions(XrSession session, const XrActionsSyncInfo* info
   for (uint32_t i = 0; i < info->countActiveActionSets; ++i) {
     auto* set = reinterpret_cast<ActionSet*>(info->activeActionSets[i].actionSet);
     if (!inst->actionSets.count(set)) return XR_ERROR_HANDLE_INVALID;
-    if (std::find(s->attachedSets.begin(), s->attachedSets.end(), set) == s->attachedSets.end())
+    if (std::none_of(s->attachedSets.begin(), s->attachedSets.end(),
+                     [&](const auto& attached) { return attached.get() == set; }))
       return XR_ERROR_ACTIONSET_NOT_ATTACHED;
     const XrPath sub = info->activeActionSets[i].subactionPath;
     if (sub != XR_NULL_PATH && (sub >= inst->paths.size() || !isTopLevelUserPath(inst->pathString(sub))))
@@ -511,7 +510,7 @@ XrResult XRAPI_CALL CreateActionSpace(XrSession session, const XrActionSpaceCrea
   auto* sp = new Space;
   sp->session = s;
   sp->kind = SpaceKind::Action;
-  sp->action = a;
+  sp->action = actionRef(a);
   sp->subaction = ci->subactionPath;
   sp->offset = offset;
   {
@@ -538,7 +537,7 @@ XrResult XRAPI_CALL EnumerateBoundSourcesForAction(XrSession session,
   std::vector<XrPath> list;
   if (auto it = inst->suggested.find(s->currentProfile); it != inst->suggested.end())
     for (const auto& [act, path] : it->second)
-      if (act == a) list.push_back(path);
+      if (act.get() == a) list.push_back(path);
   return twoCall(capacity, count, sources, list.size(), [&](XrPath* p, size_t i) { *p = list[i]; });
 }
 EMBODY_XR_ENTRY(EnumerateBoundSourcesForAction)
@@ -696,7 +695,7 @@ int handIndexForPath(Instance& inst, XrPath subaction) {
 
 Located actionPoseInStage(Session& s, const Space& space, const BodySample& body) {
   Instance& inst = *s.instance;
-  auto it = s.actionStates.find(space.action);
+  auto it = s.actionStates.find(space.action.get());
   if (it == s.actionStates.end()) return {};
   int hand = handIndexForPath(inst, space.subaction);
   if (space.subaction == XR_NULL_PATH)  // no subaction path: the first hand the action is bound to
@@ -704,15 +703,16 @@ Located actionPoseInStage(Session& s, const Space& space, const BodySample& body
   if (hand < 0 || !it->second[hand].active) return {};
   const TrackedPose& tp = hand == 0 ? body.left : body.right;
   if (!tp.valid) return {};  // tracking lost: no location flags
-  const auto comps = boundComponents(inst, s, space.action, hand);
+  const auto comps = boundComponents(inst, s, space.action.get(), hand);
   const bool aim = !comps.empty() && comps.front().rfind("input/aim", 0) == 0;
   return {aim ? aimFromGrip(tp.pose) : tp.pose, true, true};
 }
 
 void forgetSessionActions(Session& s) {
-  for (ActionSet* set : s.attachedSets) set->attached = false;
-  s.attachedSets.clear();
+  // Drops the session's references: a set whose handle is already destroyed may go with it. The
+  // sets stay `attached` (the spec keeps a set immutable once it was attached, session or not).
   s.actionStates.clear();
+  s.attachedSets.clear();
 }
 
 }  // namespace embody::xrrt

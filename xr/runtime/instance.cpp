@@ -110,8 +110,8 @@ XrResult XRAPI_CALL DestroyInstance(XrInstance instance) {
     releaseSessionVulkan(*s);
     delete s;
   }
-  for (Action* a : inst->actions) delete a;
-  for (ActionSet* a : inst->actionSets) delete a;
+  // Action sets (and their actions) go with the instance's last references to them: its live
+  // handles and suggested bindings, released with `inst` below.
   {
     std::lock_guard lock(registry().mutex);
     registry().instances.erase(inst);

@@ -94,20 +94,33 @@ constexpr XrSystemId kSystemId = 1;
 struct Instance;
 struct Session;
 
-struct ActionSet {
+// Action sets and actions outlive their handles. xrDestroyActionSet and xrDestroyAction only take
+// the application's access away: the spec forbids freeing what other valid handles still use
+// (the sessions the set is attached to, action spaces, suggested bindings), and applications do
+// destroy action sets before their session. So a set is shared: the instance holds it while its
+// handle lives, and every session it is attached to, every action space of one of its actions
+// and every suggested binding naming one holds it too. A set owns its actions; an ActionRef keeps
+// an action alive by sharing its set.
+struct Action;
+struct ActionSet : std::enable_shared_from_this<ActionSet> {
   Instance* instance = nullptr;
   std::string name, localizedName;
   uint32_t priority = 0;
-  bool attached = false;
-  std::vector<struct Action*> actions;
+  bool attached = false;  // included in an xrAttachSessionActionSets call: immutable for good
+  std::vector<std::unique_ptr<Action>> actions;  // every action created in it, handle live or not
 };
 
 struct Action {
-  ActionSet* set = nullptr;
+  ActionSet* set = nullptr;  // the set that owns this action
   std::string name, localizedName;
   XrActionType type = XR_ACTION_TYPE_BOOLEAN_INPUT;
   std::vector<XrPath> subactionPaths;
 };
+
+using ActionRef = std::shared_ptr<const Action>;
+inline ActionRef actionRef(const Action* a) {
+  return ActionRef(a->set->shared_from_this(), a);  // aliasing: shares the owning set's lifetime
+}
 
 // Per-action state kept for each hand (0 left, 1 right) after xrSyncActions.
 struct ActionStateData {
@@ -123,7 +136,7 @@ struct Space {
   Session* session = nullptr;
   SpaceKind kind = SpaceKind::Reference;
   XrReferenceSpaceType refType = XR_REFERENCE_SPACE_TYPE_STAGE;
-  Action* action = nullptr;
+  ActionRef action;  // action spaces: kept alive past xrDestroyAction(Set)
   XrPath subaction = XR_NULL_PATH;
   Pose offset;
 };
@@ -168,9 +181,8 @@ struct Session {
   XrTime lastPredicted = 0;
   // Actions.
   bool actionSetsAttached = false;
-  std::vector<ActionSet*> attachedSets;
-  std::set<ActionSet*> activeSets;  // from the last xrSyncActions
-  std::map<Action*, std::array<ActionStateData, 2>> actionStates;
+  std::vector<std::shared_ptr<ActionSet>> attachedSets;  // alive while attached, handles or not
+  std::map<const Action*, std::array<ActionStateData, 2>> actionStates;  // actions of attachedSets
   XrPath currentProfile = XR_NULL_PATH;
   std::set<Space*> spaces;
   std::set<Swapchain*> swapchains;
@@ -195,10 +207,12 @@ struct Instance {
   bool graphicsRequirementsQueried = false;
   std::vector<std::string> paths{""};  // XrPath n -> paths[n]; 0 is XR_NULL_PATH
   std::map<std::string, XrPath> pathIds;
-  std::set<ActionSet*> actionSets;
+  // Live handles (what the handle lookups accept). The instance's reference to a set goes with its
+  // handle; the set itself lives on while anything else uses it (ActionSet above).
+  std::map<ActionSet*, std::shared_ptr<ActionSet>> actionSets;
   std::set<Action*> actions;
   // Suggested bindings per interaction profile: (action, binding path) pairs.
-  std::map<XrPath, std::vector<std::pair<Action*, XrPath>>> suggested;
+  std::map<XrPath, std::vector<std::pair<ActionRef, XrPath>>> suggested;
   std::set<Session*> sessions;
   std::deque<Event> events;
   PoseProvider poses;
