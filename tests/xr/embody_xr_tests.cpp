@@ -10,6 +10,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "engine/image_io.h"
 #include "xr_test_support.h"
@@ -184,6 +185,36 @@ TEST_CASE(
   CHECK(countNear(img, {img.width / 2.0f, 40.0f}, 16, isAvatar) == 0);
   CHECK(countNear(img, {30.0f, 200.0f}, 16, isAvatar) == 0);
   CHECK(countNear(img, {img.width / 2.0f, 235.0f}, 16, isAvatar) == 0);  // floor between the forearms
+}
+
+TEST_CASE(
+    "embody xr without capture (as a user runs it) exits 0 after any number of frames, FOCUSED, no messages",
+    "[xr]") {
+  // The other end-to-end tests set EMBODY_XR_CAPTURE. Without it, `embody xr --validate` used to
+  // die of SIGSEGV at shutdown: xrDestroySession wrote one byte into the action set the
+  // application had destroyed just before (legal OpenXR order), and by then the freed block
+  // belonged to the Vulkan validation layer. Which runs crashed depended only on the heap layout:
+  // here every frame count that is a multiple of 3 (3, 6, ... 120), every time; capture (and the
+  // mirror) shifted the layout and hid it. Consecutive frame counts keep the test from depending
+  // on one allocation pattern; the runtime test "action sets and actions outlive their handles"
+  // checks the rule itself.
+  for (const int frames : {3, 4, 5, 30}) {
+    const XrRun r = runEmbodyXr("no_capture_" + std::to_string(frames), {"--frames", std::to_string(frames)},
+                                {{"EMBODY_XR_CAPTURE", ""}});  // empty: the runtime captures nothing
+    INFO("--frames " << frames << "\n"
+                     << r.process.output.substr(
+                            r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
+    REQUIRE_FALSE(r.process.timedOut);
+    CHECK(r.process.termSignal == 0);
+    REQUIRE(r.process.exitCode == 0);
+    REQUIRE(r.stats.is_object());
+    requireNoValidation(r);
+    CHECK(r.stats["reached_focused"] == true);
+    CHECK(r.stats["ended_cleanly"] == true);
+    CHECK(r.stats["frames_submitted"] == frames);
+    CHECK(r.stats["states"].back() == "EXITING");
+    CHECK_FALSE(fs::exists(r.capture));  // nothing was captured
+  }
 }
 
 TEST_CASE("embody xr --body rest leaves the arms hanging: the controllers' neighbourhood shows no avatar", "[xr]") {

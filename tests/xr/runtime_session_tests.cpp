@@ -192,6 +192,113 @@ TEST_CASE("grip and aim action spaces follow the trace, and a lost hand clears i
   CHECK(left.locationFlags == 0);
 }
 
+TEST_CASE("action sets and actions outlive their handles: attached sessions and action spaces keep working",
+          "[xr]") {
+  // OpenXR lets an application destroy action sets before its session (embody xr does); the
+  // runtime must not free what the session or an action space still uses. The runtime used to,
+  // and xrDestroySession then wrote into the freed set (a crash at the end of `embody xr`). A
+  // sanitizer build (`make sanitize`) also checks the memory accesses here.
+  HeadlessSession h({{"EMBODY_XR_POSES", staticTrace("action_lifetime")}});
+  const XrPath right = h.path("/user/hand/right");
+  auto makeSet = [&](const char* name) {
+    XrActionSetCreateInfo si{XR_TYPE_ACTION_SET_CREATE_INFO};
+    std::strcpy(si.actionSetName, name);
+    std::strcpy(si.localizedActionSetName, name);
+    XrActionSet set = XR_NULL_HANDLE;
+    REQUIRE(xrCreateActionSet(h.instance, &si, &set) == XR_SUCCESS);
+    return set;
+  };
+  auto makeAction = [&](XrActionSet set, const char* name, XrActionType type, XrAction* out) {
+    XrActionCreateInfo ai{XR_TYPE_ACTION_CREATE_INFO};
+    std::strcpy(ai.actionName, name);
+    std::strcpy(ai.localizedActionName, name);
+    ai.actionType = type;
+    ai.countSubactionPaths = 1;
+    ai.subactionPaths = &right;
+    return xrCreateAction(set, &ai, out);
+  };
+  const XrActionSet hands = makeSet("hands"), menu = makeSet("menu");
+  XrAction grip = XR_NULL_HANDLE, trigger = XR_NULL_HANDLE, select = XR_NULL_HANDLE;
+  REQUIRE(makeAction(hands, "grip", XR_ACTION_TYPE_POSE_INPUT, &grip) == XR_SUCCESS);
+  REQUIRE(makeAction(hands, "trigger", XR_ACTION_TYPE_FLOAT_INPUT, &trigger) == XR_SUCCESS);
+  REQUIRE(makeAction(menu, "select", XR_ACTION_TYPE_FLOAT_INPUT, &select) == XR_SUCCESS);
+  std::vector<XrActionSuggestedBinding> b = {{grip, h.path("/user/hand/right/input/grip/pose")},
+                                             {trigger, h.path("/user/hand/right/input/trigger/value")},
+                                             {select, h.path("/user/hand/right/input/trigger/value")}};
+  XrInteractionProfileSuggestedBinding sb{XR_TYPE_INTERACTION_PROFILE_SUGGESTED_BINDING};
+  sb.interactionProfile = h.path("/interaction_profiles/oculus/touch_controller");
+  sb.countSuggestedBindings = uint32_t(b.size());
+  sb.suggestedBindings = b.data();
+  REQUIRE(xrSuggestInteractionProfileBindings(h.instance, &sb) == XR_SUCCESS);
+  XrActionSpaceCreateInfo ai{XR_TYPE_ACTION_SPACE_CREATE_INFO};
+  ai.poseInActionSpace.orientation.w = 1.0f;
+  ai.action = grip;
+  ai.subactionPath = right;
+  XrSpace gripSpace = XR_NULL_HANDLE;
+  REQUIRE(xrCreateActionSpace(h.session, &ai, &gripSpace) == XR_SUCCESS);
+  const XrActionSet both[2] = {hands, menu};
+  XrSessionActionSetsAttachInfo at{XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO};
+  at.countActionSets = 2;
+  at.actionSets = both;
+  REQUIRE(xrAttachSessionActionSets(h.session, &at) == XR_SUCCESS);
+  h.runUntilFocused();
+  const XrActiveActionSet active[2] = {{hands, XR_NULL_PATH}, {menu, XR_NULL_PATH}};
+  XrActionsSyncInfo sync{XR_TYPE_ACTIONS_SYNC_INFO};
+  sync.countActiveActionSets = 2;
+  sync.activeActionSets = active;
+  REQUIRE(xrSyncActions(h.session, &sync) == XR_SUCCESS);
+
+  auto gripTracked = [&] {
+    XrSpaceLocation loc{XR_TYPE_SPACE_LOCATION};
+    REQUIRE(xrLocateSpace(gripSpace, h.stage, h.lastDisplayTime, &loc) == XR_SUCCESS);
+    return (loc.locationFlags & XR_SPACE_LOCATION_POSITION_TRACKED_BIT) != 0 &&
+           glm::distance(vec(loc.pose.position), glm::vec3(0.2f, 1.1f, -0.3f)) < 1e-4f;
+  };
+  CHECK(gripTracked());
+
+  // xrDestroyAction takes the handle away, nothing else: the action space still locates.
+  REQUIRE(xrDestroyAction(grip) == XR_SUCCESS);
+  CHECK(xrDestroyAction(grip) == XR_ERROR_HANDLE_INVALID);
+  CHECK(gripTracked());
+  REQUIRE(xrSyncActions(h.session, &sync) == XR_SUCCESS);
+  XrActionStateGetInfo gi{XR_TYPE_ACTION_STATE_GET_INFO};
+  gi.action = trigger;
+  XrActionStateFloat fs{XR_TYPE_ACTION_STATE_FLOAT};
+  REQUIRE(xrGetActionStateFloat(h.session, &gi, &fs) == XR_SUCCESS);
+  CHECK(fs.currentState == Approx(0.75f));
+
+  // xrDestroyActionSet: its handles are gone, the session and the action space still use it.
+  REQUIRE(xrDestroyActionSet(hands) == XR_SUCCESS);
+  CHECK(xrGetActionStateFloat(h.session, &gi, &fs) == XR_ERROR_HANDLE_INVALID);
+  CHECK(xrSyncActions(h.session, &sync) == XR_ERROR_HANDLE_INVALID);
+  CHECK(gripTracked());
+  // Syncing the other set: a set left out of xrSyncActions is inactive, so the grip space now
+  // locates without flags (and without touching freed memory).
+  sync.countActiveActionSets = 1;
+  sync.activeActionSets = &active[1];
+  CHECK(xrSyncActions(h.session, &sync) == XR_SUCCESS);
+  gi.action = select;
+  REQUIRE(xrGetActionStateFloat(h.session, &gi, &fs) == XR_SUCCESS);
+  CHECK(fs.isActive == XR_TRUE);
+  CHECK(fs.currentState == Approx(0.75f));
+  XrSpaceLocation inactive{XR_TYPE_SPACE_LOCATION};
+  REQUIRE(xrLocateSpace(gripSpace, h.stage, h.lastDisplayTime, &inactive) == XR_SUCCESS);
+  CHECK(inactive.locationFlags == 0);
+  // The name is free again; the new set is a different one (not attached, so it takes actions).
+  const XrActionSet again = makeSet("hands");
+  XrAction regrip = XR_NULL_HANDLE;
+  CHECK(makeAction(again, "grip", XR_ACTION_TYPE_POSE_INPUT, &regrip) == XR_SUCCESS);
+  REQUIRE(xrDestroySpace(gripSpace) == XR_SUCCESS);  // the last user of the destroyed set
+
+  // The session goes before the remaining set; an attached set stays immutable afterwards.
+  REQUIRE(xrDestroySession(h.session) == XR_SUCCESS);
+  h.session = XR_NULL_HANDLE;
+  XrAction late = XR_NULL_HANDLE;
+  CHECK(makeAction(menu, "late", XR_ACTION_TYPE_FLOAT_INPUT, &late) == XR_ERROR_ACTIONSETS_ALREADY_ATTACHED);
+  CHECK(xrDestroyActionSet(menu) == XR_SUCCESS);
+  CHECK(xrDestroyActionSet(again) == XR_SUCCESS);
+}
+
 TEST_CASE("XR_EXT_hand_tracking gives 26 joints of a plausible hand at the controller, none when lost",
           "[xr]") {
   HeadlessSession h({{"EMBODY_XR_POSES", staticTrace("hands")}});

@@ -105,6 +105,7 @@ ProcessResult runProcess(const std::vector<std::string>& argv, const std::map<st
   close(out[0]);
   close(in[1]);  // stdin stays open until the child is gone
   if (!r.timedOut && WIFEXITED(status)) r.exitCode = WEXITSTATUS(status);
+  if (!r.timedOut && WIFSIGNALED(status)) r.termSignal = WTERMSIG(status);
   return r;
 }
 

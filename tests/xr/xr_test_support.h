@@ -14,6 +14,7 @@ std::string helloXr();          // Debian's hello_xr, "" when not installed
 
 struct ProcessResult {
   int exitCode = -1;  // -1 when killed or not started
+  int termSignal = 0;  // the signal that ended the child (SIGSEGV = 11), 0 when it exited
   bool timedOut = false;
   std::string output;  // stdout and stderr interleaved
 };
