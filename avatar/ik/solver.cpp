@@ -131,7 +131,7 @@ Workspace::Workspace(const Model& model)
   level_eig.reserve(levels);
   level_llt.reserve(levels);
   level_llt2.reserve(levels);
-  for (auto* v : {&level_j, &level_gram, &level_jw, &level_shifted}) v->reserve(levels);
+  for (auto* v : {&level_j, &level_gram, &level_jw, &level_shifted, &level_inverse}) v->reserve(levels);
   for (auto* v : {&level_res, &level_coef, &level_tmp}) v->reserve(levels);
   for (const Model::Level& level : model.levels) {
     const int m = level.rows;
@@ -146,11 +146,25 @@ Workspace::Workspace(const Model& model)
     const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(m, m);
     level_eig.emplace_back(m).compute(identity);
     level_shifted.emplace_back(Eigen::MatrixXd::Zero(m, m));
+    level_inverse.emplace_back(Eigen::MatrixXd::Zero(m, m));
     level_llt.emplace_back(m).compute(identity);
     level_llt2.emplace_back(m).compute(identity);
     level_y.emplace_back(Eigen::VectorXd::Zero(m));
     level_svd.emplace_back(m, n, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    max_level_rows = std::max(max_level_rows, m);
+    std::vector<char> used(n, 0);
+    for (TaskId t : level.tasks)
+      for (int dof : task_dofs[t]) used[dof] = 1;
+    std::vector<int>& support = level_support.emplace_back();
+    for (int i = 0; i < n; ++i)
+      if (used[i]) support.push_back(i);
   }
+  gathered_j.setZero(max_level_rows, n);
+  gathered_w.setZero(n, n);
+  level_solve.setZero(max_level_rows, n);
+  level_cols.setZero(n, max_level_rows);
+  small_a.setZero(n);
+  small_b.setZero(n);
 
   ineq_begin.push_back(0);
   for (const InequalityRow& row : model.inequalities) {
@@ -548,26 +562,31 @@ bool levelActive(const Model::Level& level, const Workspace& w) {
 constexpr int kInverseIterations = 8;
 
 // Triangular solves with the Cholesky factor (lower, column-major) for the small m x m systems of
-// one level: plain loops beat Eigen's blocked kernels at these sizes (m <= ~16).
-void solveLower(const Eigen::MatrixXd& l, double* x) {
+// one level: plain loops beat Eigen's blocked kernels at these sizes (m <= ~16). The diagonal's
+// reciprocals are taken once per factor: a division costs as much as a dozen multiply-adds and
+// sits on the solve's critical path.
+void invertDiagonal(const Eigen::MatrixXd& l, Eigen::VectorXd& inv) {
+  inv.head(l.rows()) = l.diagonal().cwiseInverse();
+}
+void solveLower(const Eigen::MatrixXd& l, const double* invDiag, double* x) {
   const Eigen::Index m = l.rows();
   for (Eigen::Index j = 0; j < m; ++j) {
-    const double xj = (x[j] /= l(j, j));
+    const double xj = (x[j] *= invDiag[j]);
     for (Eigen::Index i = j + 1; i < m; ++i) x[i] -= l(i, j) * xj;
   }
 }
-void solveLowerTransposed(const Eigen::MatrixXd& l, double* x) {
+void solveLowerTransposed(const Eigen::MatrixXd& l, const double* invDiag, double* x) {
   const Eigen::Index m = l.rows();
   for (Eigen::Index j = m; j-- > 0;) {
     double v = x[j];
     for (Eigen::Index i = j + 1; i < m; ++i) v -= l(i, j) * x[i];
-    x[j] = v / l(j, j);
+    x[j] = v * invDiag[j];
   }
 }
 // x := G⁻¹ x with G = L Lᵀ.
-void choleskySolve(const Eigen::MatrixXd& l, double* x) {
-  solveLower(l, x);
-  solveLowerTransposed(l, x);
+void choleskySolve(const Eigen::MatrixXd& l, const double* invDiag, double* x) {
+  solveLower(l, invDiag, x);
+  solveLowerTransposed(l, invDiag, x);
 }
 
 struct LevelDamping {
@@ -603,10 +622,13 @@ LevelDamping levelDamping(const Eigen::MatrixXd& gram, Workspace& w, size_t k, c
   for (Eigen::Index i = 0; i < m; ++i) x(i) = 1.0 + 0.1 * static_cast<double>(i);  // deterministic start
   x.normalize();
   double mu = 0.0;
-  const Eigen::MatrixXd& l = gramLlt.matrixLLT();
+  // G⁻¹ is formed once (blocked triangular solves, vectorised across columns) so that each step
+  // is one matrix-vector product rather than two division- and latency-bound triangular solves.
+  Eigen::MatrixXd& inverse = w.level_inverse[k];
+  inverse.setIdentity();
+  gramLlt.solveInPlace(inverse);
   for (int it = 0; it < kInverseIterations; ++it) {
-    z = x;
-    choleskySolve(l, z.data());
+    z.noalias() = inverse * x;
     mu = x.dot(z);
     const double zn = z.norm();
     if (!(zn > 0) || !std::isfinite(zn)) break;
@@ -623,32 +645,61 @@ double levelStepScale(double norm, const SolveOptions& o) {
   return o.max_level_step / norm;
 }
 
+// The fast pass works in reduced coordinates z (Δq = Δq0 + N Δz, or a diagonal mask when only
+// single-dof rows are active) and never forms a projected Jacobian Ĵ = J̃ (I - W Wᵀ) explicitly:
+// with W the orthonormal rows the higher levels took (r x s) and J̃W (m x s),
+//   G  = Ĵ Ĵᵀ   = J̃ J̃ᵀ - (J̃W)(J̃W)ᵀ
+//   Ĵᵀ y       = J̃ᵀ y - W (J̃W)ᵀ y
+//   Ĵᵀ L⁻ᵀ     = J̃ᵀ L⁻ᵀ - W (L⁻¹ J̃W)ᵀ      (the level's new orthonormal rows, G = L Lᵀ)
+// so a level costs O(m p s) instead of O(m r s), where p is the number of columns its tasks
+// recruit (a foot touches 20 of the humanoid's 61 dofs), and the last active level skips the
+// projector update altogether. Products with J̃ run on the level's support columns only.
 void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
   w.dq = w.dq0;
-  const int r = w.mask_mode ? w.n : w.null_dim;
-  if (w.mask_mode)
-    w.reduced_jacobian.noalias() = w.jacobian * w.mask.asDiagonal();
-  else
-    w.reduced_jacobian.leftCols(r).noalias() = w.jacobian * w.nullspace.leftCols(r);
+  const bool maskMode = w.mask_mode;
+  const int r = maskMode ? w.n : w.null_dim;
+  // Mask mode reads J̃ = J diag(mask) straight from J while gathering each level's columns.
+  if (!maskMode) w.reduced_jacobian.leftCols(r).noalias() = w.jacobian * w.nullspace.leftCols(r);
+  int lastActive = -1;
+  for (size_t k = 0; k < model.levels.size(); ++k)
+    if (levelActive(model.levels[k], w)) lastActive = static_cast<int>(k);
   int s = 0;  // columns of W (orthonormal rows of the higher levels, reduced coordinates)
   for (size_t k = 0; k < model.levels.size(); ++k) {
     const Model::Level& level = model.levels[k];
     if (!levelActive(level, w) || s >= r) continue;
     const int m = level.rows;
-    Eigen::MatrixXd& jh = w.level_j[k];
-    auto jhr = jh.leftCols(r);
+    const std::vector<int>& support = w.level_support[k];
+    const bool gather = maskMode;
+    const int p = gather ? static_cast<int>(support.size()) : r;
+
+    // J̃ and W on the level's support columns.
+    auto js = w.gathered_j.topLeftCorner(m, p);
+    if (gather)
+      for (int i = 0; i < p; ++i)
+        js.col(i) = w.mask(support[i]) * w.jacobian.col(support[i]).segment(level.first_row, m);
+    else
+      js = w.reduced_jacobian.block(level.first_row, 0, m, r);
+    const auto wAll = w.row_space.topLeftCorner(r, s);
+    auto jw = w.level_jw[k].leftCols(s);
+    if (s > 0) {
+      if (gather) {
+        auto ws = w.gathered_w.topLeftCorner(p, s);
+        for (int c = 0; c < s; ++c)
+          for (int i = 0; i < p; ++i) ws(i, c) = w.row_space(support[i], c);
+        jw.noalias() = js * ws;
+      } else {
+        jw.noalias() = js * wAll;
+      }
+    }
+
     Eigen::VectorXd& res = w.level_res[k];
     res = w.error.segment(level.first_row, m);
     res.noalias() -= w.jacobian.middleRows(level.first_row, m) * w.dq;  // compensated error
-    jhr = w.reduced_jacobian.block(level.first_row, 0, m, r);
-    if (s > 0) {  // Ĵ = J N (I - W Wᵀ): the part of the level the higher levels left free
-      auto jw = w.level_jw[k].leftCols(s);
-      jw.noalias() = jhr * w.row_space.topLeftCorner(r, s);
-      jhr.noalias() -= jw * w.row_space.topLeftCorner(r, s).transpose();
-    }
+
     Eigen::MatrixXd& gram = w.level_gram[k];  // lower triangle only: LLT and eig read just that
     gram.setZero();
-    gram.selfadjointView<Eigen::Lower>().rankUpdate(jhr);
+    gram.selfadjointView<Eigen::Lower>().rankUpdate(js);
+    if (s > 0) gram.selfadjointView<Eigen::Lower>().rankUpdate(jw, -1.0);
     const LevelDamping d = levelDamping(gram, w, k, o);
 
     // Damped step: Δz = Ĵᵀ (G + λ² I)⁻¹ res.
@@ -659,55 +710,99 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
       damped = gram;
       damped.diagonal().array() += d.lambda2;
       w.level_llt2[k].compute(damped);
-      choleskySolve(w.level_llt2[k].matrixLLT(), y.data());
-    } else {
-      choleskySolve(w.level_llt[k].matrixLLT(), y.data());  // λ = 0 only when G is positive definite
+      invertDiagonal(w.level_llt2[k].matrixLLT(), w.small_a);
+      choleskySolve(w.level_llt2[k].matrixLLT(), w.small_a.data(), y.data());
+    } else {  // λ = 0 only when G is positive definite
+      invertDiagonal(w.level_llt[k].matrixLLT(), w.small_a);
+      choleskySolve(w.level_llt[k].matrixLLT(), w.small_a.data(), y.data());
     }
     auto dz = w.tmp_n.head(r);
-    dz.noalias() = jhr.transpose() * y;
+    if (gather) {
+      auto jty = w.small_a.head(p);
+      jty.noalias() = js.transpose() * y;
+      dz.setZero();
+      for (int i = 0; i < p; ++i) dz(support[i]) = jty(i);
+    } else {
+      dz.noalias() = js.transpose() * y;
+    }
+    if (s > 0) {
+      auto wy = w.small_b.head(s);
+      wy.noalias() = jw.transpose() * y;
+      dz.noalias() -= wAll * wy;
+    }
     if (const double cap = levelStepScale(dz.norm(), o); cap < 1.0) dz *= cap;
-    if (w.mask_mode)
+    if (maskMode)
       w.dq += dz;
     else
       w.dq.noalias() += w.nullspace.leftCols(r) * dz;
 
+    if (static_cast<int>(k) == lastActive) break;  // nothing below needs this level's rows
+
     // Projector update (undamped, rank-thresholded): append an orthonormal basis of Ĵ's rows to
     // W. Full rank: with G = L Lᵀ, the rows of L⁻¹ Ĵ are that basis (no eigen-decomposition).
+    int added = 0;
+    double smallest = 0.0;
     if (d.gram_pd && d.sigma_min > o.rank_tolerance && m <= r - s) {
-      auto mt = w.level_jw[k].leftCols(r);
-      mt = jhr;
-      w.level_llt[k].matrixL().solveInPlace(mt);
-      w.row_space.block(0, s, r, m) = mt.transpose();
-      s += m;
-      continue;
-    }
-    // Rank-deficient level: eigen-decompose G (σ² are its eigenvalues), keep σ > tolerance.
-    auto& eig = w.level_eig[k];
-    eig.compute(gram);
-    const auto& values = eig.eigenvalues();
-    const auto& vectors = eig.eigenvectors();
-    int rank = 0;
-    for (int i = m; i-- > 0 && rank < r - s;) {
-      if (!(std::sqrt(std::max(values(i), 0.0)) > o.rank_tolerance)) break;  // eigenvalues ascend
-      ++rank;
-    }
-    if (rank > 0) {
-      auto v = w.row_space.block(0, s, r, rank);
-      v.noalias() = jhr.transpose() * vectors.rightCols(rank);
-      for (int c = 0; c < rank; ++c) {
-        const double sigma = std::sqrt(values(m - rank + c));
-        auto col = v.col(c);
-        col /= sigma;
-        // Analytically orthogonal to W; round-off grows like eps/σ, so re-orthogonalise small σ.
-        if (sigma < 1e-3 && s > 0) {
-          auto proj = w.tmp_n2.head(s);
-          proj.noalias() = w.row_space.topLeftCorner(r, s).transpose() * col;
-          col.noalias() -= w.row_space.topLeftCorner(r, s) * proj;
-          col.normalize();
-        }
+      const auto l = w.level_llt[k].matrixL();
+      auto u = w.row_space.block(0, s, r, m);
+      auto c = w.level_solve.topLeftCorner(m, p);
+      c = js;
+      l.solveInPlace(c);
+      if (gather) {
+        u.setZero();
+        for (int i = 0; i < p; ++i) u.row(support[i]) = c.col(i).transpose();
+      } else {
+        u = c.transpose();
       }
-      s += rank;
+      if (s > 0) {
+        auto dd = w.level_solve.topLeftCorner(m, s);
+        dd = jw;
+        l.solveInPlace(dd);
+        u.noalias() -= wAll * dd.transpose();
+      }
+      added = m;
+      smallest = d.sigma_min;
+    } else {
+      // Rank-deficient level: eigen-decompose G (σ² are its eigenvalues), keep σ > tolerance.
+      auto& eig = w.level_eig[k];
+      eig.compute(gram);
+      const auto& values = eig.eigenvalues();
+      const auto& vectors = eig.eigenvectors();
+      for (int i = m; i-- > 0 && added < r - s;) {
+        if (!(std::sqrt(std::max(values(i), 0.0)) > o.rank_tolerance)) break;  // eigenvalues ascend
+        ++added;
+      }
+      if (added == 0) continue;
+      auto v = w.row_space.block(0, s, r, added);
+      const auto vecs = vectors.rightCols(added);
+      if (gather) {
+        auto jv = w.level_cols.topLeftCorner(p, added);
+        jv.noalias() = js.transpose() * vecs;
+        v.setZero();
+        for (int i = 0; i < p; ++i) v.row(support[i]) = jv.row(i);
+      } else {
+        v.noalias() = js.transpose() * vecs;
+      }
+      if (s > 0) {
+        auto wv = w.level_cols.topLeftCorner(s, added);
+        wv.noalias() = jw.transpose() * vecs;
+        v.noalias() -= wAll * wv;
+      }
+      for (int c = 0; c < added; ++c) v.col(c) /= std::sqrt(values(m - added + c));
+      smallest = std::sqrt(values(m - added));
     }
+    // The new rows are analytically orthogonal to W; round-off grows like eps |J̃| / σ, so
+    // re-orthogonalise when a kept singular value is small.
+    if (smallest < 1e-3 && s > 0) {
+      for (int c = 0; c < added; ++c) {
+        auto col = w.row_space.col(s + c).head(r);
+        auto proj = w.small_b.head(s + c);
+        proj.noalias() = w.row_space.topLeftCorner(r, s + c).transpose() * col;
+        col.noalias() -= w.row_space.topLeftCorner(r, s + c) * proj;
+        col.normalize();
+      }
+    }
+    s += added;
   }
 }
 

@@ -84,9 +84,19 @@ struct Workspace {
   std::vector<Eigen::VectorXd> level_res, level_coef, level_tmp;
   std::vector<Eigen::MatrixXd> level_jw;     // m_k x n (J W)
   std::vector<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>> level_eig;
+  std::vector<Eigen::MatrixXd> level_inverse;  // G⁻¹ (damping estimate)
   std::vector<Eigen::MatrixXd> level_shifted;  // G - eps² I
   std::vector<Eigen::LLT<Eigen::MatrixXd>> level_llt, level_llt2;  // G; G ± scalar shifts
   std::vector<Eigen::VectorXd> level_y;
+  // Columns a level's Jacobian can be non-zero in (its tasks' recruited dofs, sorted): in mask
+  // mode the pass works on these columns only.
+  std::vector<std::vector<int>> level_support;
+  int max_level_rows = 0;
+  Eigen::MatrixXd gathered_j;  // max_level_rows x n: J̃ of one level on its support
+  Eigen::MatrixXd gathered_w;  // n x n: W's rows on the support
+  Eigen::MatrixXd level_solve; // max_level_rows x n: L⁻¹ J̃, L⁻¹ (J̃ W)
+  Eigen::MatrixXd level_cols;  // n x max_level_rows: J̃ᵀ V (rank-deficient levels)
+  Eigen::VectorXd small_a, small_b;  // n each
 
   // Reference path scratch.
   Eigen::MatrixXd projector, projector0, eq_projector0;
