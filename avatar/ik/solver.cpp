@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "avatar/ik/expmap.h"
+#include "avatar/ik/small_cholesky.h"
 #include "avatar/ik/solver_detail.h"
 
 namespace embody::ik {
@@ -129,9 +130,8 @@ Workspace::Workspace(const Model& model)
   // has not computed anything yet reads its uninitialised flags (UBSan reports it).
   const size_t levels = model.levels.size();
   level_eig.reserve(levels);
-  level_llt.reserve(levels);
-  level_llt2.reserve(levels);
-  for (auto* v : {&level_j, &level_gram, &level_jw, &level_shifted, &level_inverse}) v->reserve(levels);
+  for (auto* v : {&level_j, &level_gram, &level_jw, &level_factor, &level_factor2, &level_inverse}) v->reserve(levels);
+  for (auto* v : {&level_factor_inv, &level_factor2_inv}) v->reserve(levels);
   for (auto* v : {&level_res, &level_coef, &level_tmp}) v->reserve(levels);
   for (const Model::Level& level : model.levels) {
     const int m = level.rows;
@@ -145,10 +145,11 @@ Workspace::Workspace(const Model& model)
     // decomposition holds an uninitialised status that copying a Data would read (UBSan).
     const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(m, m);
     level_eig.emplace_back(m).compute(identity);
-    level_shifted.emplace_back(Eigen::MatrixXd::Zero(m, m));
+    level_factor.emplace_back(Eigen::MatrixXd::Zero(m, m));
+    level_factor2.emplace_back(Eigen::MatrixXd::Zero(m, m));
+    level_factor_inv.emplace_back(Eigen::VectorXd::Zero(m));
+    level_factor2_inv.emplace_back(Eigen::VectorXd::Zero(m));
     level_inverse.emplace_back(Eigen::MatrixXd::Zero(m, m));
-    level_llt.emplace_back(m).compute(identity);
-    level_llt2.emplace_back(m).compute(identity);
     level_y.emplace_back(Eigen::VectorXd::Zero(m));
     level_svd.emplace_back(m, n, Eigen::ComputeThinU | Eigen::ComputeThinV);
     max_level_rows = std::max(max_level_rows, m);
@@ -557,37 +558,9 @@ bool levelActive(const Model::Level& level, const Workspace& w) {
 //   G - eps² I positive definite      -> σ_min > eps, λ = 0;
 //   G not positive definite           -> σ_min = 0, λ = λmax;
 //   otherwise inverse iteration on G (Cholesky) for σ_min² = λ_min(G).
-// Leaves the Cholesky factor of G in w.level_llt[k] (valid when gram_pd); sigma_min is eps when
+// Leaves the Cholesky factor of G in w.level_factor[k] (valid when gram_pd); sigma_min is eps when
 // undamped (a lower bound) and 0 when G is singular.
 constexpr int kInverseIterations = 8;
-
-// Triangular solves with the Cholesky factor (lower, column-major) for the small m x m systems of
-// one level: plain loops beat Eigen's blocked kernels at these sizes (m <= ~16). The diagonal's
-// reciprocals are taken once per factor: a division costs as much as a dozen multiply-adds and
-// sits on the solve's critical path.
-void invertDiagonal(const Eigen::MatrixXd& l, Eigen::VectorXd& inv) {
-  inv.head(l.rows()) = l.diagonal().cwiseInverse();
-}
-void solveLower(const Eigen::MatrixXd& l, const double* invDiag, double* x) {
-  const Eigen::Index m = l.rows();
-  for (Eigen::Index j = 0; j < m; ++j) {
-    const double xj = (x[j] *= invDiag[j]);
-    for (Eigen::Index i = j + 1; i < m; ++i) x[i] -= l(i, j) * xj;
-  }
-}
-void solveLowerTransposed(const Eigen::MatrixXd& l, const double* invDiag, double* x) {
-  const Eigen::Index m = l.rows();
-  for (Eigen::Index j = m; j-- > 0;) {
-    double v = x[j];
-    for (Eigen::Index i = j + 1; i < m; ++i) v -= l(i, j) * x[i];
-    x[j] = v * invDiag[j];
-  }
-}
-// x := G⁻¹ x with G = L Lᵀ.
-void choleskySolve(const Eigen::MatrixXd& l, const double* invDiag, double* x) {
-  solveLower(l, invDiag, x);
-  solveLowerTransposed(l, invDiag, x);
-}
 
 struct LevelDamping {
   double lambda2 = 0.0;
@@ -597,36 +570,33 @@ struct LevelDamping {
 
 LevelDamping levelDamping(const Eigen::MatrixXd& gram, Workspace& w, size_t k, const SolveOptions& o) {
   LevelDamping d;
-  Eigen::MatrixXd& scratch = w.level_shifted[k];
-  auto& gramLlt = w.level_llt[k];
-  auto& otherLlt = w.level_llt2[k];
-  gramLlt.compute(gram);
-  d.gram_pd = gramLlt.info() == Eigen::Success;
+  Eigen::MatrixXd& l = w.level_factor[k];
+  Eigen::VectorXd& lInv = w.level_factor_inv[k];
+  l = gram;
+  d.gram_pd = detail::choleskyInPlace(l, lInv);
   if (!d.gram_pd) {
     d.lambda2 = o.damping_max * o.damping_max;
     return d;
   }
-  scratch = gram;
-  scratch.diagonal().array() -= o.damping_eps * o.damping_eps;
-  otherLlt.compute(scratch);
-  if (otherLlt.info() == Eigen::Success) {
+  Eigen::MatrixXd& shifted = w.level_factor2[k];
+  shifted = gram;
+  shifted.diagonal().array() -= o.damping_eps * o.damping_eps;
+  if (detail::choleskyInPlace(shifted, w.level_factor2_inv[k])) {
     d.sigma_min = o.damping_eps;
     return d;
   }
   // Inverse iteration: the Rayleigh quotient of G⁻¹ converges to 1/λ_min(G) as (σ1/σ2)^(2k).
   // A fixed number of steps (no round-off-dependent stopping test) keeps both paths identical;
-  // the estimate lies between σ1 and σ2, and the rule only needs it to grow smoothly.
+  // the estimate lies between σ1 and σ2, and the rule only needs it to grow smoothly. G⁻¹ is
+  // formed once so that each step is one (vectorised) matrix-vector product.
   Eigen::VectorXd& x = w.level_coef[k];
   Eigen::VectorXd& z = w.level_tmp[k];
   const Eigen::Index m = gram.rows();
   for (Eigen::Index i = 0; i < m; ++i) x(i) = 1.0 + 0.1 * static_cast<double>(i);  // deterministic start
   x.normalize();
   double mu = 0.0;
-  // G⁻¹ is formed once (blocked triangular solves, vectorised across columns) so that each step
-  // is one matrix-vector product rather than two division- and latency-bound triangular solves.
   Eigen::MatrixXd& inverse = w.level_inverse[k];
-  inverse.setIdentity();
-  gramLlt.solveInPlace(inverse);
+  detail::choleskyInverse(l, lInv, w.level_factor2[k], inverse);
   for (int it = 0; it < kInverseIterations; ++it) {
     z.noalias() = inverse * x;
     mu = x.dot(z);
@@ -706,15 +676,17 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     Eigen::VectorXd& y = w.level_y[k];
     y = res;
     if (d.lambda2 > 0) {
-      Eigen::MatrixXd& damped = w.level_shifted[k];
+      Eigen::MatrixXd& damped = w.level_factor2[k];
       damped = gram;
       damped.diagonal().array() += d.lambda2;
-      w.level_llt2[k].compute(damped);
-      invertDiagonal(w.level_llt2[k].matrixLLT(), w.small_a);
-      choleskySolve(w.level_llt2[k].matrixLLT(), w.small_a.data(), y.data());
+      // G + λ² I with λ² > 0 is positive definite unless round-off made G indefinite by more
+      // than λ²; then this level takes no step rather than a wrong one.
+      if (detail::choleskyInPlace(damped, w.level_factor2_inv[k]))
+        detail::choleskySolve(damped, w.level_factor2_inv[k], y.data());
+      else
+        y.setZero();
     } else {  // λ = 0 only when G is positive definite
-      invertDiagonal(w.level_llt[k].matrixLLT(), w.small_a);
-      choleskySolve(w.level_llt[k].matrixLLT(), w.small_a.data(), y.data());
+      detail::choleskySolve(w.level_factor[k], w.level_factor_inv[k], y.data());
     }
     auto dz = w.tmp_n.head(r);
     if (gather) {
@@ -743,11 +715,12 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     int added = 0;
     double smallest = 0.0;
     if (d.gram_pd && d.sigma_min > o.rank_tolerance && m <= r - s) {
-      const auto l = w.level_llt[k].matrixL();
+      const Eigen::MatrixXd& l = w.level_factor[k];
+      const Eigen::VectorXd& lInv = w.level_factor_inv[k];
       auto u = w.row_space.block(0, s, r, m);
       auto c = w.level_solve.topLeftCorner(m, p);
       c = js;
-      l.solveInPlace(c);
+      detail::solveLowerColumns(l, lInv, c);
       if (gather) {
         u.setZero();
         for (int i = 0; i < p; ++i) u.row(support[i]) = c.col(i).transpose();
@@ -757,7 +730,7 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
       if (s > 0) {
         auto dd = w.level_solve.topLeftCorner(m, s);
         dd = jw;
-        l.solveInPlace(dd);
+        detail::solveLowerColumns(l, lInv, dd);
         u.noalias() -= wAll * dd.transpose();
       }
       added = m;

@@ -85,8 +85,10 @@ struct Workspace {
   std::vector<Eigen::MatrixXd> level_jw;     // m_k x n (J W)
   std::vector<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>> level_eig;
   std::vector<Eigen::MatrixXd> level_inverse;  // G⁻¹ (damping estimate)
-  std::vector<Eigen::MatrixXd> level_shifted;  // G - eps² I
-  std::vector<Eigen::LLT<Eigen::MatrixXd>> level_llt, level_llt2;  // G; G ± scalar shifts
+  // Cholesky factors (lower, small_cholesky.h) and their diagonals' reciprocals: of G, and of
+  // G shifted by -eps² (the damping test) or +λ² (the damped solve).
+  std::vector<Eigen::MatrixXd> level_factor, level_factor2;
+  std::vector<Eigen::VectorXd> level_factor_inv, level_factor2_inv;
   std::vector<Eigen::VectorXd> level_y;
   // Columns a level's Jacobian can be non-zero in (its tasks' recruited dofs, sorted): in mask
   // mode the pass works on these columns only.
