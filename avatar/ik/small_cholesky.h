@@ -68,34 +68,34 @@ inline void choleskySolve(const Eigen::MatrixXd& l, const Eigen::VectorXd& inv_d
   solveLowerTransposed(l, inv_diag, x);
 }
 
-// B := L⁻¹ B for a block B with m rows (any column count, column-major with its own stride).
+// B := B L⁻ᵀ for a block B with m columns (any row count, column-major, inner stride 1). Column
+// j of the result is (B.col(j) - Σ_{i<j} L(j, i) result.col(i)) / L(j, j): every operation is an
+// axpy down a column, so this layout vectorises where the row-wise L⁻¹ B would not. L⁻¹ B is
+// this applied to Bᵀ.
 template <typename Block>
-void solveLowerColumns(const Eigen::MatrixXd& l, const Eigen::VectorXd& inv_diag, Block&& b) {
-  for (Eigen::Index c = 0; c < b.cols(); ++c) solveLower(l, inv_diag, &b.coeffRef(0, c));
+void solveRightLowerTransposed(const Eigen::MatrixXd& l, const Eigen::VectorXd& inv_diag, Block&& b) {
+  const Eigen::Index m = l.rows();
+  const Eigen::Index rows = b.rows();
+  for (Eigen::Index j = 0; j < m; ++j) {
+    double* bj = &b.coeffRef(0, j);
+    for (Eigen::Index i = 0; i < j; ++i) {
+      const double c = l(j, i);
+      const double* bi = &b.coeffRef(0, i);
+      for (Eigen::Index r = 0; r < rows; ++r) bj[r] -= c * bi[r];
+    }
+    const double inv = inv_diag[j];
+    for (Eigen::Index r = 0; r < rows; ++r) bj[r] *= inv;
+  }
 }
 
-// inverse := (L Lᵀ)⁻¹ (full symmetric), through L⁻¹ (in `scratch`): about m³/3 multiply-adds.
+// inverse := (L Lᵀ)⁻¹ = L⁻ᵀ L⁻¹ (full symmetric), through L⁻ᵀ (in `scratch`).
 inline void choleskyInverse(const Eigen::MatrixXd& l, const Eigen::VectorXd& inv_diag, Eigen::MatrixXd& scratch,
                             Eigen::MatrixXd& inverse) {
-  const Eigen::Index m = l.rows();
   scratch.setIdentity();
-  for (Eigen::Index c = 0; c < m; ++c) {  // column c of L⁻¹ is zero above row c
-    double* x = &scratch.coeffRef(0, c);
-    const double* p = l.data();
-    const Eigen::Index ld = l.outerStride();
-    for (Eigen::Index j = c; j < m; ++j) {
-      const double xj = (x[j] *= inv_diag[j]);
-      const double* cj = p + j * ld;
-      for (Eigen::Index i = j + 1; i < m; ++i) x[i] -= cj[i] * xj;
-    }
-  }
-  // (L⁻ᵀ L⁻¹)(i, j) = Σ_k L⁻¹(k, i) L⁻¹(k, j) over k ≥ max(i, j): dot products of column tails.
-  for (Eigen::Index j = 0; j < m; ++j)
-    for (Eigen::Index i = j; i < m; ++i) {
-      const double v = scratch.col(i).tail(m - i).dot(scratch.col(j).tail(m - i));
-      inverse(i, j) = v;
-      inverse(j, i) = v;
-    }
+  solveRightLowerTransposed(l, inv_diag, scratch);  // L⁻ᵀ
+  inverse.setZero();
+  inverse.selfadjointView<Eigen::Lower>().rankUpdate(scratch);
+  inverse.triangularView<Eigen::StrictlyUpper>() = inverse.transpose();
 }
 
 }  // namespace embody::ik::detail

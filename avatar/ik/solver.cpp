@@ -715,24 +715,16 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     int added = 0;
     double smallest = 0.0;
     if (d.gram_pd && d.sigma_min > o.rank_tolerance && m <= r - s) {
-      const Eigen::MatrixXd& l = w.level_factor[k];
-      const Eigen::VectorXd& lInv = w.level_factor_inv[k];
+      // U = Ĵᵀ L⁻ᵀ = (scatter(J̃ᵀ) - W (J̃W)ᵀ) L⁻ᵀ.
       auto u = w.row_space.block(0, s, r, m);
-      auto c = w.level_solve.topLeftCorner(m, p);
-      c = js;
-      detail::solveLowerColumns(l, lInv, c);
       if (gather) {
         u.setZero();
-        for (int i = 0; i < p; ++i) u.row(support[i]) = c.col(i).transpose();
+        for (int i = 0; i < p; ++i) u.row(support[i]) = js.col(i).transpose();
       } else {
-        u = c.transpose();
+        u = js.transpose();
       }
-      if (s > 0) {
-        auto dd = w.level_solve.topLeftCorner(m, s);
-        dd = jw;
-        detail::solveLowerColumns(l, lInv, dd);
-        u.noalias() -= wAll * dd.transpose();
-      }
+      if (s > 0) u.noalias() -= wAll * jw.transpose();
+      detail::solveRightLowerTransposed(w.level_factor[k], w.level_factor_inv[k], u);
       added = m;
       smallest = d.sigma_min;
     } else {
