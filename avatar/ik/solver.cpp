@@ -161,8 +161,24 @@ Workspace::Workspace(const Model& model)
       if (used[i]) support.push_back(i);
   }
   gathered_j.setZero(max_level_rows, n);
-  gathered_w.setZero(n, n);
-  level_solve.setZero(max_level_rows, n);
+  for (int i = 0; i < n; ++i) all_support.push_back(i);
+  dense_ranges.push_back({0, n});
+  for (const std::vector<int>& support : level_support) {
+    std::vector<Range>& ranges = level_ranges.emplace_back();
+    for (size_t i = 0; i < support.size();) {
+      const int lo = support[i];
+      int hi = lo + 1;
+      while (++i < support.size() && support[i] == hi) ++hi;
+      ranges.push_back({lo, hi});
+    }
+  }
+  row_mark.assign(n, 0);
+  block_begin.assign(levels, 0);
+  block_size.assign(levels, 0);
+  block_touched.assign(levels, 0);
+  block_ranges.resize(levels);
+  for (std::vector<Range>& ranges : block_ranges) ranges.reserve(n);
+  level_solve.setZero(max_level_rows, max_level_rows);
   level_cols.setZero(n, max_level_rows);
   small_a.setZero(n);
   small_b.setZero(n);
@@ -615,58 +631,97 @@ double levelStepScale(double norm, const SolveOptions& o) {
   return o.max_level_step / norm;
 }
 
+// Calls f(lo, hi) for every non-empty intersection of two sorted lists of disjoint [lo, hi).
+template <typename F>
+void forEachOverlap(const std::vector<Workspace::Range>& a, const std::vector<Workspace::Range>& b, F&& f) {
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    const int lo = std::max(a[i].begin, b[j].begin), hi = std::min(a[i].end, b[j].end);
+    if (lo < hi) f(lo, hi);
+    if (a[i].end < b[j].end)
+      ++i;
+    else
+      ++j;
+  }
+}
+
+// The rows marked in `mark` (first r entries) as sorted ranges.
+void markedRanges(const std::vector<char>& mark, int r, std::vector<Workspace::Range>& out) {
+  out.clear();
+  for (int i = 0; i < r;) {
+    if (!mark[i]) {
+      ++i;
+      continue;
+    }
+    const int lo = i;
+    while (i < r && mark[i]) ++i;
+    out.push_back({lo, i});
+  }
+}
+
 // The fast pass works in reduced coordinates z (Δq = Δq0 + N Δz, or a diagonal mask when only
-// single-dof rows are active) and never forms a projected Jacobian Ĵ = J̃ (I - W Wᵀ) explicitly:
-// with W the orthonormal rows the higher levels took (r x s) and J̃W (m x s),
-//   G  = Ĵ Ĵᵀ   = J̃ J̃ᵀ - (J̃W)(J̃W)ᵀ
-//   Ĵᵀ y       = J̃ᵀ y - W (J̃W)ᵀ y
-//   Ĵᵀ L⁻ᵀ     = J̃ᵀ L⁻ᵀ - W (L⁻¹ J̃W)ᵀ      (the level's new orthonormal rows, G = L Lᵀ)
-// so a level costs O(m p s) instead of O(m r s), where p is the number of columns its tasks
-// recruit (a foot touches 20 of the humanoid's 61 dofs), and the last active level skips the
-// projector update altogether. Products with J̃ run on the level's support columns only.
+// single-dof rows are active) and never forms a projected Jacobian Ĵ = J̃ (I - W Wᵀ): with W the
+// orthonormal rows the higher levels took (r x s),
+//   G       = Ĵ Ĵᵀ = J̃ J̃ᵀ - (J̃W)(J̃W)ᵀ
+//   Ĵᵀ y    = J̃ᵀ y - W (J̃W)ᵀ y
+//   Ĵᵀ L⁻ᵀ  = (J̃ᵀ - W (J̃W)ᵀ) L⁻ᵀ         (the level's new orthonormal rows, G = L Lᵀ)
+// and it exploits sparsity. In mask mode a level's J̃ is non-zero only on the dofs its tasks
+// recruit (a foot: 20 of the humanoid's 61), kept as sorted ranges of dof indices; W is kept as
+// one block of columns per level, each non-zero only on the ranges of rows of its level and of
+// the blocks it was projected against. Products with W then run over the overlapping ranges
+// only (a hand shares just the root with the feet), and the last active level skips the
+// projector update altogether. Dense mode (equality rows) has one range, every coordinate.
 void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
   w.dq = w.dq0;
   const bool maskMode = w.mask_mode;
   const int r = maskMode ? w.n : w.null_dim;
-  // Mask mode reads J̃ = J diag(mask) straight from J while gathering each level's columns.
+  // Mask mode reads J̃ = J diag(mask) straight from J. Products with W may even use J itself:
+  // W's rows at pinned dofs are zero, as W lies in the null space of the active rows.
   if (!maskMode) w.reduced_jacobian.leftCols(r).noalias() = w.jacobian * w.nullspace.leftCols(r);
+  const Eigen::MatrixXd& jFull = maskMode ? w.jacobian : w.reduced_jacobian;
+  w.dense_ranges[0] = {0, r};
   int lastActive = -1;
   for (size_t k = 0; k < model.levels.size(); ++k)
     if (levelActive(model.levels[k], w)) lastActive = static_cast<int>(k);
-  int s = 0;  // columns of W (orthonormal rows of the higher levels, reduced coordinates)
+  int s = 0;       // columns of W
+  int blocks = 0;  // W's blocks: block b has columns block_begin[b] + [0, block_size[b])
   for (size_t k = 0; k < model.levels.size(); ++k) {
     const Model::Level& level = model.levels[k];
     if (!levelActive(level, w) || s >= r) continue;
     const int m = level.rows;
-    const std::vector<int>& support = w.level_support[k];
-    const bool gather = maskMode;
-    const int p = gather ? static_cast<int>(support.size()) : r;
+    const std::vector<int>& support = maskMode ? w.level_support[k] : w.all_support;
+    const std::vector<Workspace::Range>& ranges = maskMode ? w.level_ranges[k] : w.dense_ranges;
+    const int p = maskMode ? static_cast<int>(support.size()) : r;
+    const auto jRows = jFull.middleRows(level.first_row, m);
 
-    // J̃ and W on the level's support columns.
+    // J̃ on the level's support.
     auto js = w.gathered_j.topLeftCorner(m, p);
-    if (gather)
-      for (int i = 0; i < p; ++i)
-        js.col(i) = w.mask(support[i]) * w.jacobian.col(support[i]).segment(level.first_row, m);
-    else
-      js = w.reduced_jacobian.block(level.first_row, 0, m, r);
-    const auto wAll = w.row_space.topLeftCorner(r, s);
+    for (int i = 0; i < p; ++i) {
+      const int c = support[i];
+      if (maskMode)
+        js.col(i) = w.mask(c) * w.jacobian.col(c).segment(level.first_row, m);
+      else
+        js.col(i) = w.reduced_jacobian.col(c).segment(level.first_row, m);
+    }
+    // J̃W block by block, over the rows the level shares with each block.
     auto jw = w.level_jw[k].leftCols(s);
-    if (s > 0) {
-      if (gather) {
-        auto ws = w.gathered_w.topLeftCorner(p, s);
-        for (int c = 0; c < s; ++c)
-          for (int i = 0; i < p; ++i) ws(i, c) = w.row_space(support[i], c);
-        jw.noalias() = js * ws;
-      } else {
-        jw.noalias() = js * wAll;
-      }
+    for (int b = 0; b < blocks; ++b) {
+      auto jwb = jw.middleCols(w.block_begin[b], w.block_size[b]);
+      jwb.setZero();
+      bool touched = false;
+      forEachOverlap(ranges, w.block_ranges[b], [&](int lo, int hi) {
+        jwb.noalias() += jRows.middleCols(lo, hi - lo) *
+                         w.row_space.block(lo, w.block_begin[b], hi - lo, w.block_size[b]);
+        touched = true;
+      });
+      w.block_touched[b] = touched ? 1 : 0;
     }
 
     Eigen::VectorXd& res = w.level_res[k];
     res = w.error.segment(level.first_row, m);
     res.noalias() -= w.jacobian.middleRows(level.first_row, m) * w.dq;  // compensated error
 
-    Eigen::MatrixXd& gram = w.level_gram[k];  // lower triangle only: LLT and eig read just that
+    Eigen::MatrixXd& gram = w.level_gram[k];  // lower triangle only: the kernels read just that
     gram.setZero();
     gram.selfadjointView<Eigen::Lower>().rankUpdate(js);
     if (s > 0) gram.selfadjointView<Eigen::Lower>().rankUpdate(jw, -1.0);
@@ -689,18 +744,19 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
       detail::choleskySolve(w.level_factor[k], w.level_factor_inv[k], y.data());
     }
     auto dz = w.tmp_n.head(r);
-    if (gather) {
+    {
       auto jty = w.small_a.head(p);
       jty.noalias() = js.transpose() * y;
       dz.setZero();
       for (int i = 0; i < p; ++i) dz(support[i]) = jty(i);
-    } else {
-      dz.noalias() = js.transpose() * y;
     }
-    if (s > 0) {
-      auto wy = w.small_b.head(s);
-      wy.noalias() = jw.transpose() * y;
-      dz.noalias() -= wAll * wy;
+    for (int b = 0; b < blocks; ++b) {
+      if (!w.block_touched[b]) continue;
+      const int c0 = w.block_begin[b], nb = w.block_size[b];
+      auto wy = w.small_b.head(nb);
+      wy.noalias() = jw.middleCols(c0, nb).transpose() * y;
+      for (const Workspace::Range& g : w.block_ranges[b])
+        dz.segment(g.begin, g.end - g.begin).noalias() -= w.row_space.block(g.begin, c0, g.end - g.begin, nb) * wy;
     }
     if (const double cap = levelStepScale(dz.norm(), o); cap < 1.0) dz *= cap;
     if (maskMode)
@@ -711,53 +767,68 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     if (static_cast<int>(k) == lastActive) break;  // nothing below needs this level's rows
 
     // Projector update (undamped, rank-thresholded): append an orthonormal basis of Ĵ's rows to
-    // W. Full rank: with G = L Lᵀ, the rows of L⁻¹ Ĵ are that basis (no eigen-decomposition).
+    // W as a new block. Ĵᵀ = J̃ᵀ - W (J̃W)ᵀ first (in `jt`, r x m, non-zero on the marked rows).
+    auto jt = w.level_cols.topLeftCorner(r, m);
+    std::fill(w.row_mark.begin(), w.row_mark.begin() + r, 0);
+    for (const Workspace::Range& g : ranges) {
+      jt.middleRows(g.begin, g.end - g.begin).setZero();
+      std::fill(w.row_mark.begin() + g.begin, w.row_mark.begin() + g.end, 1);
+    }
+    for (int i = 0; i < p; ++i) jt.row(support[i]) = js.col(i).transpose();
+    for (int b = 0; b < blocks; ++b) {
+      if (!w.block_touched[b]) continue;
+      const int c0 = w.block_begin[b], nb = w.block_size[b];
+      for (const Workspace::Range& g : w.block_ranges[b]) {
+        const int len = g.end - g.begin;
+        for (int i = g.begin; i < g.end; ++i)
+          if (!w.row_mark[i]) {
+            jt.row(i).setZero();
+            w.row_mark[i] = 1;
+          }
+        jt.middleRows(g.begin, len).noalias() -= w.row_space.block(g.begin, c0, len, nb) * jw.middleCols(c0, nb).transpose();
+      }
+    }
+    std::vector<Workspace::Range>& newRanges = w.block_ranges[blocks];
+    markedRanges(w.row_mark, r, newRanges);
+
     int added = 0;
     double smallest = 0.0;
     if (d.gram_pd && d.sigma_min > o.rank_tolerance && m <= r - s) {
-      // U = Ĵᵀ L⁻ᵀ = (scatter(J̃ᵀ) - W (J̃W)ᵀ) L⁻ᵀ.
-      auto u = w.row_space.block(0, s, r, m);
-      if (gather) {
-        u.setZero();
-        for (int i = 0; i < p; ++i) u.row(support[i]) = js.col(i).transpose();
-      } else {
-        u = js.transpose();
-      }
-      if (s > 0) u.noalias() -= wAll * jw.transpose();
-      detail::solveRightLowerTransposed(w.level_factor[k], w.level_factor_inv[k], u);
+      // Full rank: U = Ĵᵀ L⁻ᵀ (no eigen-decomposition), row range by row range.
       added = m;
       smallest = d.sigma_min;
+      auto u = w.row_space.block(0, s, r, m);
+      for (int i = 0, next = 0; i < static_cast<int>(newRanges.size()); ++i) {
+        const Workspace::Range& g = newRanges[i];
+        u.middleRows(next, g.begin - next).setZero();
+        auto rows = u.middleRows(g.begin, g.end - g.begin);
+        rows = jt.middleRows(g.begin, g.end - g.begin);
+        detail::solveRightLowerTransposed(w.level_factor[k], w.level_factor_inv[k], rows);
+        next = g.end;
+        if (i + 1 == static_cast<int>(newRanges.size())) u.bottomRows(r - g.end).setZero();
+      }
     } else {
-      // Rank-deficient level: eigen-decompose G (σ² are its eigenvalues), keep σ > tolerance.
+      // Rank-deficient level: eigen-decompose G (σ² are its eigenvalues), keep σ > tolerance,
+      // U = Ĵᵀ V Σ⁻¹.
       auto& eig = w.level_eig[k];
       eig.compute(gram);
       const auto& values = eig.eigenvalues();
-      const auto& vectors = eig.eigenvectors();
       for (int i = m; i-- > 0 && added < r - s;) {
         if (!(std::sqrt(std::max(values(i), 0.0)) > o.rank_tolerance)) break;  // eigenvalues ascend
         ++added;
       }
       if (added == 0) continue;
-      auto v = w.row_space.block(0, s, r, added);
-      const auto vecs = vectors.rightCols(added);
-      if (gather) {
-        auto jv = w.level_cols.topLeftCorner(p, added);
-        jv.noalias() = js.transpose() * vecs;
-        v.setZero();
-        for (int i = 0; i < p; ++i) v.row(support[i]) = jv.row(i);
-      } else {
-        v.noalias() = js.transpose() * vecs;
-      }
-      if (s > 0) {
-        auto wv = w.level_cols.topLeftCorner(s, added);
-        wv.noalias() = jw.transpose() * vecs;
-        v.noalias() -= wAll * wv;
-      }
-      for (int c = 0; c < added; ++c) v.col(c) /= std::sqrt(values(m - added + c));
+      auto u = w.row_space.block(0, s, r, added);
+      u.setZero();
+      auto coef = w.level_solve.topLeftCorner(m, added);
+      for (int c = 0; c < added; ++c)
+        coef.col(c) = eig.eigenvectors().col(m - added + c) / std::sqrt(values(m - added + c));
+      for (const Workspace::Range& g : newRanges)
+        u.middleRows(g.begin, g.end - g.begin).noalias() = jt.middleRows(g.begin, g.end - g.begin) * coef;
       smallest = std::sqrt(values(m - added));
     }
     // The new rows are analytically orthogonal to W; round-off grows like eps |J̃| / σ, so
-    // re-orthogonalise when a kept singular value is small.
+    // re-orthogonalise (densely; rare) when a kept singular value is small.
     if (smallest < 1e-3 && s > 0) {
       for (int c = 0; c < added; ++c) {
         auto col = w.row_space.col(s + c).head(r);
@@ -766,7 +837,12 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
         col.noalias() -= w.row_space.topLeftCorner(r, s + c) * proj;
         col.normalize();
       }
+      newRanges.clear();
+      newRanges.push_back({0, r});
     }
+    w.block_begin[blocks] = s;
+    w.block_size[blocks] = added;
+    ++blocks;
     s += added;
   }
 }

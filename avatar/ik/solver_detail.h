@@ -95,9 +95,20 @@ struct Workspace {
   std::vector<std::vector<int>> level_support;
   int max_level_rows = 0;
   Eigen::MatrixXd gathered_j;  // max_level_rows x n: J̃ of one level on its support
-  Eigen::MatrixXd gathered_w;  // n x n: W's rows on the support
-  Eigen::MatrixXd level_solve; // max_level_rows x n: L⁻¹ J̃, L⁻¹ (J̃ W)
-  Eigen::MatrixXd level_cols;  // n x max_level_rows: J̃ᵀ V (rank-deficient levels)
+  struct Range {
+    int begin = 0, end = 0;  // [begin, end)
+  };
+  std::vector<int> all_support;              // 0..n-1 (dense mode)
+  std::vector<Range> dense_ranges;           // {[0, r)} (dense mode)
+  std::vector<std::vector<Range>> level_ranges;  // each level's support as ranges
+  // W's blocks (one per level that added rows): first column, width, the row ranges it is
+  // non-zero on (each reserved to n), and whether the current level overlaps it.
+  std::vector<int> block_begin, block_size;
+  std::vector<std::vector<Range>> block_ranges;
+  std::vector<char> block_touched;
+  std::vector<char> row_mark;  // n
+  Eigen::MatrixXd level_solve; // max_level_rows²: V Σ⁻¹ (rank-deficient levels)
+  Eigen::MatrixXd level_cols;  // n x max_level_rows: Ĵᵀ
   Eigen::VectorXd small_a, small_b;  // n each
 
   // Reference path scratch.
