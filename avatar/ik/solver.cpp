@@ -103,9 +103,16 @@ Workspace::Workspace(const Model& model)
   }
   eq_matrix.setZero(eq_rank, n);
   eq_rhs.setZero(eq_rank);
+  eq_begin.push_back(0);
   for (int i = 0; i < eq_rank; ++i) {
     eq_matrix.row(i) = a.row(eq_rows[i]);
     eq_rhs(i) = model.equality_rhs(eq_rows[i]);
+    for (int c = 0; c < n; ++c)
+      if (a(eq_rows[i], c) != 0.0) {
+        eq_dof.push_back(c);
+        eq_coef.push_back(a(eq_rows[i], c));
+      }
+    eq_begin.push_back(static_cast<int>(eq_dof.size()));
   }
   basis.setZero(n, n);
   factor.setZero(n, n);
@@ -182,6 +189,8 @@ Workspace::Workspace(const Model& model)
   level_cols.setZero(n, max_level_rows);
   small_a.setZero(n);
   small_b.setZero(n);
+  small_z.setZero(n);
+  small_rows.setZero(rows);
 
   ineq_begin.push_back(0);
   for (const InequalityRow& row : model.inequalities) {
@@ -460,6 +469,8 @@ void kinematics(const Model& model, Data& data, bool jacobians) {
 
 namespace {
 
+constexpr double kDriftTolerance = 1e-14;  // |b - A q| below this is round-off, not drift
+
 // Back to the equality rows only. The equality part of basis / factor is written once (in the
 // constructor) and pinned rows only append after it; the null-space basis and the reference
 // projector are restored only when pinned rows changed them.
@@ -467,8 +478,11 @@ void resetActiveSet(Workspace& w, Path path) {
   const int r = w.eq_rank;
   w.rank = r;
   if (r > 0) {
-    w.active_rhs.head(r) = w.eq_rhs;
-    w.active_rhs.head(r).noalias() -= w.eq_matrix * w.q;
+    for (int i = 0; i < r; ++i) {  // b - A q over the rows' few non-zero terms
+      double v = w.eq_rhs(i);
+      for (int t = w.eq_begin[i]; t < w.eq_begin[i + 1]; ++t) v -= w.eq_coef[t] * w.q(w.eq_dof[t]);
+      w.active_rhs(i) = v;
+    }
   }
   w.mask_mode = r == 0;
   w.mask.setOnes();
@@ -485,11 +499,13 @@ void resetActiveSet(Workspace& w, Path path) {
   std::fill(w.ineq_reported.begin(), w.ineq_reported.end(), 0);
 }
 
-// Δq0 = A⁺ (b_A - A q) = basis * factor⁻¹ * active_rhs (minimum-norm solution).
+// Δq0 = A⁺ (b_A - A q) = basis * factor⁻¹ * active_rhs (minimum-norm solution). Rows that hold
+// to round-off (|b - A q| ≤ 1e-14, the usual case for equalities between iterations) need no
+// correction, so Δq0 is zero without the two products.
 void computeDq0(Workspace& w) {
   const int r = w.rank;
   w.dq0.setZero();
-  if (r == 0) return;
+  if (r == 0 || !(w.active_rhs.head(r).cwiseAbs().maxCoeff() > kDriftTolerance)) return;
   auto y = w.y.head(r);
   y = w.active_rhs.head(r);
   w.factor.topLeftCorner(r, r).triangularView<Eigen::Lower>().solveInPlace(y);
@@ -576,7 +592,7 @@ bool levelActive(const Model::Level& level, const Workspace& w) {
 //   otherwise inverse iteration on G (Cholesky) for σ_min² = λ_min(G).
 // Leaves the Cholesky factor of G in w.level_factor[k] (valid when gram_pd); sigma_min is eps when
 // undamped (a lower bound) and 0 when G is singular.
-constexpr int kInverseIterations = 8;
+constexpr int kInverseIterations = 6;
 
 struct LevelDamping {
   double lambda2 = 0.0;
@@ -604,21 +620,23 @@ LevelDamping levelDamping(const Eigen::MatrixXd& gram, Workspace& w, size_t k, c
   // Inverse iteration: the Rayleigh quotient of G⁻¹ converges to 1/λ_min(G) as (σ1/σ2)^(2k).
   // A fixed number of steps (no round-off-dependent stopping test) keeps both paths identical;
   // the estimate lies between σ1 and σ2, and the rule only needs it to grow smoothly. G⁻¹ is
-  // formed once so that each step is one (vectorised) matrix-vector product.
+  // formed once, so each step is one (vectorised) matrix-vector product, and the start is its
+  // column with the largest diagonal entry: G⁻¹ e_i, one step ahead of the best unit vector.
   Eigen::VectorXd& x = w.level_coef[k];
   Eigen::VectorXd& z = w.level_tmp[k];
-  const Eigen::Index m = gram.rows();
-  for (Eigen::Index i = 0; i < m; ++i) x(i) = 1.0 + 0.1 * static_cast<double>(i);  // deterministic start
-  x.normalize();
-  double mu = 0.0;
   Eigen::MatrixXd& inverse = w.level_inverse[k];
   detail::choleskyInverse(l, lInv, w.level_factor2[k], inverse);
+  Eigen::Index start = 0;
+  inverse.diagonal().maxCoeff(&start);
+  x = inverse.col(start);
+  double mu = 0.0;
   for (int it = 0; it < kInverseIterations; ++it) {
+    const double xn = x.norm();
+    if (!(xn > 0) || !std::isfinite(xn)) break;
+    x *= 1.0 / xn;
     z.noalias() = inverse * x;
     mu = x.dot(z);
-    const double zn = z.norm();
-    if (!(zn > 0) || !std::isfinite(zn)) break;
-    x = z / zn;
+    x.swap(z);
   }
   d.sigma_min = mu > 0 ? std::sqrt(1.0 / mu) : 0.0;
   d.lambda2 = smoothDampingSquared(d.sigma_min, o);
@@ -672,9 +690,17 @@ void markedRanges(const std::vector<char>& mark, int r, std::vector<Workspace::R
 // only (a hand shares just the root with the feet), and the last active level skips the
 // projector update altogether. Dense mode (equality rows) has one range, every coordinate.
 void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
-  w.dq = w.dq0;
   const bool maskMode = w.mask_mode;
   const int r = maskMode ? w.n : w.null_dim;
+  // The levels' steps accumulate in reduced coordinates z; Δq = Δq0 + N z (or Δq0 + z) once at
+  // the end. The compensated errors use J Δq = J Δq0 + J̃ z.
+  auto z = w.small_z.head(r);
+  z.setZero();
+  auto jdq0 = w.small_rows.head(w.rows);
+  if (w.rank > 0)
+    jdq0.noalias() = w.jacobian * w.dq0;
+  else
+    jdq0.setZero();
   // Mask mode reads J̃ = J diag(mask) straight from J. Products with W may even use J itself:
   // W's rows at pinned dofs are zero, as W lies in the null space of the active rows.
   if (!maskMode) w.reduced_jacobian.leftCols(r).noalias() = w.jacobian * w.nullspace.leftCols(r);
@@ -694,15 +720,20 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     const int p = maskMode ? static_cast<int>(support.size()) : r;
     const auto jRows = jFull.middleRows(level.first_row, m);
 
-    // J̃ on the level's support.
-    auto js = w.gathered_j.topLeftCorner(m, p);
-    for (int i = 0; i < p; ++i) {
-      const int c = support[i];
-      if (maskMode)
-        js.col(i) = w.mask(c) * w.jacobian.col(c).segment(level.first_row, m);
-      else
-        js.col(i) = w.reduced_jacobian.col(c).segment(level.first_row, m);
+    // J̃ on the level's support: gathered in mask mode, a block of J N in dense mode.
+    if (maskMode) {
+      auto g = w.gathered_j.topLeftCorner(m, p);
+      for (int i = 0; i < p; ++i) {
+        const int c = support[i];
+        if (w.rank == 0 || w.mask(c) != 0.0)  // no pinned dof: J̃ = J
+          g.col(i) = w.jacobian.col(c).segment(level.first_row, m);
+        else
+          g.col(i).setZero();
+      }
     }
+    const Eigen::Ref<const Eigen::MatrixXd> js =
+        maskMode ? Eigen::Ref<const Eigen::MatrixXd>(w.gathered_j.topLeftCorner(m, p))
+                 : Eigen::Ref<const Eigen::MatrixXd>(w.reduced_jacobian.block(level.first_row, 0, m, r));
     // J̃W block by block, over the rows the level shares with each block.
     auto jw = w.level_jw[k].leftCols(s);
     for (int b = 0; b < blocks; ++b) {
@@ -719,7 +750,14 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
 
     Eigen::VectorXd& res = w.level_res[k];
     res = w.error.segment(level.first_row, m);
-    res.noalias() -= w.jacobian.middleRows(level.first_row, m) * w.dq;  // compensated error
+    res -= jdq0.segment(level.first_row, m);  // compensated error
+    if (maskMode) {
+      auto zs = w.small_b.head(p);
+      for (int i = 0; i < p; ++i) zs(i) = z(support[i]);
+      res.noalias() -= js * zs;
+    } else {
+      res.noalias() -= js * z;
+    }
 
     Eigen::MatrixXd& gram = w.level_gram[k];  // lower triangle only: the kernels read just that
     gram.setZero();
@@ -744,11 +782,13 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
       detail::choleskySolve(w.level_factor[k], w.level_factor_inv[k], y.data());
     }
     auto dz = w.tmp_n.head(r);
-    {
+    if (maskMode) {
       auto jty = w.small_a.head(p);
       jty.noalias() = js.transpose() * y;
       dz.setZero();
       for (int i = 0; i < p; ++i) dz(support[i]) = jty(i);
+    } else {
+      dz.noalias() = js.transpose() * y;
     }
     for (int b = 0; b < blocks; ++b) {
       if (!w.block_touched[b]) continue;
@@ -759,10 +799,7 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
         dz.segment(g.begin, g.end - g.begin).noalias() -= w.row_space.block(g.begin, c0, g.end - g.begin, nb) * wy;
     }
     if (const double cap = levelStepScale(dz.norm(), o); cap < 1.0) dz *= cap;
-    if (maskMode)
-      w.dq += dz;
-    else
-      w.dq.noalias() += w.nullspace.leftCols(r) * dz;
+    z += dz;
 
     if (static_cast<int>(k) == lastActive) break;  // nothing below needs this level's rows
 
@@ -770,11 +807,16 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     // W as a new block. Ĵᵀ = J̃ᵀ - W (J̃W)ᵀ first (in `jt`, r x m, non-zero on the marked rows).
     auto jt = w.level_cols.topLeftCorner(r, m);
     std::fill(w.row_mark.begin(), w.row_mark.begin() + r, 0);
-    for (const Workspace::Range& g : ranges) {
-      jt.middleRows(g.begin, g.end - g.begin).setZero();
-      std::fill(w.row_mark.begin() + g.begin, w.row_mark.begin() + g.end, 1);
+    if (maskMode) {
+      for (const Workspace::Range& g : ranges) {
+        jt.middleRows(g.begin, g.end - g.begin).setZero();
+        std::fill(w.row_mark.begin() + g.begin, w.row_mark.begin() + g.end, 1);
+      }
+      for (int i = 0; i < p; ++i) jt.row(support[i]) = js.col(i).transpose();
+    } else {
+      jt = js.transpose();
+      std::fill(w.row_mark.begin(), w.row_mark.begin() + r, 1);
     }
-    for (int i = 0; i < p; ++i) jt.row(support[i]) = js.col(i).transpose();
     for (int b = 0; b < blocks; ++b) {
       if (!w.block_touched[b]) continue;
       const int c0 = w.block_begin[b], nb = w.block_size[b];
@@ -845,7 +887,13 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     ++blocks;
     s += added;
   }
+  w.dq = w.dq0;
+  if (maskMode)
+    w.dq += z;
+  else
+    w.dq.noalias() += w.nullspace.leftCols(r) * z;
 }
+
 
 void referencePass(const Model& model, Workspace& w, const SolveOptions& o) {
   w.dq = w.dq0;

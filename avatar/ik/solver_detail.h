@@ -58,6 +58,8 @@ struct Workspace {
   Eigen::MatrixXd eq_matrix;  // the independent equality rows (eq_rank x n) and their rhs
   Eigen::VectorXd eq_rhs;
   std::vector<int> eq_rows;  // independent equality row indices
+  std::vector<int> eq_begin, eq_dof;  // the same rows' non-zero terms (sparse), for b - A q
+  std::vector<double> eq_coef;
   int eq_rank = 0;
 
   // Null space of A. Mask mode (only single-dof rows active, no equality rows): the projector is
@@ -109,7 +111,8 @@ struct Workspace {
   std::vector<char> row_mark;  // n
   Eigen::MatrixXd level_solve; // max_level_rows²: V Σ⁻¹ (rank-deficient levels)
   Eigen::MatrixXd level_cols;  // n x max_level_rows: Ĵᵀ
-  Eigen::VectorXd small_a, small_b;  // n each
+  Eigen::VectorXd small_a, small_b, small_z;  // n each
+  Eigen::VectorXd small_rows;  // rows: J Δq0
 
   // Reference path scratch.
   Eigen::MatrixXd projector, projector0, eq_projector0;
