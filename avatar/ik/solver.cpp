@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "avatar/ik/expmap.h"
+#include "avatar/ik/small_cholesky.h"
 #include "avatar/ik/solver_detail.h"
 
 namespace embody::ik {
@@ -102,9 +103,16 @@ Workspace::Workspace(const Model& model)
   }
   eq_matrix.setZero(eq_rank, n);
   eq_rhs.setZero(eq_rank);
+  eq_begin.push_back(0);
   for (int i = 0; i < eq_rank; ++i) {
     eq_matrix.row(i) = a.row(eq_rows[i]);
     eq_rhs(i) = model.equality_rhs(eq_rows[i]);
+    for (int c = 0; c < n; ++c)
+      if (a(eq_rows[i], c) != 0.0) {
+        eq_dof.push_back(c);
+        eq_coef.push_back(a(eq_rows[i], c));
+      }
+    eq_begin.push_back(static_cast<int>(eq_dof.size()));
   }
   basis.setZero(n, n);
   factor.setZero(n, n);
@@ -129,9 +137,8 @@ Workspace::Workspace(const Model& model)
   // has not computed anything yet reads its uninitialised flags (UBSan reports it).
   const size_t levels = model.levels.size();
   level_eig.reserve(levels);
-  level_llt.reserve(levels);
-  level_llt2.reserve(levels);
-  for (auto* v : {&level_j, &level_gram, &level_jw, &level_shifted}) v->reserve(levels);
+  for (auto* v : {&level_j, &level_gram, &level_jw, &level_factor, &level_factor2, &level_inverse}) v->reserve(levels);
+  for (auto* v : {&level_factor_inv, &level_factor2_inv}) v->reserve(levels);
   for (auto* v : {&level_res, &level_coef, &level_tmp}) v->reserve(levels);
   for (const Model::Level& level : model.levels) {
     const int m = level.rows;
@@ -145,12 +152,45 @@ Workspace::Workspace(const Model& model)
     // decomposition holds an uninitialised status that copying a Data would read (UBSan).
     const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(m, m);
     level_eig.emplace_back(m).compute(identity);
-    level_shifted.emplace_back(Eigen::MatrixXd::Zero(m, m));
-    level_llt.emplace_back(m).compute(identity);
-    level_llt2.emplace_back(m).compute(identity);
+    level_factor.emplace_back(Eigen::MatrixXd::Zero(m, m));
+    level_factor2.emplace_back(Eigen::MatrixXd::Zero(m, m));
+    level_factor_inv.emplace_back(Eigen::VectorXd::Zero(m));
+    level_factor2_inv.emplace_back(Eigen::VectorXd::Zero(m));
+    level_inverse.emplace_back(Eigen::MatrixXd::Zero(m, m));
     level_y.emplace_back(Eigen::VectorXd::Zero(m));
     level_svd.emplace_back(m, n, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    max_level_rows = std::max(max_level_rows, m);
+    std::vector<char> used(n, 0);
+    for (TaskId t : level.tasks)
+      for (int dof : task_dofs[t]) used[dof] = 1;
+    std::vector<int>& support = level_support.emplace_back();
+    for (int i = 0; i < n; ++i)
+      if (used[i]) support.push_back(i);
   }
+  gathered_j.setZero(max_level_rows, n);
+  for (int i = 0; i < n; ++i) all_support.push_back(i);
+  dense_ranges.push_back({0, n});
+  for (const std::vector<int>& support : level_support) {
+    std::vector<Range>& ranges = level_ranges.emplace_back();
+    for (size_t i = 0; i < support.size();) {
+      const int lo = support[i];
+      int hi = lo + 1;
+      while (++i < support.size() && support[i] == hi) ++hi;
+      ranges.push_back({lo, hi});
+    }
+  }
+  row_mark.assign(n, 0);
+  block_begin.assign(levels, 0);
+  block_size.assign(levels, 0);
+  block_touched.assign(levels, 0);
+  block_ranges.resize(levels);
+  for (std::vector<Range>& ranges : block_ranges) ranges.reserve(n);
+  level_solve.setZero(max_level_rows, max_level_rows);
+  level_cols.setZero(n, max_level_rows);
+  small_a.setZero(n);
+  small_b.setZero(n);
+  small_z.setZero(n);
+  small_rows.setZero(rows);
 
   ineq_begin.push_back(0);
   for (const InequalityRow& row : model.inequalities) {
@@ -429,6 +469,9 @@ void kinematics(const Model& model, Data& data, bool jacobians) {
 
 namespace {
 
+constexpr double kDriftTolerance = 1e-14;
+constexpr Eigen::Index kLazyProductLimit = 400;  // |b - A q| below this is round-off, not drift
+
 // Back to the equality rows only. The equality part of basis / factor is written once (in the
 // constructor) and pinned rows only append after it; the null-space basis and the reference
 // projector are restored only when pinned rows changed them.
@@ -436,8 +479,11 @@ void resetActiveSet(Workspace& w, Path path) {
   const int r = w.eq_rank;
   w.rank = r;
   if (r > 0) {
-    w.active_rhs.head(r) = w.eq_rhs;
-    w.active_rhs.head(r).noalias() -= w.eq_matrix * w.q;
+    for (int i = 0; i < r; ++i) {  // b - A q over the rows' few non-zero terms
+      double v = w.eq_rhs(i);
+      for (int t = w.eq_begin[i]; t < w.eq_begin[i + 1]; ++t) v -= w.eq_coef[t] * w.q(w.eq_dof[t]);
+      w.active_rhs(i) = v;
+    }
   }
   w.mask_mode = r == 0;
   w.mask.setOnes();
@@ -454,11 +500,13 @@ void resetActiveSet(Workspace& w, Path path) {
   std::fill(w.ineq_reported.begin(), w.ineq_reported.end(), 0);
 }
 
-// Δq0 = A⁺ (b_A - A q) = basis * factor⁻¹ * active_rhs (minimum-norm solution).
+// Δq0 = A⁺ (b_A - A q) = basis * factor⁻¹ * active_rhs (minimum-norm solution). Rows that hold
+// to round-off (|b - A q| ≤ 1e-14, the usual case for equalities between iterations) need no
+// correction, so Δq0 is zero without the two products.
 void computeDq0(Workspace& w) {
   const int r = w.rank;
   w.dq0.setZero();
-  if (r == 0) return;
+  if (r == 0 || !(w.active_rhs.head(r).cwiseAbs().maxCoeff() > kDriftTolerance)) return;
   auto y = w.y.head(r);
   y = w.active_rhs.head(r);
   w.factor.topLeftCorner(r, r).triangularView<Eigen::Lower>().solveInPlace(y);
@@ -539,36 +587,17 @@ bool levelActive(const Model::Level& level, const Workspace& w) {
 }
 
 // The level's damping λ² from the smallest singular value of Ĵ, computed on G = Ĵ Ĵᵀ (the same
-// m x m matrix in both paths, so both damp identically). Cheap in the common cases:
+// m x m matrix in both paths up to round-off: the reference path forms it from J P, the fast
+// path as J̃J̃ᵀ - (J̃W)(J̃W)ᵀ). Cheap in the common cases:
 //   G - eps² I positive definite      -> σ_min > eps, λ = 0;
 //   G not positive definite           -> σ_min = 0, λ = λmax;
 //   otherwise inverse iteration on G (Cholesky) for σ_min² = λ_min(G).
-// Leaves the Cholesky factor of G in w.level_llt[k] (valid when gram_pd); sigma_min is eps when
-// undamped (a lower bound) and 0 when G is singular.
-constexpr int kInverseIterations = 8;
-
-// Triangular solves with the Cholesky factor (lower, column-major) for the small m x m systems of
-// one level: plain loops beat Eigen's blocked kernels at these sizes (m <= ~16).
-void solveLower(const Eigen::MatrixXd& l, double* x) {
-  const Eigen::Index m = l.rows();
-  for (Eigen::Index j = 0; j < m; ++j) {
-    const double xj = (x[j] /= l(j, j));
-    for (Eigen::Index i = j + 1; i < m; ++i) x[i] -= l(i, j) * xj;
-  }
-}
-void solveLowerTransposed(const Eigen::MatrixXd& l, double* x) {
-  const Eigen::Index m = l.rows();
-  for (Eigen::Index j = m; j-- > 0;) {
-    double v = x[j];
-    for (Eigen::Index i = j + 1; i < m; ++i) v -= l(i, j) * x[i];
-    x[j] = v / l(j, j);
-  }
-}
-// x := G⁻¹ x with G = L Lᵀ.
-void choleskySolve(const Eigen::MatrixXd& l, double* x) {
-  solveLower(l, x);
-  solveLowerTransposed(l, x);
-}
+// Leaves the Cholesky factor of G in w.level_factor[k] (valid when gram_pd); sigma_min is eps when
+// undamped (a lower bound) and 0 when G is singular. Three inverse-iteration steps from G⁻¹'s
+// largest column match the converged σ_min to 5 digits on random 12-row levels whose smallest
+// singular value is separated (8 steps from a fixed vector did not always); with two nearly equal
+// smallest values the estimate lies between them, which is all the smooth rule needs.
+constexpr int kInverseIterations = 3;
 
 struct LevelDamping {
   double lambda2 = 0.0;
@@ -578,39 +607,41 @@ struct LevelDamping {
 
 LevelDamping levelDamping(const Eigen::MatrixXd& gram, Workspace& w, size_t k, const SolveOptions& o) {
   LevelDamping d;
-  Eigen::MatrixXd& scratch = w.level_shifted[k];
-  auto& gramLlt = w.level_llt[k];
-  auto& otherLlt = w.level_llt2[k];
-  gramLlt.compute(gram);
-  d.gram_pd = gramLlt.info() == Eigen::Success;
+  Eigen::MatrixXd& l = w.level_factor[k];
+  Eigen::VectorXd& lInv = w.level_factor_inv[k];
+  l = gram;
+  d.gram_pd = detail::choleskyInPlace(l, lInv);
   if (!d.gram_pd) {
     d.lambda2 = o.damping_max * o.damping_max;
     return d;
   }
-  scratch = gram;
-  scratch.diagonal().array() -= o.damping_eps * o.damping_eps;
-  otherLlt.compute(scratch);
-  if (otherLlt.info() == Eigen::Success) {
+  Eigen::MatrixXd& shifted = w.level_factor2[k];
+  shifted = gram;
+  shifted.diagonal().array() -= o.damping_eps * o.damping_eps;
+  if (detail::choleskyInPlace(shifted, w.level_factor2_inv[k])) {
     d.sigma_min = o.damping_eps;
     return d;
   }
   // Inverse iteration: the Rayleigh quotient of G⁻¹ converges to 1/λ_min(G) as (σ1/σ2)^(2k).
   // A fixed number of steps (no round-off-dependent stopping test) keeps both paths identical;
-  // the estimate lies between σ1 and σ2, and the rule only needs it to grow smoothly.
+  // the estimate lies between σ1 and σ2, and the rule only needs it to grow smoothly. G⁻¹ is
+  // formed once, so each step is one (vectorised) matrix-vector product, and the start is its
+  // column with the largest diagonal entry: G⁻¹ e_i, one step ahead of the best unit vector.
   Eigen::VectorXd& x = w.level_coef[k];
   Eigen::VectorXd& z = w.level_tmp[k];
-  const Eigen::Index m = gram.rows();
-  for (Eigen::Index i = 0; i < m; ++i) x(i) = 1.0 + 0.1 * static_cast<double>(i);  // deterministic start
-  x.normalize();
+  Eigen::MatrixXd& inverse = w.level_inverse[k];
+  detail::choleskyInverse(l, lInv, w.level_factor2[k], inverse);
+  Eigen::Index start = 0;
+  inverse.diagonal().maxCoeff(&start);
+  x = inverse.col(start);
   double mu = 0.0;
-  const Eigen::MatrixXd& l = gramLlt.matrixLLT();
   for (int it = 0; it < kInverseIterations; ++it) {
-    z = x;
-    choleskySolve(l, z.data());
+    const double xn = x.norm();
+    if (!(xn > 0) || !std::isfinite(xn)) break;
+    x *= 1.0 / xn;
+    z.noalias() = inverse * x;
     mu = x.dot(z);
-    const double zn = z.norm();
-    if (!(zn > 0) || !std::isfinite(zn)) break;
-    x = z / zn;
+    x.swap(z);
   }
   d.sigma_min = mu > 0 ? std::sqrt(1.0 / mu) : 0.0;
   d.lambda2 = smoothDampingSquared(d.sigma_min, o);
@@ -623,93 +654,267 @@ double levelStepScale(double norm, const SolveOptions& o) {
   return o.max_level_step / norm;
 }
 
+// dst += sign * a * b. Small products (a few hundred multiply-adds, the usual size here) skip
+// Eigen's blocked GEMM, whose packing costs more than the arithmetic at these sizes.
+template <typename Dst, typename A, typename B>
+void addProduct(Dst&& dst, const A& a, const B& b, double sign) {
+  if (a.rows() * a.cols() * b.cols() <= kLazyProductLimit) {
+    if (sign > 0)
+      dst.noalias() += a.lazyProduct(b);
+    else
+      dst.noalias() -= a.lazyProduct(b);
+  } else {
+    if (sign > 0)
+      dst.noalias() += a * b;
+    else
+      dst.noalias() -= a * b;
+  }
+}
+
+// Calls f(lo, hi) for every non-empty intersection of two sorted lists of disjoint [lo, hi).
+template <typename F>
+void forEachOverlap(const std::vector<Workspace::Range>& a, const std::vector<Workspace::Range>& b, F&& f) {
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    const int lo = std::max(a[i].begin, b[j].begin), hi = std::min(a[i].end, b[j].end);
+    if (lo < hi) f(lo, hi);
+    if (a[i].end < b[j].end)
+      ++i;
+    else
+      ++j;
+  }
+}
+
+// The rows marked in `mark` (first r entries) as sorted ranges.
+void markedRanges(const std::vector<char>& mark, int r, std::vector<Workspace::Range>& out) {
+  out.clear();
+  for (int i = 0; i < r;) {
+    if (!mark[i]) {
+      ++i;
+      continue;
+    }
+    const int lo = i;
+    while (i < r && mark[i]) ++i;
+    out.push_back({lo, i});
+  }
+}
+
+// The fast pass works in reduced coordinates z (Δq = Δq0 + N Δz, or a diagonal mask when only
+// single-dof rows are active) and never forms a projected Jacobian Ĵ = J̃ (I - W Wᵀ): with W the
+// orthonormal rows the higher levels took (r x s),
+//   G       = Ĵ Ĵᵀ = J̃ J̃ᵀ - (J̃W)(J̃W)ᵀ
+//   Ĵᵀ y    = J̃ᵀ y - W (J̃W)ᵀ y
+//   Ĵᵀ L⁻ᵀ  = (J̃ᵀ - W (J̃W)ᵀ) L⁻ᵀ         (the level's new orthonormal rows, G = L Lᵀ)
+// and it exploits sparsity. In mask mode a level's J̃ is non-zero only on the dofs its tasks
+// recruit (a foot: 20 of the humanoid's 61), kept as sorted ranges of dof indices; W is kept as
+// one block of columns per level, each non-zero only on the ranges of rows of its level and of
+// the blocks it was projected against. Products with W then run over the overlapping ranges
+// only (a hand shares just the root with the feet), and the last active level skips the
+// projector update altogether. Dense mode (equality rows) has one range, every coordinate.
 void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
-  w.dq = w.dq0;
-  const int r = w.mask_mode ? w.n : w.null_dim;
-  if (w.mask_mode)
-    w.reduced_jacobian.noalias() = w.jacobian * w.mask.asDiagonal();
+  const bool maskMode = w.mask_mode;
+  const int r = maskMode ? w.n : w.null_dim;
+  // The levels' steps accumulate in reduced coordinates z; Δq = Δq0 + N z (or Δq0 + z) once at
+  // the end. The compensated errors use J Δq = J Δq0 + J̃ z.
+  auto z = w.small_z.head(r);
+  z.setZero();
+  auto jdq0 = w.small_rows.head(w.rows);
+  if (w.rank > 0)
+    jdq0.noalias() = w.jacobian * w.dq0;
   else
-    w.reduced_jacobian.leftCols(r).noalias() = w.jacobian * w.nullspace.leftCols(r);
-  int s = 0;  // columns of W (orthonormal rows of the higher levels, reduced coordinates)
+    jdq0.setZero();
+  // Mask mode reads J̃ = J diag(mask) straight from J. Products with W may even use J itself:
+  // W's rows at pinned dofs are zero, as W lies in the null space of the active rows.
+  if (!maskMode) w.reduced_jacobian.leftCols(r).noalias() = w.jacobian * w.nullspace.leftCols(r);
+  const Eigen::MatrixXd& jFull = maskMode ? w.jacobian : w.reduced_jacobian;
+  w.dense_ranges[0] = {0, r};
+  int lastActive = -1;
+  for (size_t k = 0; k < model.levels.size(); ++k)
+    if (levelActive(model.levels[k], w)) lastActive = static_cast<int>(k);
+  int s = 0;       // columns of W
+  int blocks = 0;  // W's blocks: block b has columns block_begin[b] + [0, block_size[b])
   for (size_t k = 0; k < model.levels.size(); ++k) {
     const Model::Level& level = model.levels[k];
     if (!levelActive(level, w) || s >= r) continue;
     const int m = level.rows;
-    Eigen::MatrixXd& jh = w.level_j[k];
-    auto jhr = jh.leftCols(r);
+    const std::vector<int>& support = maskMode ? w.level_support[k] : w.all_support;
+    const std::vector<Workspace::Range>& ranges = maskMode ? w.level_ranges[k] : w.dense_ranges;
+    const int p = maskMode ? static_cast<int>(support.size()) : r;
+    const auto jRows = jFull.middleRows(level.first_row, m);
+
+    // J̃ on the level's support: gathered in mask mode, a block of J N in dense mode.
+    if (maskMode) {
+      auto g = w.gathered_j.topLeftCorner(m, p);
+      for (int i = 0; i < p; ++i) {
+        const int c = support[i];
+        if (w.rank == 0 || w.mask(c) != 0.0)  // no pinned dof: J̃ = J
+          g.col(i) = w.jacobian.col(c).segment(level.first_row, m);
+        else
+          g.col(i).setZero();
+      }
+    }
+    const Eigen::Ref<const Eigen::MatrixXd> js =
+        maskMode ? Eigen::Ref<const Eigen::MatrixXd>(w.gathered_j.topLeftCorner(m, p))
+                 : Eigen::Ref<const Eigen::MatrixXd>(w.reduced_jacobian.block(level.first_row, 0, m, r));
+    // J̃W block by block, over the rows the level shares with each block.
+    auto jw = w.level_jw[k].leftCols(s);
+    for (int b = 0; b < blocks; ++b) {
+      auto jwb = jw.middleCols(w.block_begin[b], w.block_size[b]);
+      jwb.setZero();
+      bool touched = false;
+      forEachOverlap(ranges, w.block_ranges[b], [&](int lo, int hi) {
+        addProduct(jwb, jRows.middleCols(lo, hi - lo), w.row_space.block(lo, w.block_begin[b], hi - lo, w.block_size[b]), 1.0);
+        touched = true;
+      });
+      w.block_touched[b] = touched ? 1 : 0;
+    }
+
     Eigen::VectorXd& res = w.level_res[k];
     res = w.error.segment(level.first_row, m);
-    res.noalias() -= w.jacobian.middleRows(level.first_row, m) * w.dq;  // compensated error
-    jhr = w.reduced_jacobian.block(level.first_row, 0, m, r);
-    if (s > 0) {  // Ĵ = J N (I - W Wᵀ): the part of the level the higher levels left free
-      auto jw = w.level_jw[k].leftCols(s);
-      jw.noalias() = jhr * w.row_space.topLeftCorner(r, s);
-      jhr.noalias() -= jw * w.row_space.topLeftCorner(r, s).transpose();
+    res -= jdq0.segment(level.first_row, m);  // compensated error
+    if (maskMode) {
+      auto zs = w.small_b.head(p);
+      for (int i = 0; i < p; ++i) zs(i) = z(support[i]);
+      res.noalias() -= js * zs;
+    } else {
+      res.noalias() -= js * z;
     }
-    Eigen::MatrixXd& gram = w.level_gram[k];  // lower triangle only: LLT and eig read just that
+
+    Eigen::MatrixXd& gram = w.level_gram[k];  // lower triangle only: the kernels read just that
     gram.setZero();
-    gram.selfadjointView<Eigen::Lower>().rankUpdate(jhr);
+    gram.selfadjointView<Eigen::Lower>().rankUpdate(js);
+    if (s > 0) gram.selfadjointView<Eigen::Lower>().rankUpdate(jw, -1.0);
     const LevelDamping d = levelDamping(gram, w, k, o);
 
     // Damped step: Δz = Ĵᵀ (G + λ² I)⁻¹ res.
     Eigen::VectorXd& y = w.level_y[k];
     y = res;
     if (d.lambda2 > 0) {
-      Eigen::MatrixXd& damped = w.level_shifted[k];
+      Eigen::MatrixXd& damped = w.level_factor2[k];
       damped = gram;
       damped.diagonal().array() += d.lambda2;
-      w.level_llt2[k].compute(damped);
-      choleskySolve(w.level_llt2[k].matrixLLT(), y.data());
-    } else {
-      choleskySolve(w.level_llt[k].matrixLLT(), y.data());  // λ = 0 only when G is positive definite
+      // G + λ² I with λ² > 0 is positive definite unless round-off made G indefinite by more
+      // than λ²; then this level takes no step rather than a wrong one.
+      if (detail::choleskyInPlace(damped, w.level_factor2_inv[k]))
+        detail::choleskySolve(damped, w.level_factor2_inv[k], y.data());
+      else
+        y.setZero();
+    } else {  // λ = 0 only when G is positive definite
+      detail::choleskySolve(w.level_factor[k], w.level_factor_inv[k], y.data());
     }
     auto dz = w.tmp_n.head(r);
-    dz.noalias() = jhr.transpose() * y;
+    if (maskMode) {
+      auto jty = w.small_a.head(p);
+      jty.noalias() = js.transpose() * y;
+      dz.setZero();
+      for (int i = 0; i < p; ++i) dz(support[i]) = jty(i);
+    } else {
+      dz.noalias() = js.transpose() * y;
+    }
+    for (int b = 0; b < blocks; ++b) {
+      if (!w.block_touched[b]) continue;
+      const int c0 = w.block_begin[b], nb = w.block_size[b];
+      auto wy = w.small_b.head(nb);
+      wy.noalias() = jw.middleCols(c0, nb).transpose() * y;
+      for (const Workspace::Range& g : w.block_ranges[b])
+        dz.segment(g.begin, g.end - g.begin).noalias() -= w.row_space.block(g.begin, c0, g.end - g.begin, nb) * wy;
+    }
     if (const double cap = levelStepScale(dz.norm(), o); cap < 1.0) dz *= cap;
-    if (w.mask_mode)
-      w.dq += dz;
-    else
-      w.dq.noalias() += w.nullspace.leftCols(r) * dz;
+    z += dz;
+
+    if (static_cast<int>(k) == lastActive) break;  // nothing below needs this level's rows
 
     // Projector update (undamped, rank-thresholded): append an orthonormal basis of Ĵ's rows to
-    // W. Full rank: with G = L Lᵀ, the rows of L⁻¹ Ĵ are that basis (no eigen-decomposition).
-    if (d.gram_pd && d.sigma_min > o.rank_tolerance && m <= r - s) {
-      auto mt = w.level_jw[k].leftCols(r);
-      mt = jhr;
-      w.level_llt[k].matrixL().solveInPlace(mt);
-      w.row_space.block(0, s, r, m) = mt.transpose();
-      s += m;
-      continue;
-    }
-    // Rank-deficient level: eigen-decompose G (σ² are its eigenvalues), keep σ > tolerance.
-    auto& eig = w.level_eig[k];
-    eig.compute(gram);
-    const auto& values = eig.eigenvalues();
-    const auto& vectors = eig.eigenvectors();
-    int rank = 0;
-    for (int i = m; i-- > 0 && rank < r - s;) {
-      if (!(std::sqrt(std::max(values(i), 0.0)) > o.rank_tolerance)) break;  // eigenvalues ascend
-      ++rank;
-    }
-    if (rank > 0) {
-      auto v = w.row_space.block(0, s, r, rank);
-      v.noalias() = jhr.transpose() * vectors.rightCols(rank);
-      for (int c = 0; c < rank; ++c) {
-        const double sigma = std::sqrt(values(m - rank + c));
-        auto col = v.col(c);
-        col /= sigma;
-        // Analytically orthogonal to W; round-off grows like eps/σ, so re-orthogonalise small σ.
-        if (sigma < 1e-3 && s > 0) {
-          auto proj = w.tmp_n2.head(s);
-          proj.noalias() = w.row_space.topLeftCorner(r, s).transpose() * col;
-          col.noalias() -= w.row_space.topLeftCorner(r, s) * proj;
-          col.normalize();
-        }
+    // W as a new block. Ĵᵀ = J̃ᵀ - W (J̃W)ᵀ first (in `jt`, r x m, non-zero on the marked rows).
+    auto jt = w.level_cols.topLeftCorner(r, m);
+    std::fill(w.row_mark.begin(), w.row_mark.begin() + r, 0);
+    if (maskMode) {
+      for (const Workspace::Range& g : ranges) {
+        jt.middleRows(g.begin, g.end - g.begin).setZero();
+        std::fill(w.row_mark.begin() + g.begin, w.row_mark.begin() + g.end, 1);
       }
-      s += rank;
+      for (int i = 0; i < p; ++i) jt.row(support[i]) = js.col(i).transpose();
+    } else {
+      jt = js.transpose();
+      std::fill(w.row_mark.begin(), w.row_mark.begin() + r, 1);
     }
+    for (int b = 0; b < blocks; ++b) {
+      if (!w.block_touched[b]) continue;
+      const int c0 = w.block_begin[b], nb = w.block_size[b];
+      for (const Workspace::Range& g : w.block_ranges[b]) {
+        const int len = g.end - g.begin;
+        for (int i = g.begin; i < g.end; ++i)
+          if (!w.row_mark[i]) {
+            jt.row(i).setZero();
+            w.row_mark[i] = 1;
+          }
+        addProduct(jt.middleRows(g.begin, len), w.row_space.block(g.begin, c0, len, nb), jw.middleCols(c0, nb).transpose(), -1.0);
+      }
+    }
+    std::vector<Workspace::Range>& newRanges = w.block_ranges[blocks];
+    markedRanges(w.row_mark, r, newRanges);
+
+    int added = 0;
+    double smallest = 0.0;
+    if (d.gram_pd && d.sigma_min > o.rank_tolerance && m <= r - s) {
+      // Full rank: U = Ĵᵀ L⁻ᵀ (no eigen-decomposition), row range by row range.
+      added = m;
+      smallest = d.sigma_min;
+      auto u = w.row_space.block(0, s, r, m);
+      for (int i = 0, next = 0; i < static_cast<int>(newRanges.size()); ++i) {
+        const Workspace::Range& g = newRanges[i];
+        u.middleRows(next, g.begin - next).setZero();
+        auto rows = u.middleRows(g.begin, g.end - g.begin);
+        rows = jt.middleRows(g.begin, g.end - g.begin);
+        detail::solveRightLowerTransposed(w.level_factor[k], w.level_factor_inv[k], rows);
+        next = g.end;
+        if (i + 1 == static_cast<int>(newRanges.size())) u.bottomRows(r - g.end).setZero();
+      }
+    } else {
+      // Rank-deficient level: eigen-decompose G (σ² are its eigenvalues), keep σ > tolerance,
+      // U = Ĵᵀ V Σ⁻¹.
+      auto& eig = w.level_eig[k];
+      eig.compute(gram);
+      const auto& values = eig.eigenvalues();
+      for (int i = m; i-- > 0 && added < r - s;) {
+        if (!(std::sqrt(std::max(values(i), 0.0)) > o.rank_tolerance)) break;  // eigenvalues ascend
+        ++added;
+      }
+      if (added == 0) continue;
+      auto u = w.row_space.block(0, s, r, added);
+      u.setZero();
+      auto coef = w.level_solve.topLeftCorner(m, added);
+      for (int c = 0; c < added; ++c)
+        coef.col(c) = eig.eigenvectors().col(m - added + c) / std::sqrt(values(m - added + c));
+      for (const Workspace::Range& g : newRanges)
+        u.middleRows(g.begin, g.end - g.begin).noalias() = jt.middleRows(g.begin, g.end - g.begin) * coef;
+      smallest = std::sqrt(values(m - added));
+    }
+    // The new rows are analytically orthogonal to W; round-off grows like eps |J̃| / σ, so
+    // re-orthogonalise (densely; rare) when a kept singular value is small.
+    if (smallest < 1e-3 && s > 0) {
+      for (int c = 0; c < added; ++c) {
+        auto col = w.row_space.col(s + c).head(r);
+        auto proj = w.small_b.head(s + c);
+        proj.noalias() = w.row_space.topLeftCorner(r, s + c).transpose() * col;
+        col.noalias() -= w.row_space.topLeftCorner(r, s + c) * proj;
+        col.normalize();
+      }
+      newRanges.clear();
+      newRanges.push_back({0, r});
+    }
+    w.block_begin[blocks] = s;
+    w.block_size[blocks] = added;
+    ++blocks;
+    s += added;
   }
+  w.dq = w.dq0;
+  if (maskMode)
+    w.dq += z;
+  else
+    w.dq.noalias() += w.nullspace.leftCols(r) * z;
 }
+
 
 void referencePass(const Model& model, Workspace& w, const SolveOptions& o) {
   w.dq = w.dq0;

@@ -58,6 +58,8 @@ struct Workspace {
   Eigen::MatrixXd eq_matrix;  // the independent equality rows (eq_rank x n) and their rhs
   Eigen::VectorXd eq_rhs;
   std::vector<int> eq_rows;  // independent equality row indices
+  std::vector<int> eq_begin, eq_dof;  // the same rows' non-zero terms (sparse), for b - A q
+  std::vector<double> eq_coef;
   int eq_rank = 0;
 
   // Null space of A. Mask mode (only single-dof rows active, no equality rows): the projector is
@@ -84,9 +86,33 @@ struct Workspace {
   std::vector<Eigen::VectorXd> level_res, level_coef, level_tmp;
   std::vector<Eigen::MatrixXd> level_jw;     // m_k x n (J W)
   std::vector<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>> level_eig;
-  std::vector<Eigen::MatrixXd> level_shifted;  // G - eps² I
-  std::vector<Eigen::LLT<Eigen::MatrixXd>> level_llt, level_llt2;  // G; G ± scalar shifts
+  std::vector<Eigen::MatrixXd> level_inverse;  // G⁻¹ (damping estimate)
+  // Cholesky factors (lower, small_cholesky.h) and their diagonals' reciprocals: of G, and of
+  // G shifted by -eps² (the damping test) or +λ² (the damped solve).
+  std::vector<Eigen::MatrixXd> level_factor, level_factor2;
+  std::vector<Eigen::VectorXd> level_factor_inv, level_factor2_inv;
   std::vector<Eigen::VectorXd> level_y;
+  // Columns a level's Jacobian can be non-zero in (its tasks' recruited dofs, sorted): in mask
+  // mode the pass works on these columns only.
+  std::vector<std::vector<int>> level_support;
+  int max_level_rows = 0;
+  Eigen::MatrixXd gathered_j;  // max_level_rows x n: J̃ of one level on its support
+  struct Range {
+    int begin = 0, end = 0;  // [begin, end)
+  };
+  std::vector<int> all_support;              // 0..n-1 (dense mode)
+  std::vector<Range> dense_ranges;           // {[0, r)} (dense mode)
+  std::vector<std::vector<Range>> level_ranges;  // each level's support as ranges
+  // W's blocks (one per level that added rows): first column, width, the row ranges it is
+  // non-zero on (each reserved to n), and whether the current level overlaps it.
+  std::vector<int> block_begin, block_size;
+  std::vector<std::vector<Range>> block_ranges;
+  std::vector<char> block_touched;
+  std::vector<char> row_mark;  // n
+  Eigen::MatrixXd level_solve; // max_level_rows²: V Σ⁻¹ (rank-deficient levels)
+  Eigen::MatrixXd level_cols;  // n x max_level_rows: Ĵᵀ
+  Eigen::VectorXd small_a, small_b, small_z;  // n each
+  Eigen::VectorXd small_rows;  // rows: J Δq0
 
   // Reference path scratch.
   Eigen::MatrixXd projector, projector0, eq_projector0;
