@@ -11,9 +11,9 @@ if(EMBODY_WERROR)
   target_compile_options(embody_warnings INTERFACE -Werror)
 endif()
 
-# Wider SIMD for Eigen (AVX2 + FMA with x86-64-v3 or native): about 20 % off the IK pass
-# (docs/performance.md). Off by default so binaries run on any x86-64; set it when building for
-# the machine (or the fleet) that runs the headset.
+# Wider SIMD for Eigen (AVX2 + FMA with x86-64-v3 or native): 8 % off the fast IK pass, a third
+# off the reference pass (docs/performance.md). Off by default so binaries run on any x86-64; set
+# it when building for the machine (or the fleet) that runs the headset.
 if(EMBODY_ARCH)
   add_compile_options(-march=${EMBODY_ARCH})
 endif()
