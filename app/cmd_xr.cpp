@@ -106,11 +106,11 @@ int runXr(cli::Argv argv) {
   if (bodyMode == "ik") {
     runtime::TrackedBodyOptions bo;
     bo.body.trackers = tracking::TrackerMask::threePoint();
-    bo.seated = lo.placement.seated;
-    const float eye = lo.placement.userEyeHeight;  // 0: from the first head sample (standing)
-    bo.standingEyeHeight = eye > 0.0f ? eye : 1.64f;
-    // The solver takes a body height; a seated user's head height says nothing about it.
-    bo.body.userHeight = eye > 0.0f ? eye / 0.936f : (bo.seated ? bo.standingEyeHeight / 0.936f : 0.0f);
+    bo.body.seat = seat;
+    // The solver takes a body height (0: from the first head sample, standing); seated, the
+    // solver assumes 1.75 m unless --height gives the standing eye height.
+    const float eye = lo.placement.userEyeHeight;
+    bo.body.userHeight = eye > 0.0f ? eye / 0.936f : 0.0f;
     bo.stage.budgetSeconds = budgetMs * 1e-3;
     auto created = runtime::TrackedAvatarBody::create(asset, bo);
     if (!created) {

@@ -14,9 +14,27 @@ std::string_view taskKindName(TaskKind kind) {
     case TaskKind::TrackerPosition: return "position";
     case TaskKind::TrackerOrientation: return "orientation";
     case TaskKind::InferredHips: return "inferred_hips";
+    case TaskKind::SeatedHip: return "seated_hip";
+    case TaskKind::SeatedKnee: return "seated_knee";
+    case TaskKind::SeatedPelvis: return "seated_pelvis";
   }
   return "?";
 }
+
+namespace {
+
+// Levels 2 to 4 of both layouts: 2 the head position, 3 the hand positions, 4 the orientations
+// (which matter less than positions).
+void addUpperBody(TaskLayout& l, tracking::TrackerMask trackers) {
+  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Head, 2, 1.0f});
+  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
+    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerPosition, hand, 3, 1.0f});
+  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, 4, 1.0f});
+  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
+    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerOrientation, hand, 4, 1.0f});
+}
+
+}  // namespace
 
 TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
   TaskLayout l;
@@ -40,15 +58,8 @@ TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
   // person. Its orientation is a level lower (4): in first person the view turns with the HMD
   // whatever the avatar's head does, and sharing a level with the position would let the
   // orientation rows trade eye position for head angle (least squares) whenever the trunk is
-  // short of reach.
-  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Head, 2, 1.0f});
-  // 3: hand positions.
-  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
-    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerPosition, hand, 3, 1.0f});
-  // 4: orientations, which matter less than positions.
-  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, 4, 1.0f});
-  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
-    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerOrientation, hand, 4, 1.0f});
+  // short of reach. 3: the hand positions. 4: the orientations.
+  addUpperBody(l, trackers);
   // 5: a tracked pelvis, over the ground only, the softest level: its height follows from the
   // head and the legs, whose proportions differ between user and avatar, and when the scaled
   // performer's trunk is longer than the avatar's the pelvis must yield, not the head. Strict
@@ -56,6 +67,27 @@ TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
   // (a row scaled by √w is damped as if λ were λ/√w), so while it conflicts its steps, and with
   // them their second-order pull on the levels above, stay small (docs/runtime.md).
   if (trackers.has(TrackerId::Hips)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Hips, 5, 0.1f});
+  return l;
+}
+
+TaskLayout seatedTaskLayoutFor(tracking::TrackerMask trackers) {
+  TaskLayout l;
+  l.seated = true;
+  // 1: the seat. Both hip joint centres (the pelvis can only pitch about the line through them:
+  // leaning bends the hips and the spine, never lifts the pelvis), the knees (the one free turn of
+  // each leg about its hip-ankle line) and the feet (position and orientation, flat). The targets
+  // are one consistent rigid leg pose (seated_pose.h), so this level is met exactly.
+  for (auto foot : {TrackerId::LeftFoot, TrackerId::RightFoot}) {
+    l.tasks.push_back({TaskKind::SeatedHip, foot, 1, 1.0f});
+    l.tasks.push_back({TaskKind::SeatedKnee, foot, 1, 1.0f});
+    l.tasks.push_back({TaskKind::FootPlant, foot, 1, 1.0f});
+  }
+  // 2-4: as standing. The head and hands move the spine, the pelvis's pitch and the arms only.
+  addUpperBody(l, trackers);
+  // 5: the pelvis upright, facing the seat: which of pelvis and spine takes a lean is otherwise
+  // up to the minimum-norm steps, and the split would drift over a session. Within the null
+  // space of the head and hands it only redistributes, so the spine bends first.
+  l.tasks.push_back({TaskKind::SeatedPelvis, TrackerId::Hips, 5, 0.3f});
   return l;
 }
 
@@ -69,11 +101,15 @@ std::string TaskLayout::describe() const {
   std::string s;
   for (const auto& t : tasks) {
     s += "  " + std::to_string(t.priority) + "  " + std::string(taskKindName(t.kind));
-    if (t.kind != TaskKind::Balance && t.kind != TaskKind::InferredHips) s += " " + std::string(tracking::trackerKey(t.tracker));
+    if (t.kind == TaskKind::SeatedHip || t.kind == TaskKind::SeatedKnee)
+      s += t.tracker == TrackerId::LeftFoot ? " left" : " right";
+    else if (t.kind != TaskKind::Balance && t.kind != TaskKind::InferredHips && t.kind != TaskKind::SeatedPelvis)
+      s += " " + std::string(tracking::trackerKey(t.tracker));
     if (t.weight != 1.0f) s += " (weight " + std::to_string(t.weight).substr(0, 4) + ")";
     s += "\n";
   }
-  if (inferLowerBody) s += "  lower body inferred: feet planted, stepping when the user walks or turns\n";
+  if (seated) s += "  seated: the lower body sits on the seat, the spine and arms follow the head and hands\n";
+  else if (inferLowerBody) s += "  lower body inferred: feet planted, stepping when the user walks or turns\n";
   return s;
 }
 
