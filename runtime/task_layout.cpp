@@ -21,21 +21,6 @@ std::string_view taskKindName(TaskKind kind) {
   return "?";
 }
 
-namespace {
-
-// Levels 2 to 4 of both layouts: 2 the head position, 3 the hand positions, 4 the orientations
-// (which matter less than positions).
-void addUpperBody(TaskLayout& l, tracking::TrackerMask trackers) {
-  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Head, 2, 1.0f});
-  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
-    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerPosition, hand, 3, 1.0f});
-  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, 4, 1.0f});
-  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
-    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerOrientation, hand, 4, 1.0f});
-}
-
-}  // namespace
-
 TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
   TaskLayout l;
   const bool feet = trackers.has(TrackerId::LeftFoot) && trackers.has(TrackerId::RightFoot);
@@ -58,8 +43,15 @@ TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
   // person. Its orientation is a level lower (4): in first person the view turns with the HMD
   // whatever the avatar's head does, and sharing a level with the position would let the
   // orientation rows trade eye position for head angle (least squares) whenever the trunk is
-  // short of reach. 3: the hand positions. 4: the orientations.
-  addUpperBody(l, trackers);
+  // short of reach.
+  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Head, 2, 1.0f});
+  // 3: hand positions.
+  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
+    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerPosition, hand, 3, 1.0f});
+  // 4: orientations, which matter less than positions.
+  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, 4, 1.0f});
+  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
+    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerOrientation, hand, 4, 1.0f});
   // 5: a tracked pelvis, over the ground only, the softest level: its height follows from the
   // head and the legs, whose proportions differ between user and avatar, and when the scaled
   // performer's trunk is longer than the avatar's the pelvis must yield, not the head. Strict
@@ -82,12 +74,22 @@ TaskLayout seatedTaskLayoutFor(tracking::TrackerMask trackers) {
     l.tasks.push_back({TaskKind::SeatedKnee, foot, 1, 1.0f});
     l.tasks.push_back({TaskKind::FootPlant, foot, 1, 1.0f});
   }
-  // 2-4: as standing. The head and hands move the spine, the pelvis's pitch and the arms only.
-  addUpperBody(l, trackers);
-  // 5: the pelvis upright, facing the seat: which of pelvis and spine takes a lean is otherwise
-  // up to the minimum-norm steps, and the split would drift over a session. Within the null
-  // space of the head and hands it only redistributes, so the spine bends first.
-  l.tasks.push_back({TaskKind::SeatedPelvis, TrackerId::Hips, 5, 0.3f});
+  // 2: the head position, as standing.
+  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Head, 2, 1.0f});
+  // 3: the hand positions, as standing.
+  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
+    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerPosition, hand, 3, 1.0f});
+  // 4: the pelvis's tilt about the hip joints, a set share of the lean towards the head
+  // (SeatOptions::pelvisShare, a lumbopelvic rhythm). With the hip joints pinned the pelvis can
+  // only pitch, and left to the minimum-norm steps (or below the orientations, which leave it no
+  // freedom) a lean became pelvis tilt alone (30 degrees, the spine straight); above the hands,
+  // it held the shoulders where the hands could not reach when the user leans sideways too. Here
+  // it splits the lean in what the head and hands leave free.
+  l.tasks.push_back({TaskKind::SeatedPelvis, TrackerId::Hips, 4, 1.0f});
+  // 5: the orientations (level 4 standing).
+  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, 5, 1.0f});
+  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
+    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerOrientation, hand, 5, 1.0f});
   return l;
 }
 

@@ -19,7 +19,7 @@ enum class TaskKind : uint8_t {
   InferredHips,       // three-point mode: the pelvis under the head, upright, facing the heading
   SeatedHip,          // seated mode: a hip joint centre on the seat (3 rows; `tracker` names the side's foot)
   SeatedKnee,         // seated mode: a knee ahead of its hip joint over the planted foot (3 rows)
-  SeatedPelvis        // seated mode: the pelvis upright, facing the seat (3 rows, the softest level)
+  SeatedPelvis        // seated mode: the pelvis facing the seat, tilted by a share of the lean (3 rows)
 };
 
 struct TaskSpec {
@@ -40,9 +40,9 @@ struct TaskLayout {
 // The layout for the trackers a source provides (e.g. threePoint() or all()).
 TaskLayout taskLayoutFor(tracking::TrackerMask trackers);
 
-// Seated mode: the lower body sits (hip joints, knees and feet pinned at priority 1), the head,
-// hands and their orientations follow as in taskLayoutFor, the pelvis is kept upright at the
-// softest level. Hips and feet trackers, when the source has them, are not used.
+// Seated mode: the lower body sits (hip joints, knees and feet pinned at priority 1), then the
+// head position (2), the pelvis tilt (3: a share of the lean, the spine bends for the rest),
+// the hand positions (4) and the orientations (5). Hips and feet trackers are not used.
 TaskLayout seatedTaskLayoutFor(tracking::TrackerMask trackers);
 
 // How strongly a target with this status should pull (0 = drop the task this frame). Held and

@@ -96,57 +96,178 @@ TEST_CASE("seated: the pelvis stays on the seat and the legs stay seated while t
   for (int i = 0; i < 60; ++i, t += 1.0 / 90.0) REQUIRE(b.solve(seatedSample(home, t)));
   REQUIRE(b.solver().seat() != nullptr);
   const runtime::LowerBodyPosture start = b.posture();
-  const glm::vec3 pelvis0 = b.at(start.pelvis);
+  const glm::vec3 hips0 = b.at(0.5 * (start.hip[0] + start.hip[1]));  // where the pelvis sits
   const glm::vec3 ankle0[2] = {b.at(start.ankle[0]), b.at(start.ankle[1])};
   const double seatHeight = b.metres(float(b.solver().seat()->seatHeight));
-  INFO("seat height " << seatHeight << " m, pelvis " << pelvis0.x << " " << pelvis0.y << " " << pelvis0.z);
-  // Upright on the seat: thighs level, shins down, the trunk over the pelvis.
-  for (int s = 0; s < 2; ++s) {
-    CHECK(start.kneeFlexion[size_t(s)] / kRad == Approx(90.0).margin(20.0));
-    CHECK(start.hipFlexion[size_t(s)] / kRad == Approx(90.0).margin(20.0));
+  INFO("seat height " << seatHeight << " m, hip joints at " << hips0.x << " " << hips0.y << " " << hips0.z);
+  // Upright on the seat, under the head: thighs level, shins down, the trunk over the pelvis.
+  for (size_t s = 0; s < 2; ++s) {
+    CHECK(start.kneeFlexion[s] / kRad == Approx(90.0).margin(20.0));
+    CHECK(start.hipFlexion[s] / kRad == Approx(90.0).margin(20.0));
+    CHECK(b.at(start.ankle[s]).z < hips0.z - 0.3f);  // the feet in front of the seat
   }
+  CHECK(start.pelvisPitch / kRad < 5.0);
+  CHECK(std::abs(hips0.x) < 0.01f);
+  CHECK(hips0.z > 0.0f);  // the seat is under the head, the hips a little behind the eyes
+  CHECK(hips0.z < 0.25f);
   CHECK(seatHeight > 0.35);
-  CHECK(seatHeight < 0.6);
-  const MeshHeights rest = skinnedHeights(b);
-  CHECK(rest.lowest == Approx(0.0).margin(0.01));  // the soles on the floor
+  CHECK(seatHeight < 0.55);
+  CHECK(skinnedHeights(b).lowest == Approx(0.0).margin(0.01));  // the soles on the floor
 
-  // 4 s at 90 Hz: the head sways ±20 cm sideways and leans up to 20 cm forward and back again.
-  double pelvisDrift = 0.0, ankleDrift = 0.0, lowest = 1e9;
+  // 4 s at 90 Hz: the head sways ±20 cm sideways, and leans 20 cm forward (dropping 4 cm, as a
+  // trunk turning about the hips does) and back, twice.
+  double hipsDrift = 0.0, ankleDrift = 0.0, lowest = 1e9, pitchMax = 0.0;
   double kneeMin = 1e9, kneeMax = -1e9, hipMin = 1e9, hipMax = -1e9;
   std::vector<double> head, hands;
   for (int i = 0; i < 360; ++i, t += 1.0 / 90.0) {
     const double phase = i / 360.0 * 2.0 * 3.14159265358979323846;
-    const glm::vec3 h = home + glm::vec3(0.2f * float(std::sin(phase)), 0.0f, -0.1f * float(1.0 - std::cos(2.0 * phase)));
+    const float lean = 0.5f * float(1.0 - std::cos(2.0 * phase));  // 0..1
+    const glm::vec3 h = home + glm::vec3(0.2f * float(std::sin(phase)), -0.04f * lean, -0.2f * lean);
     REQUIRE(b.solve(seatedSample(h, t)));
     const runtime::LowerBodyPosture p = b.posture();
-    pelvisDrift = std::max(pelvisDrift, double(glm::distance(b.at(p.pelvis), pelvis0)));
-    for (int s = 0; s < 2; ++s) {
-      ankleDrift = std::max(ankleDrift, double(glm::distance(b.at(p.ankle[size_t(s)]), ankle0[s])));
-      kneeMin = std::min(kneeMin, p.kneeFlexion[size_t(s)] / kRad), kneeMax = std::max(kneeMax, p.kneeFlexion[size_t(s)] / kRad);
-      hipMin = std::min(hipMin, p.hipFlexion[size_t(s)] / kRad), hipMax = std::max(hipMax, p.hipFlexion[size_t(s)] / kRad);
+    hipsDrift = std::max(hipsDrift, double(glm::distance(b.at(0.5 * (p.hip[0] + p.hip[1])), hips0)));
+    pitchMax = std::max(pitchMax, p.pelvisPitch / kRad);
+    for (size_t s = 0; s < 2; ++s) {
+      ankleDrift = std::max(ankleDrift, double(glm::distance(b.at(p.ankle[s]), ankle0[s])));
+      kneeMin = std::min(kneeMin, p.kneeFlexion[s] / kRad), kneeMax = std::max(kneeMax, p.kneeFlexion[s] / kRad);
+      hipMin = std::min(hipMin, p.hipFlexion[s] / kRad), hipMax = std::max(hipMax, p.hipFlexion[s] / kRad);
     }
     const auto& r = b.body->frame().stats.residual;
     head.push_back(b.metres(r[size_t(tracking::index(TrackerId::Head))]));
     hands.push_back(b.metres(std::max(r[size_t(tracking::index(TrackerId::LeftHand))], r[size_t(tracking::index(TrackerId::RightHand))])));
-    if (i % 30 == 0) {
-      const auto* seat = b.solver().seat();
-      WARN("i " << i << " pitch " << p.pelvisPitch / kRad << " spine " << p.spineFlexion / kRad << " hipL drift "
-                << (p.hip[0] - seat->hip[0]).norm() << " knee drift " << (p.knee[0] - seat->knee[0]).norm() << " ankle "
-                << (p.ankle[0] - seat->ankle[0]).norm() << " head " << head.back() << " it " << b.body->frame().stats.iterations);
-    }
     if (i % 45 == 0) lowest = std::min(lowest, double(skinnedHeights(b).lowest));
   }
-  INFO("pelvis drift " << pelvisDrift << " ankle drift " << ankleDrift << " knee " << kneeMin << ".." << kneeMax
-                       << " hip " << hipMin << ".." << hipMax << " head p95 " << p95(head) << " hands p95 "
-                       << p95(hands) << " lowest " << lowest);
-  CHECK(pelvisDrift < 0.01);
-  CHECK(ankleDrift < 0.005);
+  INFO("hip joints drift " << hipsDrift << " ankle drift " << ankleDrift << " knee " << kneeMin << ".." << kneeMax
+                           << " hip " << hipMin << ".." << hipMax << " pelvis pitch max " << pitchMax << " head p95 "
+                           << p95(head) << " hands p95 " << p95(hands) << " lowest " << lowest);
+  CHECK(hipsDrift < 0.01);   // the pelvis sits: it only pitches about its hip joints
+  CHECK(ankleDrift < 0.003); // the feet stay planted
   CHECK(kneeMin > 70.0);
   CHECK(kneeMax < 110.0);
   CHECK(hipMin > 70.0);
-  CHECK(hipMax < 130.0);
-  CHECK(lowest > -0.01);
+  CHECK(hipMax < 125.0);     // the lean flexes the hips up to their limit (120 degrees past rest)
+  CHECK(lowest > -0.01);     // no vertex of the posed mesh below the floor
   CHECK(p95(head) < 0.02);
   CHECK(p95(hands) < 0.02);
-  CHECK(false);
+}
+
+TEST_CASE("seated: leaning forward to reach bends the spine and the hips, the pelvis stays on the seat",
+          "[runtime]") {
+  Body b = seatedBody();
+  const glm::vec3 home(0.0f, kSeatedEye, 0.0f);
+  double t = 0.0;
+  for (int i = 0; i < 60; ++i, t += 1.0 / 90.0) REQUIRE(b.solve(seatedSample(home, t)));
+  const runtime::LowerBodyPosture upright = b.posture();
+  const glm::vec3 hips0 = b.at(0.5 * (upright.hip[0] + upright.hip[1]));
+  // Over 1 s the head goes 30 cm forward and 15 cm down, the hands with it:
+  // reaching for something on a table.
+  for (int i = 1; i <= 90; ++i, t += 1.0 / 90.0) {
+    const float f = float(i) / 90.0f;
+    REQUIRE(b.solve(seatedSample(home + f * glm::vec3(0.0f, -0.15f, -0.30f), t)));
+  }
+  for (int i = 0; i < 30; ++i, t += 1.0 / 90.0) REQUIRE(b.solve(seatedSample(home + glm::vec3(0.0f, -0.15f, -0.30f), t)));
+  const runtime::LowerBodyPosture lean = b.posture();
+  const auto& r = b.body->frame().stats.residual;
+  INFO("spine " << upright.spineFlexion / kRad << " -> " << lean.spineFlexion / kRad << " deg, hips "
+                << upright.hipFlexion[0] / kRad << " -> " << lean.hipFlexion[0] / kRad << " deg, head error "
+                << b.metres(r[0]) << " hands " << b.metres(r[1]) << " " << b.metres(r[2]));
+  CHECK(lean.spineFlexion > upright.spineFlexion + 5.0 * kRad);  // measured: +8 degrees
+  CHECK(lean.hipFlexion[0] > upright.hipFlexion[0] + 5.0 * kRad);   // measured: +13.5 degrees
+  CHECK(glm::distance(b.at(0.5 * (lean.hip[0] + lean.hip[1])), hips0) < 0.01f);
+  CHECK(b.metres(r[size_t(tracking::index(TrackerId::Head))]) < 0.02);
+  CHECK(b.metres(r[size_t(tracking::index(TrackerId::LeftHand))]) < 0.02);
+  CHECK(b.metres(r[size_t(tracking::index(TrackerId::RightHand))]) < 0.02);
+}
+
+TEST_CASE("seated: a user standing up stays seated with a bounded head error, and sits back cleanly",
+          "[runtime]") {
+  // Decision (docs/runtime.md): the seat outranks the head, so a user who stands while seated
+  // mode is on leaves the avatar sitting, stretched up as far as its trunk goes; the head error is
+  // the unreachable part of the rise. Recentering places the seat again.
+  Body b = seatedBody();
+  const glm::vec3 home(0.0f, kSeatedEye, 0.0f);
+  double t = 0.0;
+  for (int i = 0; i < 60; ++i, t += 1.0 / 90.0) REQUIRE(b.solve(seatedSample(home, t)));
+  const runtime::LowerBodyPosture start = b.posture();
+  const glm::vec3 hips0 = b.at(0.5 * (start.hip[0] + start.hip[1]));
+  double worstHead = 0.0, hipsDrift = 0.0;
+  for (int i = 0; i <= 180; ++i, t += 1.0 / 90.0) {  // up to a standing eye height (1.63 m) and held
+    const float f = std::min(1.0f, float(i) / 90.0f);
+    REQUIRE(b.solve(seatedSample(home + glm::vec3(0.0f, 0.43f * f, 0.1f * f), t)));
+    for (const auto& l : b.pose.local) {
+      REQUIRE(std::isfinite(l.translation.x + l.translation.y + l.translation.z));
+      REQUIRE(std::isfinite(l.rotation.w + l.rotation.x + l.rotation.y + l.rotation.z));
+    }
+    const runtime::LowerBodyPosture p = b.posture();
+    hipsDrift = std::max(hipsDrift, double(glm::distance(b.at(0.5 * (p.hip[0] + p.hip[1])), hips0)));
+    worstHead = std::max(worstHead, b.metres(b.body->frame().stats.residual[0]));
+  }
+  const double standingError = b.metres(b.body->frame().stats.residual[0]);
+  INFO("head error standing " << standingError << " m, worst " << worstHead << " m, hip joints drift " << hipsDrift);
+  CHECK(hipsDrift < 0.01);
+  CHECK(standingError > 0.25);  // the rise is mostly unreachable...
+  CHECK(worstHead < 0.50);      // ...and the error never exceeds the rise (0.44 m) by much
+  // Sitting back down: the head is met again within a second.
+  for (int i = 0; i < 90; ++i, t += 1.0 / 90.0) REQUIRE(b.solve(seatedSample(home, t)));
+  CHECK(b.metres(b.body->frame().stats.residual[0]) < 0.01);
+  CHECK(b.posture().kneeFlexion[0] / kRad == Approx(start.kneeFlexion[0] / kRad).margin(1.0));
+}
+
+TEST_CASE("seated: --seat-height sets the seat, and reset places it under the head again", "[runtime]") {
+  Body b = seatedBody(0.50f);
+  double t = 0.0;
+  const glm::vec3 home(0.0f, 1.25f, 0.0f);
+  for (int i = 0; i < 60; ++i, t += 1.0 / 90.0) REQUIRE(b.solve(seatedSample(home, t)));
+  REQUIRE(b.solver().seat() != nullptr);
+  CHECK(b.metres(float(b.solver().seat()->seatHeight)) == Approx(0.50).margin(0.005));
+  CHECK(b.metres(float(b.solver().seatedLegs().hipAboveSeat)) > 0.05);
+  CHECK(skinnedHeights(b).lowest == Approx(0.0).margin(0.01));
+  const runtime::LowerBodyPosture high = b.posture();
+  CHECK(high.kneeFlexion[0] / kRad < 90.0);  // a high seat: the thighs slope down to the knees
+  CHECK(high.kneeFlexion[0] / kRad > 70.0);
+
+  // A recenter: the user is now a metre to the right, turned 90 degrees left.
+  b.body->reset();
+  const glm::quat turn = glm::angleAxis(glm::radians(90.0f), glm::vec3(0, 1, 0));
+  const glm::vec3 there(1.0f, 1.25f, 0.0f);
+  auto turned = [&](double time) {
+    tracking::PoseSample s = seatedSample(there, time);
+    for (auto id : {TrackerId::Head, TrackerId::LeftHand, TrackerId::RightHand}) {
+      s[id].position = there + turn * (s[id].position - there);
+      s[id].orientation = turn * s[id].orientation;
+    }
+    return s;
+  };
+  for (int i = 0; i < 90; ++i, t += 1.0 / 90.0) REQUIRE(b.solve(turned(t)));
+  const runtime::LowerBodyPosture p = b.posture();
+  const glm::vec3 hips = b.at(0.5 * (p.hip[0] + p.hip[1]));
+  CHECK(glm::distance(glm::vec2(hips.x, hips.z), glm::vec2(there.x, there.z)) < 0.25f);
+  CHECK(hips.x > there.x);  // behind the eyes, which now look along -X
+  for (size_t s = 0; s < 2; ++s) CHECK(b.at(p.ankle[s]).x < there.x - 0.2f);  // the feet in front
+  CHECK(b.metres(b.body->frame().stats.residual[0]) < 0.02);
+}
+
+TEST_CASE("seated layout: the seat at priority 1, no balance row, the upright pelvis under the head", "[runtime]") {
+  const runtime::TaskLayout l = runtime::seatedTaskLayoutFor(tracking::TrackerMask::threePoint());
+  CHECK(l.seated);
+  CHECK_FALSE(l.inferLowerBody);
+  int seat = 0;
+  for (const auto& t : l.tasks) {
+    CHECK(t.kind != runtime::TaskKind::Balance);
+    if (t.kind == runtime::TaskKind::SeatedHip || t.kind == runtime::TaskKind::SeatedKnee ||
+        t.kind == runtime::TaskKind::FootPlant) {
+      CHECK(t.priority == 1);
+      ++seat;
+    }
+    if (t.kind == runtime::TaskKind::TrackerPosition && t.tracker == TrackerId::Head) CHECK(t.priority == 2);
+    if (t.kind == runtime::TaskKind::SeatedPelvis) CHECK(t.priority == 4);  // under the head and hands
+  }
+  CHECK(seat == 6);
+  CHECK(l.describe().find("seated") != std::string::npos);
+  // Without legs in the humanoid map, seated mode is refused with a clear error (not tested
+  // here: every built-in avatar has legs); a standing solver reports no seat.
+  auto standing = runtime::AvatarBodySolver::create(mannequin());
+  REQUIRE(standing.ok());
+  CHECK_FALSE((*standing)->seated());
+  CHECK((*standing)->seat() == nullptr);
 }
