@@ -41,8 +41,8 @@ struct TaskLayout {
 TaskLayout taskLayoutFor(tracking::TrackerMask trackers);
 
 // Seated mode: the lower body sits (hip joints, knees and feet pinned at priority 1), then the
-// head position (2), the pelvis tilt (3: a share of the lean, the spine bends for the rest),
-// the hand positions (4) and the orientations (5). Hips and feet trackers are not used.
+// head position (2), the hand positions (3), the pelvis's tilt (4: a share of the lean towards the
+// head, the spine bends for the rest) and the orientations (5). Hips and feet trackers are unused.
 TaskLayout seatedTaskLayoutFor(tracking::TrackerMask trackers);
 
 // How strongly a target with this status should pull (0 = drop the task this frame). Held and

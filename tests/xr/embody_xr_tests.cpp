@@ -186,6 +186,78 @@ TEST_CASE(
   CHECK(countNear(img, {img.width / 2.0f, 235.0f}, 16, isAvatar) == 0);  // floor between the forearms
 }
 
+// A seated user for `embody xr --seated`: eyes at 1.2 m, swaying ±15 cm sideways and leaning up
+// to 15 cm forward (2 s period), the controllers in front of the chest moving with the head.
+std::string writeSeatedTrace() {
+  const std::string path = freshTestDir("seated_trace") + "/seated.jsonl";
+  std::ofstream out(path);
+  auto pose = [](const glm::vec3& p, const glm::quat& q) {
+    return nlohmann::json{{"p", {p.x, p.y, p.z}}, {"q", {q.x, q.y, q.z, q.w}}, {"valid", true}};
+  };
+  const glm::quat handQ = glm::angleAxis(glm::radians(20.0f), glm::vec3(1, 0, 0));
+  for (int i = 0; i <= 600; ++i) {
+    const double t = 0.1 * i, phase = t * 3.14159265358979323846;  // 2 s period
+    const float lean = 0.5f * float(1.0 - std::cos(phase));
+    const glm::vec3 head(0.15f * float(std::sin(phase)), 1.2f - 0.03f * lean, -0.15f * lean);
+    nlohmann::json j = {{"t", t},
+                        {"head", pose(head, kHeadQ)},
+                        {"left", pose(head + glm::vec3(-0.16f, -0.35f, -0.33f), handQ)},
+                        {"right", pose(head + glm::vec3(0.16f, -0.35f, -0.33f), handQ)}};
+    out << j.dump() << "\n";
+  }
+  return path;
+}
+
+TEST_CASE("embody xr --seated sits the avatar: the pelvis stays on the seat, feet planted, head and hands met",
+          "[xr]") {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  const char* budgetMs = "40";
+#else
+  const char* budgetMs = "5";
+#endif
+  const XrRun r = runEmbodyXr("seated", {"--seated", "--frames", "120", "--ik-budget-ms", budgetMs},
+                              {{"EMBODY_XR_POSES", writeSeatedTrace()}});
+  INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
+  REQUIRE_FALSE(r.process.timedOut);
+  REQUIRE(r.process.exitCode == 0);
+  REQUIRE(r.stats.is_object());
+  requireNoValidation(r);
+  CHECK(r.stats["ended_cleanly"] == true);
+  CHECK(r.stats["body_pose_frames"] == 120);
+  CHECK(r.process.output.find("seated: seat") != std::string::npos);
+  const nlohmann::json& seated = r.stats["seated"];
+  INFO(seated.dump());
+  REQUIRE(seated.is_object());
+  CHECK(seated["frames"] == 120);
+  CHECK(seated["measured_frames"] == 90);  // after 30 settling frames
+  CHECK(seated["seat_height_m"].get<double>() > 0.35);
+  CHECK(seated["seat_height_m"].get<double>() < 0.55);
+  CHECK(seated["hip_joint_drift_max_m"].get<double>() < 0.01);  // the pelvis sits
+  CHECK(seated["ankle_drift_max_m"].get<double>() < 0.005);     // the feet do not slide
+  CHECK(seated["sole_height_m"][0].get<double>() > -0.01);       // on the floor, not through it
+  CHECK(seated["sole_height_m"][1].get<double>() < 0.01);
+  CHECK(seated["knee_flexion_deg"][0].get<double>() > 70.0);
+  CHECK(seated["knee_flexion_deg"][1].get<double>() < 110.0);
+  CHECK(seated["hip_flexion_deg"][0].get<double>() > 70.0);
+  CHECK(seated["hip_flexion_deg"][1].get<double>() < 125.0);
+  CHECK(r.stats["tracking"]["non_finite_frames"] == 0);
+  CHECK(r.stats["tracking"]["head_error_p95_m"].get<double>() < 0.02);
+  CHECK(r.stats["tracking"]["hand_error_p95_m"].get<double>() < 0.02);
+}
+
+TEST_CASE("embody xr --seat-height without --seated, or out of range, is a usage error", "[xr]") {
+  for (const auto& args : std::vector<std::vector<std::string>>{{"--seat-height", "0.45"},
+                                                                {"--seated", "--seat-height", "3"},
+                                                                {"--seated", "--seat-height", "tall"}}) {
+    std::vector<std::string> argv = {embodyBin(), "xr"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    const auto r = runProcess(argv, {{"XR_RUNTIME_JSON", "/nonexistent/runtime.json"}}, 30);
+    INFO(r.output);
+    CHECK(r.exitCode == 2);
+    CHECK(r.output.find("--seat-height") != std::string::npos);
+  }
+}
+
 TEST_CASE("embody xr --body rest leaves the arms hanging: the controllers' neighbourhood shows no avatar", "[xr]") {
   // The control for the check above: without the solver the rest pose stands under the head.
   const XrRun r = runEmbodyXr("body_rest", {"--frames", "20", "--body", "rest"}, {});
