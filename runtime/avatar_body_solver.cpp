@@ -387,8 +387,7 @@ void AvatarBodySolver::setSeatedTargets(const tracking::GuardedSample& targets) 
     targetRotation_[f] = seat_.footRotation[s];
     setPose(positionTask_[f], -1, targetPoint_[f], targetRotation_[f], w);
   }
-  const Eigen::Quaterniond pelvis = seatedPelvisRotation(legs_, seat_, targetPoint_[headIndex], options_.seat.pelvisShare);
-  setPose(-1, seatPelvisTask_, Eigen::Vector3d::Zero(), pelvis, w);
+  setPose(-1, seatPelvisTask_, Eigen::Vector3d::Zero(), seat_.pelvisRotation, w);
 }
 
 namespace {

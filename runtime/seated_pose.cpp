@@ -34,18 +34,4 @@ SeatedPose placeSeat(const SeatedLegs& legs, const Eigen::Vector3d& eye, double 
   return s;
 }
 
-Eigen::Quaterniond seatedPelvisRotation(const SeatedLegs& legs, const SeatedPose& seat, const Eigen::Vector3d& eye,
-                                        double share) {
-  const Eigen::Vector3d& up = legs.up;
-  const Eigen::Quaterniond heading(Eigen::AngleAxisd(seat.yaw, up));
-  const Eigen::Vector3d forward = heading * legs.forward;
-  const Eigen::Vector3d mid = 0.5 * (seat.hip[0] + seat.hip[1]);
-  const Eigen::Vector3d restEye = legs.eye - 0.5 * (legs.hip[0] + legs.hip[1]);
-  auto inclination = [&](const Eigen::Vector3d& v, const Eigen::Vector3d& fwd) { return std::atan2(fwd.dot(v), up.dot(v)); };
-  const double lean = inclination(eye - mid, forward) - inclination(restEye, legs.forward);
-  constexpr double kDeg = 3.14159265358979323846 / 180.0;
-  const double pitch = std::clamp(share * lean, -15.0 * kDeg, 45.0 * kDeg);
-  return Eigen::Quaterniond(Eigen::AngleAxisd(pitch, up.cross(forward))) * seat.pelvisRotation;
-}
-
 }  // namespace embody::runtime

@@ -22,10 +22,6 @@ struct SeatOptions {
   // Either way it is kept within the range the avatar's legs sit at with the feet flat on the
   // floor (the hip joints within ±half a thigh of the knee height).
   float seatHeight = 0.0f;
-  // The share of a forward (or backward) lean the pelvis takes by tilting about the hip joints;
-  // the spine bends for the rest (a lumbopelvic rhythm). The lean is the turn of the line from
-  // the hip joints to the eye target away from where the upright rest trunk has it.
-  double pelvisShare = 0.5;
 };
 
 // The avatar's legs at rest (avatar space), index 0 = left, 1 = right.
@@ -60,11 +56,6 @@ struct SeatedPose {
   std::array<Eigen::Quaterniond, 2> footRotation{};
   Eigen::Quaterniond pelvisRotation = Eigen::Quaterniond::Identity();  // upright, facing `yaw`
 };
-
-// The pelvis orientation for an eye target while seated: upright facing the seat, pitched about
-// the hip joints' line by `share` of the lean towards `eye`, within [-15, +45] degrees.
-Eigen::Quaterniond seatedPelvisRotation(const SeatedLegs& legs, const SeatedPose& seat, const Eigen::Vector3d& eye,
-                                        double share);
 
 // The seat for an upright sitter whose eyes are at `eye` (avatar space) facing `yaw`: under the
 // eyes as far back as the rest trunk puts the hips; its surface `seatHeight` above the floor

@@ -79,13 +79,18 @@ TaskLayout seatedTaskLayoutFor(tracking::TrackerMask trackers) {
   // 3: the hand positions, as standing.
   for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
     if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerPosition, hand, 3, 1.0f});
-  // 4: the pelvis's tilt about the hip joints, a set share of the lean towards the head
-  // (SeatOptions::pelvisShare, a lumbopelvic rhythm). With the hip joints pinned the pelvis can
-  // only pitch, and left to the minimum-norm steps (or below the orientations, which leave it no
-  // freedom) a lean became pelvis tilt alone (30 degrees, the spine straight); above the hands,
-  // it held the shoulders where the hands could not reach when the user leans sideways too. Here
-  // it splits the lean in what the head and hands leave free.
-  l.tasks.push_back({TaskKind::SeatedPelvis, TrackerId::Hips, 4, 1.0f});
+  // 4: the pelvis upright, facing the seat, weight 0.1. With the hip joints pinned the pelvis
+  // can only pitch about them; this level leaves a lean to the spine wherever the head and hands
+  // leave it the freedom, so the pelvis tilts (the hips flex past 90 degrees) for the rest. Where
+  // it was tried instead:
+  //   - lowest (under the orientations, which leave it no freedom): a lean became pelvis tilt
+  //     alone, 30 degrees with a straight spine;
+  //   - above the hands (3): the shoulders stayed back and the hands out of reach when the user
+  //     leant sideways and forward;
+  //   - with a target tilted by a share of the lean (a lumbopelvic rhythm): where the coupled
+  //     spine's bands sat at their limits the head stalled 2-3 cm off its target.
+  // The low weight damps its steps while it conflicts (as the tracked pelvis's row standing).
+  l.tasks.push_back({TaskKind::SeatedPelvis, TrackerId::Hips, 4, 0.1f});
   // 5: the orientations (level 4 standing).
   if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, 5, 1.0f});
   for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})

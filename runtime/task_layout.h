@@ -19,7 +19,7 @@ enum class TaskKind : uint8_t {
   InferredHips,       // three-point mode: the pelvis under the head, upright, facing the heading
   SeatedHip,          // seated mode: a hip joint centre on the seat (3 rows; `tracker` names the side's foot)
   SeatedKnee,         // seated mode: a knee ahead of its hip joint over the planted foot (3 rows)
-  SeatedPelvis        // seated mode: the pelvis facing the seat, tilted by a share of the lean (3 rows)
+  SeatedPelvis        // seated mode: the pelvis upright, facing the seat (3 rows)
 };
 
 struct TaskSpec {
@@ -41,8 +41,9 @@ struct TaskLayout {
 TaskLayout taskLayoutFor(tracking::TrackerMask trackers);
 
 // Seated mode: the lower body sits (hip joints, knees and feet pinned at priority 1), then the
-// head position (2), the hand positions (3), the pelvis's tilt (4: a share of the lean towards the
-// head, the spine bends for the rest) and the orientations (5). Hips and feet trackers are unused.
+// head position (2), the hand positions (3), the pelvis upright (4: a lean bends the spine where
+// the head and hands leave it free, the pelvis tilts for the rest) and the orientations (5). Hips
+// and feet trackers are unused.
 TaskLayout seatedTaskLayoutFor(tracking::TrackerMask trackers);
 
 // How strongly a target with this status should pull (0 = drop the task this frame). Held and
