@@ -114,6 +114,25 @@ void requireNoValidation(const XrRun& r) {
   CHECK(r.stats.value("vulkan_validation_messages", 1) == 0);
 }
 
+// The IK budget of the 120-frame runs: generous, as in the runtime's walk tests (see the first
+// test); instrumented builds run the IK several times slower.
+const char* ikBudgetMs() {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  return "40";
+#else
+  return "5";
+#endif
+}
+
+// The process ended by itself with exit code 0 and wrote its stats, with no validation message.
+void requireCleanRun(const XrRun& r) {
+  INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
+  REQUIRE_FALSE(r.process.timedOut);
+  REQUIRE(r.process.exitCode == 0);
+  REQUIRE(r.stats.is_object());
+  requireNoValidation(r);
+}
+
 embody::avatar::Image capture(const XrRun& r, int index) {
   char name[32];
   std::snprintf(name, sizeof(name), "/left_%05d.png", index);
@@ -130,17 +149,9 @@ TEST_CASE(
   // A generous IK budget, as in the runtime's walk tests: with validation on and a loaded 2-core
   // CI machine the default 1 ms allows ~4 iterations a frame, and the cold start from the rest
   // pose (trust region 0.1 per level) then spends more than 5 % of these 120 frames arriving.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-  const char* budgetMs = "40";  // instrumented builds run the IK several times slower
-#else
-  const char* budgetMs = "5";
-#endif
-  const XrRun r = runEmbodyXr("frames120", {"--frames", "120", "--ik-budget-ms", budgetMs}, {});
+  const XrRun r = runEmbodyXr("frames120", {"--frames", "120", "--ik-budget-ms", ikBudgetMs()}, {});
   INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
-  REQUIRE_FALSE(r.process.timedOut);
-  REQUIRE(r.process.exitCode == 0);
-  REQUIRE(r.stats.is_object());
-  requireNoValidation(r);
+  requireCleanRun(r);
   CHECK(r.stats["reached_focused"] == true);
   CHECK(r.stats["ended_cleanly"] == true);
   CHECK(r.stats["frames_submitted"] == 120);
@@ -210,18 +221,10 @@ std::string writeSeatedTrace() {
 
 TEST_CASE("embody xr --seated sits the avatar: the pelvis stays on the seat, feet planted, head and hands met",
           "[xr]") {
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-  const char* budgetMs = "40";
-#else
-  const char* budgetMs = "5";
-#endif
-  const XrRun r = runEmbodyXr("seated", {"--seated", "--frames", "120", "--ik-budget-ms", budgetMs},
+  const XrRun r = runEmbodyXr("seated", {"--seated", "--frames", "120", "--ik-budget-ms", ikBudgetMs()},
                               {{"EMBODY_XR_POSES", writeSeatedTrace()}});
   INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
-  REQUIRE_FALSE(r.process.timedOut);
-  REQUIRE(r.process.exitCode == 0);
-  REQUIRE(r.stats.is_object());
-  requireNoValidation(r);
+  requireCleanRun(r);
   CHECK(r.stats["ended_cleanly"] == true);
   CHECK(r.stats["body_pose_frames"] == 120);
   CHECK(r.process.output.find("seated: seat") != std::string::npos);
