@@ -116,12 +116,13 @@ void requireNoValidation(const XrRun& r) {
 
 // The IK budget of the 120-frame runs: generous, as in the runtime's walk tests (see the first
 // test); instrumented builds run the IK several times slower.
-const char* ikBudgetMs() {
+std::string ikBudgetMs(double factor = 1.0) {
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-  return "40";
+  const double ms = 40.0;
 #else
-  return "5";
+  const double ms = 5.0;
 #endif
+  return std::to_string(ms * factor);
 }
 
 // The process ended by itself with exit code 0 and wrote its stats, with no validation message.
@@ -221,7 +222,11 @@ std::string writeSeatedTrace() {
 
 TEST_CASE("embody xr --seated sits the avatar: the pelvis stays on the seat, feet planted, head and hands met",
           "[xr]") {
-  const XrRun r = runEmbodyXr("seated", {"--seated", "--frames", "120", "--ik-budget-ms", ikBudgetMs()},
+  // The pose is under test here, not the timing: a budget the iteration cap (40) usually ends
+  // first. A seated iteration costs about twice a standing one (more rows and clamping passes,
+  // docs/runtime.md "Seated mode"), the trace keeps moving, and on a loaded 2-core machine 10 ms
+  // sometimes bought 6 iterations a frame and a 2 cm head p95.
+  const XrRun r = runEmbodyXr("seated", {"--seated", "--frames", "120", "--ik-budget-ms", ikBudgetMs(10.0)},
                               {{"EMBODY_XR_POSES", writeSeatedTrace()}});
   INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
   requireCleanRun(r);
