@@ -357,6 +357,7 @@ void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
 
 void AvatarBodySolver::setSeatedTargets(const tracking::GuardedSample& targets) {
   ik::Data& d = *data_;
+  bool settleSeat = false;
   const size_t headIndex = size_t(tracking::index(TrackerId::Head));
   if (!seatPlaced_ && targets.status[headIndex] == TrackerStatus::Tracked && targets.pose[TrackerId::Head].valid) {
     // The seat goes under the first tracked head, facing where it looks.
@@ -374,6 +375,7 @@ void AvatarBodySolver::setSeatedTargets(const tracking::GuardedSample& targets) 
         q.segment<3>(root.first_dof) += root.desc.rest.linear().transpose() * shift;
         (void)d.setConfiguration(q);
       }
+      settleSeat = true;
     }
   }
   // Until then (no tracked head yet) the lower body is left to the warm start.
@@ -388,6 +390,14 @@ void AvatarBodySolver::setSeatedTargets(const tracking::GuardedSample& targets) 
     setPose(positionTask_[f], -1, targetPoint_[f], targetRotation_[f], w);
   }
   setPose(-1, seatPelvisTask_, Eigen::Vector3d::Zero(), seat_.pelvisRotation, w);
+  if (!settleSeat) return;
+  // A cold start sits down and reaches the first targets outside the budget (once per placement:
+  // the first frame and each recenter). Within a 1 ms budget the budgeted solve otherwise folded
+  // the legs and raised the arms over dozens of frames (hand p95 35 cm over the first 2 s of
+  // `embody xr --seated`).
+  ik::SolveOptions o;
+  o.max_iterations = 80;
+  (void)ik::solve(body_.model, d, o);
 }
 
 namespace {
