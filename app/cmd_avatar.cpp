@@ -1,8 +1,8 @@
 // embody avatar: inspect avatars (mapping, spine, first person) and export the default avatar.
-//   embody avatar info FILE|default [--json] [--bone-map FILE] [--spine full|simplified|auto]
+//   embody avatar info FILE|default [--json] [--fingers] [--bone-map FILE] [--spine full|simplified|auto]
 //                     [--user-height M] [--profile FILE]
 //   embody avatar calibrate FILE|default (--user-height M | --eye-height M) [--arm-span M] --profile OUT
-//   embody avatar export-default FILE.glb
+//   embody avatar export-default FILE.glb [--fingers]
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -13,6 +13,7 @@
 #include "avatar/body/calibration.h"
 #include "avatar/gltf/glb_writer.h"
 #include "avatar/gltf/gltf_loader.h"
+#include "avatar/hand/finger_retarget.h"
 #include "avatar/procedural/default_avatar.h"
 
 namespace {
@@ -34,6 +35,17 @@ nlohmann::json describe(const AvatarAsset& a, const GltfLoadReport& report) {
     if (h.bones[static_cast<size_t>(b)] >= 0)
       j["bones"][std::string(humanBoneName(static_cast<HumanBone>(b)))] =
           nodeName(h.bones[static_cast<size_t>(b)]);
+  // Finger bones: mapped per hand, and how many of them hand tracking can drive.
+  const FingerRig fingers = buildFingerRig(a.skeleton, h);
+  int perSide[2] = {0, 0};
+  for (int f = 0; f < kFingerCount; ++f)
+    for (int s = 0; s < kFingerSegments; ++s)
+      for (int side = 0; side < 2; ++side) perSide[side] += h.has(fingerHumanBone(side == 0, f, s)) ? 1 : 0;
+  j["finger_bones"] = {{"mapped", perSide[0] + perSide[1]},
+                       {"left", perSide[0]},
+                       {"right", perSide[1]},
+                       {"driven", fingers.mappedBones()},
+                       {"notes", fingers.notes}};
   j["unmapped_required"] = nlohmann::json::array();
   for (HumanBone b : h.missingRequired) j["unmapped_required"].push_back(humanBoneName(b));
   j["joints"] = a.skinJointCount;
@@ -92,6 +104,11 @@ void printText(const nlohmann::json& j) {
   std::printf("  humanoid mapping: %s\n", s(j["mapping"]).c_str());
   for (const auto& [bone, node] : j["bones"].items())
     std::printf("    %-24s %s\n", bone.c_str(), s(node).c_str());
+  const auto& fb = j["finger_bones"];
+  std::printf("  finger bones: %s of 30 mapped (left %s, right %s); %s driven by hand tracking\n",
+              s(fb["mapped"]).c_str(), s(fb["left"]).c_str(), s(fb["right"]).c_str(),
+              s(fb["driven"]).c_str());
+  for (const auto& n : fb["notes"]) std::printf("    %s\n", s(n).c_str());
   if (j["unmapped_required"].empty())
     std::printf("  all required bones mapped\n");
   else
@@ -125,6 +142,7 @@ int runInfo(cli::Argv argv) {
                  "reports its format, humanoid bone mapping, spine vertebrae and first-person mode.");
   args.positional("FILE", "avatar file, or 'default'");
   args.flag("json", "print one JSON object instead of text");
+  args.flag("fingers", "with 'default': the mannequin with finger bones (as export-default --fingers)");
   args.option("bone-map", "FILE",
               "JSON object VRM-1.0-bone-name -> node name; its entries win over every other mapping");
   args.option("spine", "MODE",
@@ -151,7 +169,7 @@ int runInfo(cli::Argv argv) {
   GltfLoadReport report;
   Result<AvatarAsset> asset = Error{""};
   if (args.get("FILE") == "default") {
-    asset = buildDefaultAvatar();
+    asset = buildDefaultAvatar(DefaultAvatarOptions{.fingers = args.has("fingers")});
     if (args.has("bone-map")) {
       auto text = readBoneMapFile(args.get("bone-map"));
       if (!text.ok()) {
@@ -250,8 +268,11 @@ int runExportDefault(cli::Argv argv) {
   cli::Args args("embody avatar export-default",
                  "Writes the built-in mannequin as a standard glTF 2.0 binary (GLB).");
   args.positional("FILE", "output .glb path");
+  args.flag("fingers",
+            "add finger bones (thumb/index/middle/ring/pinky 1..3 per hand, the 30 humanoid finger bones) "
+            "and skinned fingers, for hand tracking");
   if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
-  const AvatarAsset a = buildDefaultAvatar();
+  const AvatarAsset a = buildDefaultAvatar(DefaultAvatarOptions{.fingers = args.has("fingers")});
   if (auto s = writeGlbFile(a, args.get("FILE")); !s.ok()) {
     std::fprintf(stderr, "error: %s\n", s.error().c_str());
     return 1;
@@ -263,11 +284,12 @@ int runExportDefault(cli::Argv argv) {
 
 int runAvatar(cli::Argv argv) {
   static const char* usage =
-      "usage: embody avatar info FILE|default [--json] [--bone-map FILE] [--spine full|simplified|auto]\n"
+      "usage: embody avatar info FILE|default [--json] [--fingers] [--bone-map FILE] [--spine "
+      "full|simplified|auto]\n"
       "                          [--user-height M] [--profile FILE]\n"
       "       embody avatar calibrate FILE|default (--user-height M | --eye-height M) [--arm-span M] "
       "--profile OUT\n"
-      "       embody avatar export-default FILE.glb\n";
+      "       embody avatar export-default FILE.glb [--fingers]\n";
   if (argv.empty()) {
     std::fprintf(stderr, "error: missing action\n\n%s", usage);
     return 2;

@@ -166,6 +166,10 @@ int runXr(cli::Argv argv) {
               static_cast<unsigned long long>(r.handLostFrames[0]),
               static_cast<unsigned long long>(r.handLostFrames[1]));
   std::printf("body: %s, %llu frames solved\n", bodyMode.c_str(), static_cast<unsigned long long>(r.bodyPoseFrames));
+  if (r.fingers.drivenBones > 0)
+    std::printf("fingers: %d bones, hand-tracked in %llu frames, curl %.1f..%.1f deg\n",
+                r.fingers.drivenBones, static_cast<unsigned long long>(r.fingers.frames),
+                r.fingers.curlMinDeg, r.fingers.curlMaxDeg);
   std::printf("calibration: %s, avatar scale %.3f\n", r.calibrated ? "done" : "not done", r.calibratedScale);
   if (body && seat.enabled && body->solver().seat())
     std::printf("seated: seat %.2f m high, placed under the head\n", body->solver().seat()->seatHeight / body->solver().scale());
@@ -199,6 +203,13 @@ int runXr(cli::Argv argv) {
                         {"mirror_frames", r.mirrorFrames},
                         {"body", bodyMode},
                         {"body_pose_frames", r.bodyPoseFrames},
+                        {"fingers",
+                         {{"driven_bones", r.fingers.drivenBones},
+                          {"frames", r.fingers.frames},
+                          {"full_frames", r.fingers.fullFrames},
+                          {"curl_min_deg", r.fingers.curlMinDeg},
+                          {"curl_max_deg", r.fingers.curlMaxDeg},
+                          {"curl_last_deg", r.fingers.curlLastDeg}}},
                         {"error", r.error}};
     if (body) runtime::toJson(j, ik);
     if (body && seat.enabled) seatedStats.toJson(j);  // "ik" and "tracking" objects as in embody render's stats.json

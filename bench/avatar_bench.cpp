@@ -4,6 +4,7 @@
 
 #include "avatar/body/body_model.h"
 #include "avatar/gltf/gltf_loader.h"
+#include "avatar/hand/finger_retarget.h"
 #include "avatar/procedural/default_avatar.h"
 #include "test_paths.h"
 
@@ -24,6 +25,44 @@ static void BM_BuildDefaultAvatar(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(buildDefaultAvatar());
 }
 BENCHMARK(BM_BuildDefaultAvatar)->Unit(benchmark::kMillisecond);
+
+// Both hands' 30 finger bones from 26 tracked joints each (the mannequin with fingers, a
+// relaxed hand curling and uncurling so the result changes every iteration).
+static void BM_FingerRetarget(benchmark::State& state) {
+  const AvatarAsset a = buildDefaultAvatar(DefaultAvatarOptions{.fingers = true});
+  const FingerRig rig = buildFingerRig(a.skeleton, a.humanoid);
+  std::array<TrackedHandJoints, 2> hands;
+  std::vector<glm::mat4> g;
+  computeGlobals(a.skeleton, SkeletonPose::rest(a.skeleton), g);
+  for (int h = 0; h < 2; ++h) {  // the avatar's own rest hand as the tracked one
+    hands[h].active = true;
+    hands[h].position[static_cast<size_t>(HandJoint::Wrist)] = glm::vec3(g[rig.hands[h].hand][3]);
+    for (const FingerBone& b : rig.hands[h].bones) {
+      hands[h].position[static_cast<size_t>(b.trackedFrom)] = glm::vec3(g[b.joint][3]);
+      hands[h].position[static_cast<size_t>(b.trackedTo)] =
+          glm::vec3(g[b.joint][3]) + 0.02f * glm::mat3(g[b.joint]) * b.axis;
+    }
+    hands[h].orientation.fill(glm::quat(1, 0, 0, 0));
+    hands[h].valid.fill(true);
+  }
+  FingerRetargetState st;
+  SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+  FingerRetargetJob job;
+  job.skeleton = &a.skeleton;
+  job.rig = &rig;
+  job.hands = {&hands[0], &hands[1]};
+  job.deltaTime = 0.011f;
+  job.state = &st;
+  job.pose = &pose;
+  int i = 0;
+  for (auto _ : state) {
+    const size_t tip = static_cast<size_t>(HandJoint::IndexTip);
+    hands[0].position[tip].y += (i++ & 1) ? 0.01f : -0.01f;
+    job.Run();
+    benchmark::DoNotOptimize(pose.local.data());
+  }
+}
+BENCHMARK(BM_FingerRetarget)->Unit(benchmark::kMicrosecond);
 
 static void BM_BuildBodyModel(benchmark::State& state) {
   const AvatarAsset a = buildDefaultAvatar();

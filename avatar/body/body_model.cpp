@@ -190,6 +190,16 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
         return pick(HumanBone::leftLowerArm, HumanBone::rightLowerArm);
       case Elbow:
         return pick(HumanBone::leftHand, HumanBone::rightHand);
+      case Hand:  // towards the fingers: the middle knuckle (else another), not a first child that may be the
+                  // thumb
+        for (int f : {1, 0, 2, 3}) {
+          const auto first =
+              static_cast<int>(isLeft(j) ? HumanBone::leftIndexProximal : HumanBone::rightIndexProximal);
+          const int k =
+              map.joint(static_cast<HumanBone>(first + 3 * f));  // index, middle, ring, little proximal
+          if (k >= 0 && k != j && sk.isAncestor(j, k)) return k;
+        }
+        return -1;
       case UpperLeg:
         return pick(HumanBone::leftLowerLeg, HumanBone::rightLowerLeg);
       case Knee:

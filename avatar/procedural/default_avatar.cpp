@@ -241,12 +241,140 @@ std::vector<JointDef> jointTable() {
   return t;
 }
 
+// The hand's rest geometry with fingers: the fingers hang straight along the forearm (`down`),
+// the knuckles spread across the palm's width (`across`, the thumb side: forward), the palm faces
+// the thigh (`palm`). The middle knuckle lies on the forearm's line, so the hand bone's direction
+// (towards its first child) is the same as without fingers.
+struct HandGeometry {
+  glm::vec3 down, across, palm;
+};
+
+HandGeometry handGeometry(const glm::vec3& wrist, const glm::vec3& elbow) {
+  const float sx = wrist.x > 0.0f ? 1.0f : -1.0f;  // left hand at +X
+  HandGeometry g;
+  g.down = glm::normalize(wrist - elbow);
+  g.across = glm::normalize(glm::vec3(0, 0, 1) - g.down.z * g.down);
+  g.palm = glm::normalize(glm::cross(g.down, g.across));
+  if (glm::dot(g.palm, glm::vec3(-sx, 0, 0)) < 0.0f) g.palm = -g.palm;  // towards the body
+  return g;
+}
+
+struct FingerShape {
+  const char* name;  // H-Anim 1.1 stem: <side>_<name>1..3
+  float knuckleDown, knuckleAcross;
+  float lengths[3];
+  float radius;
+};
+// Middle first: it becomes the wrist's first child (see HandGeometry).
+constexpr FingerShape kFingerShapes[4] = {
+    {"middle", 0.092f, 0.000f, {0.044f, 0.028f, 0.022f}, 0.0090f},
+    {"index", 0.088f, 0.021f, {0.040f, 0.024f, 0.020f}, 0.0086f},
+    {"ring", 0.088f, -0.019f, {0.041f, 0.026f, 0.021f}, 0.0083f},
+    {"pinky", 0.080f, -0.036f, {0.032f, 0.019f, 0.018f}, 0.0072f},
+};
+constexpr float kThumbLengths[3] = {0.040f, 0.032f, 0.026f};
+
+// Thumb joints (CMC, MCP, IP) and tip: out of the palm's thumb side, forward and a little palmar.
+std::array<glm::vec3, 4> thumbPoints(const glm::vec3& wrist, const HandGeometry& g) {
+  const glm::vec3 cmc = wrist + g.down * 0.022f + g.across * 0.018f + g.palm * 0.010f;
+  const glm::vec3 d1 = glm::normalize(g.down * 0.55f + g.across * 0.7f + g.palm * 0.35f);
+  const glm::vec3 d2 = glm::normalize(g.down * 0.75f + g.across * 0.55f + g.palm * 0.3f);
+  const glm::vec3 mcp = cmc + d1 * kThumbLengths[0], ip = mcp + d2 * kThumbLengths[1];
+  return {cmc, mcp, ip, ip + d2 * kThumbLengths[2]};
+}
+
+void appendFingerJoints(std::vector<JointDef>& defs, std::vector<std::string>& names) {
+  auto posOf = [&](const std::string& n) {
+    for (const auto& d : defs)
+      if (n == d.name) return d.pos;
+    return glm::vec3(0.0f);
+  };
+  struct Pending {
+    std::string name, parent;
+    glm::vec3 pos;
+  };
+  std::vector<Pending> pending;
+  for (const char* side : {"l_", "r_"}) {
+    const std::string s = side;
+    const glm::vec3 wr = posOf(s + "wrist"), el = posOf(s + "elbow");
+    const HandGeometry g = handGeometry(wr, el);
+    for (const auto& f : kFingerShapes) {
+      glm::vec3 p = wr + g.down * f.knuckleDown + g.across * f.knuckleAcross;
+      std::string parent = s + "wrist";
+      for (int k = 0; k < 3; ++k) {
+        const std::string name = s + f.name + std::to_string(k + 1);
+        pending.push_back({name, parent, p});
+        parent = name;
+        p += g.down * f.lengths[k];
+      }
+    }
+    const auto t = thumbPoints(wr, g);
+    std::string parent = s + "wrist";
+    for (int k = 0; k < 3; ++k) {
+      const std::string name = s + "thumb" + std::to_string(k + 1);
+      pending.push_back({name, parent, t[static_cast<size_t>(k)]});
+      parent = name;
+    }
+  }
+  // Names (and parents) are stored once, then the JointDefs point into that storage.
+  names.reserve(pending.size() * 2);
+  for (const auto& q : pending) {
+    names.push_back(q.name);
+    names.push_back(q.parent);
+  }
+  for (size_t i = 0; i < pending.size(); ++i)
+    defs.push_back({names[2 * i].c_str(), names[2 * i + 1].c_str(), pending[i].pos});
+}
+
+// Palm and five skinned fingers for the hand of `prefix` ("l_" / "r_"): every phalanx blends
+// into its neighbours at the joints, the palm follows the wrist.
+void addFingeredHand(MeshSink& sink, const Skeleton& skeleton, const std::vector<glm::vec3>& pos,
+                     const std::string& prefix, int wristJoint, const glm::vec3& wr, const glm::vec3& el) {
+  const HandGeometry g = handGeometry(wr, el);
+  auto handOnly = [&](const glm::vec3&) { return Influences{{wristJoint, 1.0f}}; };
+  addEllipsoid(sink, wr + g.down * 0.050f - g.across * 0.006f, {0.018f, 0.055f, 0.046f}, 14, 20, handOnly);
+  auto chainTube = [&](const std::array<int, 3>& joints, const glm::vec3& tip, float radius,
+                       float startInset) {
+    std::vector<Station> st;
+    const glm::vec3 p0 = pos[static_cast<size_t>(joints[0])];
+    const glm::vec3 first = glm::normalize(pos[static_cast<size_t>(joints[1])] - p0);
+    st.push_back({p0 - first * startInset, radius * 1.1f, radius, {{wristJoint, 1.0f}}});
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec3 a = pos[static_cast<size_t>(joints[static_cast<size_t>(k)])];
+      const glm::vec3 b = k < 2 ? pos[static_cast<size_t>(joints[static_cast<size_t>(k) + 1])] : tip;
+      const float r = radius * (1.0f - 0.1f * float(k));
+      const int parent = k == 0 ? wristJoint : joints[static_cast<size_t>(k) - 1];
+      st.push_back({a, r * 1.05f, r, {{parent, 0.5f}, {joints[static_cast<size_t>(k)], 0.5f}}});
+      st.push_back({glm::mix(a, b, 0.5f), r, r * 0.95f, {{joints[static_cast<size_t>(k)], 1.0f}}});
+    }
+    st.push_back({tip, radius * 0.8f, radius * 0.75f, {{joints[2], 1.0f}}});
+    addTube(sink, st, 10, 0.008f, g.palm, radius * 0.8f, radius * 0.8f);
+  };
+  for (const auto& f : kFingerShapes) {
+    std::array<int, 3> j{};
+    for (int k = 0; k < 3; ++k)
+      j[static_cast<size_t>(k)] = skeleton.find(prefix + f.name + std::to_string(k + 1));
+    const glm::vec3 tip = pos[static_cast<size_t>(j[2])] + g.down * f.lengths[2];
+    chainTube(j, tip, f.radius, 0.02f);
+  }
+  std::array<int, 3> thumb{};
+  for (int k = 0; k < 3; ++k)
+    thumb[static_cast<size_t>(k)] = skeleton.find(prefix + "thumb" + std::to_string(k + 1));
+  chainTube(thumb, thumbPoints(wr, g)[3], 0.011f, 0.005f);
+}
+
 }  // namespace
 
 AvatarAsset buildDefaultAvatar() {
+  return buildDefaultAvatar(DefaultAvatarOptions{});
+}
+
+AvatarAsset buildDefaultAvatar(const DefaultAvatarOptions& options) {
   AvatarAsset a;
   a.format = AvatarFormat::Procedural;
-  const auto defs = jointTable();
+  auto defs = jointTable();
+  std::vector<std::string> fingerNames;  // owns the names the JointDefs point at
+  if (options.fingers) appendFingerJoints(defs, fingerNames);
   std::vector<glm::vec3> pos;
   for (const auto& d : defs) {
     Joint j;
@@ -369,6 +497,10 @@ AvatarAsset buildDefaultAvatar() {
     // Hand (palm towards the thigh) and thumb pointing forward.
     auto handOnly = [&](const glm::vec3&) { return Influences{{wrJ, 1.0f}}; };
     const glm::vec3 down = glm::normalize(wr - el);
+    if (options.fingers) {
+      addFingeredHand(sink, a.skeleton, pos, p, wrJ, wr, el);
+      continue;
+    }
     addEllipsoid(sink, wr + down * 0.085f, {0.020f, 0.092f, 0.045f}, 16, 20, handOnly);
     addEllipsoid(sink, wr + down * 0.055f + glm::vec3(-sx * 0.004f, 0.0f, 0.042f), {0.012f, 0.036f, 0.013f},
                  8, 12, handOnly);

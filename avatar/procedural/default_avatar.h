@@ -17,7 +17,16 @@
 
 namespace embody::avatar {
 
+struct DefaultAvatarOptions {
+  // Add finger bones (H-Anim 1.1 names l_thumb1..3, l_index1..3, l_middle1..3, l_ring1..3,
+  // l_pinky1..3 and r_..., the 30 VRM humanoid finger bones) with a palm and five skinned
+  // fingers in place of the mitten hand. The joints are appended after the standard ones, so
+  // every other joint keeps its index; the fingers hang straight along the forearm at rest.
+  bool fingers = false;
+};
+
 // Builds the mannequin, mapped (names: H-Anim) and with its first-person draw list.
 AvatarAsset buildDefaultAvatar();
+AvatarAsset buildDefaultAvatar(const DefaultAvatarOptions& options);
 
 }  // namespace embody::avatar

@@ -32,7 +32,9 @@ std::string runCapture(const std::string& cmd, int& exitCode) {
 }  // namespace
 
 TEST_CASE("the exported default avatar reloads with the same skeleton, mesh and mapping", "[export]") {
-  const AvatarAsset a = buildDefaultAvatar();
+  const bool fingers = GENERATE(false, true);  // also the mannequin with finger bones
+  INFO("fingers " << fingers);
+  const AvatarAsset a = buildDefaultAvatar(DefaultAvatarOptions{.fingers = fingers});
   auto bytes = encodeGlb(a);
   REQUIRE(bytes.ok());
   auto b = loadGltfFromMemory(bytes.value(), "");
@@ -51,6 +53,15 @@ TEST_CASE("the exported default avatar reloads with the same skeleton, mesh and 
   CHECK(b->humanoid.method == MappingMethod::Names);
   CHECK(b->humanoid.missingRequired.empty());
   CHECK(b->humanoid.spine.size() == 25);
+  for (int bone = 0; bone < kHumanBoneCount; ++bone) {  // finger bones included
+    const int ja = a.humanoid.bones[static_cast<size_t>(bone)],
+              jb = b->humanoid.bones[static_cast<size_t>(bone)];
+    INFO(humanBoneName(static_cast<HumanBone>(bone)));
+    REQUIRE((ja < 0) == (jb < 0));
+    if (ja >= 0)
+      CHECK(a.skeleton.joints[static_cast<size_t>(ja)].name ==
+            b->skeleton.joints[static_cast<size_t>(jb)].name);
+  }
   CHECK(b->mesh.firstPersonIndices.size() == a.mesh.firstPersonIndices.size());
   // Skinned at rest, the reloaded mesh sits exactly where the original does.
   std::vector<glm::mat4> ga, gb, pa, pb;
@@ -82,9 +93,11 @@ TEST_CASE("the exported default avatar passes the Khronos glTF validator with ze
                                                         << " (run scripts/install-deps.sh)");
     return;
   }
+  const bool fingers = GENERATE(false, true);  // also the mannequin with finger bones
+  INFO("fingers " << fingers);
   const auto file = std::filesystem::temp_directory_path() /
                     ("embody_default_avatar_" + std::to_string(::getpid()) + ".glb");
-  REQUIRE(writeGlbFile(buildDefaultAvatar(), file.string()).ok());
+  REQUIRE(writeGlbFile(buildDefaultAvatar(DefaultAvatarOptions{.fingers = fingers}), file.string()).ok());
   const std::string out = runCapture("node '" + (src / "scripts" / "validate_gltf.js").string() + "' '" +
                                          file.string() + "' '" + tools.string() + "' 2>&1",
                                      rc);

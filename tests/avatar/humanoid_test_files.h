@@ -48,6 +48,46 @@ inline const std::vector<HumanoidJointSpec>& humanoidJointSpecs() {
   return s;
 }
 
+// The 30 finger bones for the T-posed hands above (fingers along +-X, palms down, thumbs
+// forward), VRM 1.0 names. Appended by HumanoidFile(..., fingers = true).
+inline const std::vector<HumanoidJointSpec>& humanoidFingerSpecs() {
+  static const std::vector<HumanoidJointSpec> s = [] {
+    static const std::vector<std::string> names = [] {
+      std::vector<std::string> n;
+      for (const char* side : {"left", "right"}) {
+        for (const char* seg : {"Metacarpal", "Proximal", "Distal"})
+          n.push_back(std::string(side) + "Thumb" + seg);
+        for (const char* f : {"Index", "Middle", "Ring", "Little"})
+          for (const char* seg : {"Proximal", "Intermediate", "Distal"})
+            n.push_back(std::string(side) + f + seg);
+      }
+      return n;
+    }();
+    std::vector<HumanoidJointSpec> v;
+    size_t k = 0;
+    for (int side = 0; side < 2; ++side) {
+      const float sx = side == 0 ? 1.0f : -1.0f;
+      const char* hand = side == 0 ? "leftHand" : "rightHand";
+      const glm::vec3 thumb[3] = {{0.70f, 1.41f, 0.01f}, {0.73f, 1.40f, 0.04f}, {0.755f, 1.395f, 0.06f}};
+      for (int j = 0; j < 3; ++j, ++k)
+        v.push_back({names[k].c_str(),
+                     j == 0 ? hand : names[k - 1].c_str(),
+                     {sx * thumb[j].x, thumb[j].y, thumb[j].z}});
+      const float across[4] = {0.005f, -0.015f, -0.034f, -0.05f};
+      const float len[3] = {0.0f, 0.04f, 0.025f};
+      for (int f = 0; f < 4; ++f) {
+        float x = 0.77f;
+        for (int j = 0; j < 3; ++j, ++k) {
+          x += len[j];
+          v.push_back({names[k].c_str(), j == 0 ? hand : names[k - 1].c_str(), {sx * x, 1.42f, across[f]}});
+        }
+      }
+    }
+    return v;
+  }();
+  return s;
+}
+
 struct HumanoidFile {
   nlohmann::json doc;
   std::vector<uint8_t> bin;
@@ -57,8 +97,11 @@ struct HumanoidFile {
 
   // names: VRM bone name -> node name (bones not listed keep their VRM name).
   // facesMinusZ turns the whole rest pose 180 degrees about +Y (VRM 0.x convention).
-  explicit HumanoidFile(const std::map<std::string, std::string>& names = {}, bool facesMinusZ = false) {
+  // fingers appends humanoidFingerSpecs().
+  explicit HumanoidFile(const std::map<std::string, std::string>& names = {}, bool facesMinusZ = false,
+                        bool fingers = false) {
     std::vector<HumanoidJointSpec> specs = humanoidJointSpecs();
+    if (fingers) specs.insert(specs.end(), humanoidFingerSpecs().begin(), humanoidFingerSpecs().end());
     if (facesMinusZ)
       for (auto& j : specs) j.pos = glm::vec3(-j.pos.x, j.pos.y, -j.pos.z);
     doc = {{"asset", {{"version", "2.0"}}},        {"scene", 0},
@@ -201,6 +244,19 @@ inline std::map<std::string, std::string> mixamoBoneNames() {
       {"leftLowerLeg", "LeftLeg"},        {"leftFoot", "LeftFoot"},     {"leftToes", "LeftToeBase"},
       {"rightUpperLeg", "RightUpLeg"},    {"rightLowerLeg", "RightLeg"}, {"rightFoot", "RightFoot"},
       {"rightToes", "RightToeBase"}};
+  // Fingers: LeftHandThumb1..3 (thumb1 is the metacarpal), LeftHandIndex1..3 ... LeftHandPinky1..3.
+  for (const char* side : {"left", "right"}) {
+    const std::string vrmSide = side, mixSide = vrmSide == "left" ? "Left" : "Right";
+    const char* segs[3] = {"Metacarpal", "Proximal", "Distal"};
+    for (int k = 0; k < 3; ++k)
+      m[vrmSide + "Thumb" + segs[k]] = mixSide + "HandThumb" + std::to_string(k + 1);
+    const char* fingerSegs[3] = {"Proximal", "Intermediate", "Distal"};
+    const std::pair<const char*, const char*> fingers[] = {
+        {"Index", "Index"}, {"Middle", "Middle"}, {"Ring", "Ring"}, {"Little", "Pinky"}};
+    for (const auto& [vrm, mix] : fingers)
+      for (int k = 0; k < 3; ++k)
+        m[vrmSide + vrm + fingerSegs[k]] = mixSide + "Hand" + mix + std::to_string(k + 1);
+  }
   for (auto& [bone, name] : m) name = "mixamorig:" + name;
   return m;
 }

@@ -50,6 +50,32 @@ TEST_CASE("embody avatar export-default writes a GLB that info reads back", "[av
   CHECK(j["joints"].get<int>() == 43);
 }
 
+TEST_CASE("embody avatar export-default --fingers writes a mannequin whose 30 finger bones info finds",
+          "[avatar]") {
+  const auto plain = nlohmann::json::parse(runEmbody("avatar info default --json").output);
+  CHECK(plain["finger_bones"]["mapped"] == 0);
+  CHECK(plain["finger_bones"]["driven"] == 0);
+  const auto file =
+      std::filesystem::temp_directory_path() / ("embody_cli_fingers_" + std::to_string(::getpid()) + ".glb");
+  REQUIRE(runEmbody("avatar export-default --fingers '" + file.string() + "'").exitCode == 0);
+  const auto r = runEmbody("avatar info '" + file.string() + "' --json");
+  const auto text = runEmbody("avatar info '" + file.string() + "'");
+  std::filesystem::remove(file);
+  REQUIRE(r.exitCode == 0);
+  const auto j = nlohmann::json::parse(r.output);
+  CHECK(j["joints"].get<int>() == 73);
+  CHECK(j["finger_bones"]["mapped"] == 30);
+  CHECK(j["finger_bones"]["left"] == 15);
+  CHECK(j["finger_bones"]["right"] == 15);
+  CHECK(j["finger_bones"]["driven"] == 30);
+  CHECK(j["bones"]["leftThumbMetacarpal"] == "l_thumb1");
+  CHECK(j["bones"]["rightLittleDistal"] == "r_pinky3");
+  CHECK(j["body_model"]["dofs"] == plain["body_model"]["dofs"]);  // the IK does not see the fingers
+  CHECK(text.output.find("finger bones: 30 of 30 mapped (left 15, right 15); 30 driven") != std::string::npos);
+  const auto direct = nlohmann::json::parse(runEmbody("avatar info default --fingers --json").output);
+  CHECK(direct["finger_bones"]["mapped"] == 30);
+}
+
 TEST_CASE("embody avatar reports usage and file errors with the right exit codes", "[avatar]") {
   CHECK(runEmbody("avatar").exitCode == 2);
   CHECK(runEmbody("avatar frobnicate").exitCode == 2);

@@ -109,4 +109,28 @@ std::string writeTraceFile(const std::string& name, const std::vector<std::strin
   return path;
 }
 
+bool HeadlessSession::locateHand(XrHandEXT hand, XrTime time,
+                                 std::array<XrHandJointLocationEXT, XR_HAND_JOINT_COUNT_EXT>& joints) {
+  auto create = proc<PFN_xrCreateHandTrackerEXT>("xrCreateHandTrackerEXT");
+  auto locate = proc<PFN_xrLocateHandJointsEXT>("xrLocateHandJointsEXT");
+  auto destroy = proc<PFN_xrDestroyHandTrackerEXT>("xrDestroyHandTrackerEXT");
+  REQUIRE(create);
+  REQUIRE(locate);
+  REQUIRE(destroy);
+  XrHandTrackerCreateInfoEXT ci{XR_TYPE_HAND_TRACKER_CREATE_INFO_EXT};
+  ci.hand = hand;
+  ci.handJointSet = XR_HAND_JOINT_SET_DEFAULT_EXT;
+  XrHandTrackerEXT tracker = XR_NULL_HANDLE;
+  REQUIRE(create(session, &ci, &tracker) == XR_SUCCESS);
+  XrHandJointLocationsEXT locs{XR_TYPE_HAND_JOINT_LOCATIONS_EXT};
+  locs.jointCount = XR_HAND_JOINT_COUNT_EXT;
+  locs.jointLocations = joints.data();
+  XrHandJointsLocateInfoEXT li{XR_TYPE_HAND_JOINTS_LOCATE_INFO_EXT};
+  li.baseSpace = stage;
+  li.time = time;
+  REQUIRE(locate(tracker, &li, &locs) == XR_SUCCESS);
+  REQUIRE(destroy(tracker) == XR_SUCCESS);
+  return locs.isActive == XR_TRUE;
+}
+
 }  // namespace embody::test

@@ -7,6 +7,7 @@
 #include <openxr/openxr.h>
 #include <openxr/openxr_platform.h>
 
+#include <array>
 #include <map>
 #include <memory>
 #include <string>
@@ -39,6 +40,10 @@ class HeadlessSession {
   // Polls, begins the session on READY, and runs frames (no layers) until FOCUSED.
   void runUntilFocused();
   XrTime lastDisplayTime = 0;
+  // One hand's joints in STAGE at `time`, through a hand tracker created for the call; returns
+  // the locations' isActive.
+  bool locateHand(XrHandEXT hand, XrTime time,
+                  std::array<XrHandJointLocationEXT, XR_HAND_JOINT_COUNT_EXT>& joints);
 
  private:
   std::unique_ptr<TestInstance> vk_;

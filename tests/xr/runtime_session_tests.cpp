@@ -30,30 +30,6 @@ glm::vec3 vec(const XrVector3f& v) {
 
 using HandJoints = std::array<XrHandJointLocationEXT, XR_HAND_JOINT_COUNT_EXT>;
 
-// One hand's joints in STAGE at `time`, through a hand tracker created for the call; isActive.
-bool locateHand(HeadlessSession& h, XrHandEXT hand, XrTime time, HandJoints& joints) {
-  auto create = h.proc<PFN_xrCreateHandTrackerEXT>("xrCreateHandTrackerEXT");
-  auto locate = h.proc<PFN_xrLocateHandJointsEXT>("xrLocateHandJointsEXT");
-  auto destroy = h.proc<PFN_xrDestroyHandTrackerEXT>("xrDestroyHandTrackerEXT");
-  REQUIRE(create);
-  REQUIRE(locate);
-  REQUIRE(destroy);
-  XrHandTrackerCreateInfoEXT ci{XR_TYPE_HAND_TRACKER_CREATE_INFO_EXT};
-  ci.hand = hand;
-  ci.handJointSet = XR_HAND_JOINT_SET_DEFAULT_EXT;
-  XrHandTrackerEXT tracker = XR_NULL_HANDLE;
-  REQUIRE(create(h.session, &ci, &tracker) == XR_SUCCESS);
-  XrHandJointLocationsEXT locs{XR_TYPE_HAND_JOINT_LOCATIONS_EXT};
-  locs.jointCount = XR_HAND_JOINT_COUNT_EXT;
-  locs.jointLocations = joints.data();
-  XrHandJointsLocateInfoEXT li{XR_TYPE_HAND_JOINTS_LOCATE_INFO_EXT};
-  li.baseSpace = h.stage;
-  li.time = time;
-  REQUIRE(locate(tracker, &li, &locs) == XR_SUCCESS);
-  REQUIRE(destroy(tracker) == XR_SUCCESS);
-  return locs.isActive == XR_TRUE;
-}
-
 }  // namespace
 
 TEST_CASE("the session walks IDLE, READY, SYNCHRONIZED, VISIBLE, FOCUSED and rejects calls out of order",
@@ -222,7 +198,7 @@ TEST_CASE("XR_EXT_hand_tracking gives 26 joints of a plausible hand at the contr
   h.runUntilFocused();
   HandJoints joints;
   // The left hand (trigger released: a relaxed open hand).
-  REQUIRE(locateHand(h, XR_HAND_LEFT_EXT, h.lastDisplayTime, joints));
+  REQUIRE(h.locateHand(XR_HAND_LEFT_EXT, h.lastDisplayTime, joints));
   const glm::vec3 palm = vec(joints[XR_HAND_JOINT_PALM_EXT].pose.position);
   CHECK(glm::distance(palm, glm::vec3(-0.2f, 1.1f, -0.3f)) < 1e-3f);  // palm at the grip
   for (const auto& j : joints) {
@@ -241,14 +217,14 @@ TEST_CASE("XR_EXT_hand_tracking gives 26 joints of a plausible hand at the contr
   CHECK(joints[XR_HAND_JOINT_THUMB_TIP_EXT].pose.position.y >
         joints[XR_HAND_JOINT_LITTLE_TIP_EXT].pose.position.y);
   // The right hand pulls its trigger (0.75): the fingers curl, so they reach less far forward.
-  REQUIRE(locateHand(h, XR_HAND_RIGHT_EXT, h.lastDisplayTime, joints));
+  REQUIRE(h.locateHand(XR_HAND_RIGHT_EXT, h.lastDisplayTime, joints));
   CHECK(joints[XR_HAND_JOINT_THUMB_TIP_EXT].pose.position.y >
         joints[XR_HAND_JOINT_LITTLE_TIP_EXT].pose.position.y);
   const float curledReach =
       joints[XR_HAND_JOINT_WRIST_EXT].pose.position.z - joints[XR_HAND_JOINT_MIDDLE_TIP_EXT].pose.position.z;
   CHECK(curledReach < openReach - 0.03f);
   // The left hand is lost after 1 s of trace time.
-  CHECK_FALSE(locateHand(h, XR_HAND_LEFT_EXT, h.lastDisplayTime + 2000000000, joints));
+  CHECK_FALSE(h.locateHand(XR_HAND_LEFT_EXT, h.lastDisplayTime + 2000000000, joints));
   for (const auto& j : joints) CHECK(j.locationFlags == 0);
 }
 
@@ -273,9 +249,9 @@ BodyProbe probeBody(HeadlessSession& h, XrTime time) {
                       loc.pose.orientation.z);
   xrDestroySpace(view);
   HandJoints joints;
-  b.handsActive = locateHand(h, XR_HAND_LEFT_EXT, time, joints);
+  b.handsActive = h.locateHand(XR_HAND_LEFT_EXT, time, joints);
   b.left = vec(joints[XR_HAND_JOINT_PALM_EXT].pose.position);
-  b.handsActive = locateHand(h, XR_HAND_RIGHT_EXT, time, joints) && b.handsActive;
+  b.handsActive = h.locateHand(XR_HAND_RIGHT_EXT, time, joints) && b.handsActive;
   b.right = vec(joints[XR_HAND_JOINT_PALM_EXT].pose.position);
   return b;
 }

@@ -1,9 +1,11 @@
 #include "xr/openxr/xr_loop.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <thread>
 
+#include "avatar/hand/finger_retarget.h"
 #include "engine/avatar_renderer.h"
 #include "engine/desktop_window.h"
 #include "engine/device.h"
@@ -24,6 +26,44 @@ gfx::FovAngles fovOf(const XrFovf& f) {
 // Midpoint of the eyes with the left eye's orientation: the head pose the body follows.
 Pose headFromViews(const Views& v) {
   return {0.5f * (v.eyes[0].pose.position + v.eyes[1].pose.position), v.eyes[0].pose.orientation};
+}
+
+// The hand tracker's joints as the finger retargeting job reads them (any rigid frame will do:
+// it only uses the joints' placement relative to each other).
+void toTrackedHand(const HandState& hs, avatar::TrackedHandJoints& out) {
+  out.active = hs.jointsValid;
+  for (int j = 0; j < kHandJointCount; ++j) {
+    out.position[static_cast<size_t>(j)] = hs.joints[static_cast<size_t>(j)].pose.position;
+    out.orientation[static_cast<size_t>(j)] = hs.joints[static_cast<size_t>(j)].pose.orientation;
+    out.valid[static_cast<size_t>(j)] = hs.jointsValid && hs.joints[static_cast<size_t>(j)].valid;
+  }
+}
+
+// Folds one frame's finger output into the run's report.
+void recordFingers(const avatar::FingerRig& rig, const avatar::FingerRetargetOutput& out, FingerReport& rep) {
+  float sum = 0.0f;
+  int n = 0;
+  bool any = false, full = true;
+  for (int h = 0; h < 2; ++h)
+    for (int f = 0; f < avatar::kFingerCount; ++f) {
+      const float w = out.weight[static_cast<size_t>(h)][static_cast<size_t>(f)];
+      any = any || w > 0.0f;
+      for (int s = 0; s < avatar::kFingerSegments; ++s) {
+        const size_t b = static_cast<size_t>(f * avatar::kFingerSegments + s);
+        if (f == 0 || rig.hands[static_cast<size_t>(h)].bones[b].joint < 0) continue;
+        full = full && w >= 1.0f;
+        sum += out.bend[static_cast<size_t>(h)][b];
+        ++n;
+      }
+    }
+  if (!any) return;
+  ++rep.frames;
+  if (!full || n == 0) return;
+  const float curl = sum / float(n) * 57.29578f;
+  rep.curlMinDeg = rep.fullFrames == 0 ? curl : std::min(rep.curlMinDeg, curl);
+  rep.curlMaxDeg = rep.fullFrames == 0 ? curl : std::max(rep.curlMaxDeg, curl);
+  ++rep.fullFrames;
+  rep.curlLastDeg = curl;
 }
 
 constexpr float kNear = 0.05f, kFar = 100.0f;
@@ -83,6 +123,14 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
   const glm::vec3 avatarEye(ar.eyePose(rest)[3]);
   AvatarPlacement placement(avatarEye, ar.anchors().forward, o.placement);
   avatar::SkeletonPose pose = rest;
+  // Fingers: driven when the runtime tracks hands and the avatar has finger bones.
+  const avatar::FingerRig fingerRig = avatar::buildFingerRig(o.avatar->skeleton, o.avatar->humanoid);
+  const bool driveFingers = o.fingers && in.handTracking() && fingerRig.mappedBones() > 0;
+  rep.fingers.drivenBones = fingerRig.mappedBones();
+  avatar::FingerRetargetState fingerState;
+  avatar::FingerRetargetOutput fingerOut;
+  std::array<avatar::TrackedHandJoints, 2> trackedHands;
+  XrTime lastFingerTime = 0;
   XrPoseSource trackers;  // this frame's head and wrists as a tracking sample
   XrTime firstDisplayTime = 0;
   std::vector<gfx::LineVertex> lines, overlay;
@@ -172,6 +220,20 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
       } else {
         pose = rest;
         placement.place(o.avatar->skeleton, head, pose);
+      }
+      if (driveFingers) {  // after the body: the fingers ride on the solved hands
+        for (int h = 0; h < 2; ++h) toTrackedHand(in.hand(h), trackedHands[static_cast<size_t>(h)]);
+        avatar::FingerRetargetJob job;
+        job.skeleton = &o.avatar->skeleton;
+        job.rig = &fingerRig;
+        job.hands = {&trackedHands[0], &trackedHands[1]};
+        job.deltaTime =
+            lastFingerTime ? std::clamp(float(double(t - lastFingerTime) * 1e-9), 0.0f, 0.1f) : 0.0f;
+        job.state = &fingerState;
+        job.pose = &pose;
+        job.output = &fingerOut;
+        lastFingerTime = t;
+        if (job.Validate() && job.Run()) recordFingers(fingerRig, fingerOut, rep.fingers);
       }
       if (auto s = ar.computePose(pose); !s) {
         error = s.error();

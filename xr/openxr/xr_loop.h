@@ -4,7 +4,9 @@
 //
 // The body comes from `bodyPose` (embody xr: runtime::TrackedAvatarBody, three-point PIK); without
 // it the avatar stands in its rest pose under the head (scaled by the HMD-height calibration,
-// turned with the head's heading).
+// turned with the head's heading). After the body, when XR_EXT_hand_tracking is active and the
+// avatar has humanoid finger bones, the 26 tracked joints of each hand drive its fingers
+// (avatar::FingerRetargetJob, relative to the posed hands) before skinning.
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -17,6 +19,16 @@
 
 namespace embody::xr {
 
+// What the fingers did over the run (all zero without hand tracking or finger bones).
+struct FingerReport {
+  int drivenBones = 0;      // finger bones of the avatar that hand tracking drives (of 30)
+  uint64_t frames = 0;      // frames with at least one finger following the tracked hand
+  uint64_t fullFrames = 0;  // frames with every driven finger fully on the tracked hand
+  // Curl: the mean bend of the driven index..little bones against the input pose (degrees),
+  // over frames whose fingers were fully blended in.
+  float curlMinDeg = 0.0f, curlMaxDeg = 0.0f, curlLastDeg = 0.0f;
+};
+
 struct XrLoopOptions {
   const avatar::AvatarAsset* avatar = nullptr;  // required; must outlive the loop
   uint64_t frames = 0;  // request exit after this many submitted frames (0: until the runtime ends it)
@@ -25,6 +37,7 @@ struct XrLoopOptions {
   bool recenterAtStart = false;
   bool verbose = false;  // print every session state change
   bool mirror = false;   // a desktop window (gfx::DesktopWindow) showing the left eye (V: third person)
+  bool fingers = true;   // drive the avatar's finger bones from hand tracking when both exist
   // The body: given each frame's tracker sample (world space, recentered: head, wrists), fill
   // `pose` (starts at the rest pose) and return true; false or unset = the rest pose placed under
   // the head. Called on the render thread with the trackers predicted for this frame's display.
@@ -50,8 +63,9 @@ struct XrLoopReport {
   uint32_t vulkanValidationMessages = 0;
   uint64_t mirrorFrames = 0;    // frames the mirror window presented
   uint64_t bodyPoseFrames = 0;  // frames whose pose came from options.bodyPose
-  double meanFrameMs = 0.0;     // wall time per loop iteration while rendering
-  std::string error;            // "" when the run ended normally
+  FingerReport fingers;
+  double meanFrameMs = 0.0;  // wall time per loop iteration while rendering
+  std::string error;         // "" when the run ended normally
 };
 
 // Runs until the session ends. Setup failures, failing calls and a lost session (sessionLost)

@@ -209,20 +209,23 @@ void handJointsFromGrip(const Pose& grip, bool leftHand, float curl, std::array<
   if (leftHand)  // the left hand is the mirror image: thumb at palm +X
     for (auto& j : out) j.pose.p.x = -j.pose.p.x;
   // Orientation: -Z along the bone towards the next joint (tips copy their parent), +Y the back of
-  // the hand.
-  auto orient = [&](int joint, int next) {
+  // the finger. The back is carried down each finger from the previous joint's +Y (starting at the
+  // back of the hand), so it stays on the nail side when a curled phalanx points back up.
+  auto orient = [&](int joint, int next, const glm::vec3& back) {
     const glm::vec3 forward = out[next].pose.p - out[joint].pose.p;
     const glm::vec3 z = -glm::normalize(forward);
-    glm::vec3 x = glm::cross(glm::vec3(0, 1, 0), z);
+    glm::vec3 x = glm::cross(back, z);
     x = glm::length(x) < 1e-4f ? glm::vec3(1, 0, 0) : glm::normalize(x);
     const glm::vec3 y = glm::cross(z, x);
     out[joint].pose.q = glm::quat_cast(glm::mat3(x, y, z));
+    return y;
   };
   out[XR_HAND_JOINT_PALM_EXT].pose.q = glm::quat(1, 0, 0, 0);
   out[XR_HAND_JOINT_WRIST_EXT].pose.q = glm::quat(1, 0, 0, 0);
   for (int chainStart : {2, 6, 11, 16, 21}) {
     const int last = chainStart == 2 ? 5 : chainStart + 4;
-    for (int j = chainStart; j < last; ++j) orient(j, j + 1);
+    glm::vec3 back(0, 1, 0);
+    for (int j = chainStart; j < last; ++j) back = orient(j, j + 1, back);
     out[last].pose.q = out[last - 1].pose.q;
   }
   for (auto& j : out) j.pose = compose(palm, j.pose);

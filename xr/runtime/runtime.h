@@ -73,8 +73,11 @@ class PoseProvider {
 // BVH motion capture (head, hands) as samples in OpenXR conventions; "" or why it failed.
 std::string loadBvhSamples(const std::string& path, std::vector<BodySample>& out);
 
-// The 26 XR_EXT_hand_tracking joints of a relaxed hand, given its grip pose; poses in the same
-// space as the grip. radius in metres.
+// The 26 XR_EXT_hand_tracking joints of a hand holding a controller at `grip`; poses in the same
+// space as the grip, radius in metres. `curl` (0..1, the trace's per-hand "trigger") bends each
+// finger joint of index..little by 12 + 60 * curl degrees towards the palm: 0 a relaxed hand, 1 a
+// fist. The thumb does not curl. Each joint's +Y is the back of its finger (carried joint to
+// joint, so it stays there past 90 degrees).
 struct HandJoint {
   Pose pose;
   float radius = 0.01f;
