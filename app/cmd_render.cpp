@@ -56,6 +56,8 @@ int runRender(cli::Argv argv) {
   args.flag("uncoupled-spine", "independent spine sites (one ball joint each) instead of the coupled spine (the default)");
   args.flag("coupled-spine", "the coupled spine model (Raunhardt & Boulic 2008; the default, kept for old scripts)");
   args.flag("three-point", "keep only head and hands (HMD + controllers): the lower body is inferred, feet step");
+  args.flag("seated", "seated mode: the lower body sits on a seat placed under the first head sample, the spine and "
+                      "arms follow (try --motion synthetic:seated)");
   args.option("yaw", "DEGREES", "orbit camera yaw around the avatar (0 = from the front)", "30");
   args.option("pitch", "DEGREES", "orbit camera pitch (positive looks down)", "10");
   args.option("device", "SELECTOR", "Vulkan device: auto, an index, 'lavapipe', or part of its name", "auto");
@@ -103,6 +105,10 @@ int runRender(cli::Argv argv) {
     std::fprintf(stderr, "error: --view must be first, third or stereo\n");
     return 2;
   }
+  if (!motion && args.has("seated")) {
+    std::fprintf(stderr, "error: --seated needs --motion (e.g. --motion synthetic:seated)\n");
+    return 2;
+  }
   if (motion) {
     app::RenderJob job;
     try {
@@ -115,6 +121,7 @@ int runRender(cli::Argv argv) {
       return 2;
     }
     job.threePoint = args.has("three-point");
+    job.seated = args.has("seated");
     if (args.has("uncoupled-spine") && args.has("coupled-spine")) {
       std::fprintf(stderr, "error: --coupled-spine and --uncoupled-spine exclude each other\n");
       return 2;

@@ -8,6 +8,7 @@
 #include "avatar/gltf/gltf_loader.h"
 #include "avatar/procedural/default_avatar.h"
 #include "runtime/frame_stats.h"
+#include "runtime/seated_stats.h"
 #include "runtime/tracked_avatar_body.h"
 #include "xr/tracking/trace.h"
 #include "xr/openxr/xr_loop.h"
@@ -32,7 +33,11 @@ int runXr(cli::Argv argv) {
               "ik");
   args.option("record", "FILE.jsonl", "record the head and wrist trackers as a trace (replay with embody render --motion)");
   args.option("ik-budget-ms", "MS", "IK time budget per frame", "1");
-  args.flag("seated", "seated mode: the avatar follows your head down instead of standing on the floor");
+  args.flag("seated",
+            "seated mode: the avatar sits on a seat placed under your head at the first frame (again on recenter), "
+            "feet on the floor; the spine and arms follow your head and hands");
+  args.option("seat-height", "METRES",
+              "seated mode: the seat's height above the floor (default: from your head height and the avatar's legs)");
   args.flag("recenter", "recenter at start (your position and heading become the origin)");
   args.flag(
       "mirror",
@@ -56,6 +61,20 @@ int runXr(cli::Argv argv) {
     return 2;
   }
   lo.placement.seated = args.has("seated");
+  runtime::SeatOptions seat;
+  seat.enabled = lo.placement.seated;
+  if (args.has("seat-height")) {
+    try {
+      seat.seatHeight = static_cast<float>(args.number("seat-height"));
+    } catch (const std::invalid_argument& e) {
+      std::fprintf(stderr, "error: %s\n", e.what());
+      return 2;
+    }
+    if (!seat.enabled || !(seat.seatHeight >= 0.2f && seat.seatHeight <= 1.2f)) {
+      std::fprintf(stderr, "error: --seat-height needs --seated and must be between 0.2 and 1.2 metres\n");
+      return 2;
+    }
+  }
   lo.recenterAtStart = args.has("recenter");
   lo.vulkanValidation = args.has("validate");
   lo.verbose = args.has("verbose");
@@ -102,15 +121,16 @@ int runXr(cli::Argv argv) {
     }
   std::unique_ptr<runtime::TrackedAvatarBody> body;
   runtime::StatsRecorder ikStats;  // per solved frame, for --stats (grows with the session)
+  runtime::SeatedStats seatedStats;
   const bool keepStats = args.has("stats");
   if (bodyMode == "ik") {
     runtime::TrackedBodyOptions bo;
     bo.body.trackers = tracking::TrackerMask::threePoint();
-    bo.seated = lo.placement.seated;
-    const float eye = lo.placement.userEyeHeight;  // 0: from the first head sample (standing)
-    bo.standingEyeHeight = eye > 0.0f ? eye : 1.64f;
-    // The solver takes a body height; a seated user's head height says nothing about it.
-    bo.body.userHeight = eye > 0.0f ? eye / 0.936f : (bo.seated ? bo.standingEyeHeight / 0.936f : 0.0f);
+    bo.body.seat = seat;
+    // The solver takes a body height (0: from the first head sample, standing); seated, the
+    // solver assumes 1.75 m unless --height gives the standing eye height.
+    const float eye = lo.placement.userEyeHeight;
+    bo.body.userHeight = eye > 0.0f ? eye / 0.936f : 0.0f;
     bo.stage.budgetSeconds = budgetMs * 1e-3;
     auto created = runtime::TrackedAvatarBody::create(asset, bo);
     if (!created) {
@@ -122,8 +142,10 @@ int runXr(cli::Argv argv) {
       if (record) (void)recorder.write(sample);
       const bool ok = body->solve(sample, pose);
       if (ok && keepStats) ikStats.add(body->frame().stats);
+      if (ok && seat.enabled) seatedStats.add(body->solver());
       return ok;
     };
+    lo.onRecenter = [&] { body->reset(); };
   }
 
   const xr::XrLoopReport r = xr::runXrLoop(lo);
@@ -149,6 +171,8 @@ int runXr(cli::Argv argv) {
                 r.fingers.drivenBones, static_cast<unsigned long long>(r.fingers.frames),
                 r.fingers.curlMinDeg, r.fingers.curlMaxDeg);
   std::printf("calibration: %s, avatar scale %.3f\n", r.calibrated ? "done" : "not done", r.calibratedScale);
+  if (body && seat.enabled && body->solver().seat())
+    std::printf("seated: seat %.2f m high, placed under the head\n", body->solver().seat()->seatHeight / body->solver().scale());
   if (lo.mirror) std::printf("mirror: %llu frames shown\n", static_cast<unsigned long long>(r.mirrorFrames));
   if (lo.vulkanValidation) std::printf("validation messages: %u\n", r.vulkanValidationMessages);
 
@@ -187,7 +211,8 @@ int runXr(cli::Argv argv) {
                           {"curl_max_deg", r.fingers.curlMaxDeg},
                           {"curl_last_deg", r.fingers.curlLastDeg}}},
                         {"error", r.error}};
-    if (body) runtime::toJson(j, ik);  // "ik" and "tracking" objects as in embody render's stats.json
+    if (body) runtime::toJson(j, ik);
+    if (body && seat.enabled) seatedStats.toJson(j);  // "ik" and "tracking" objects as in embody render's stats.json
     std::ofstream out(args.get("stats"));
     out << j.dump(2) << "\n";
     if (!out) {

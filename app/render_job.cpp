@@ -21,6 +21,7 @@
 #include "engine/instance.h"
 #include "runtime/avatar_body_solver.h"
 #include "runtime/ik_thread.h"
+#include "runtime/seated_stats.h"
 #include "xr/tracking/pose_source.h"
 #include "xr/tracking/trace.h"
 
@@ -149,6 +150,7 @@ int runRenderJob(const RenderJob& job) {
   // user is unknown unless given: calibrate from its first head sample.
   const bool trace = job.motion.size() > 6 && job.motion.substr(job.motion.size() - 6) == ".jsonl";
   bo.userHeight = userHeight > 0.0f ? userHeight : (trace ? 0.0f : so.userHeight);
+  bo.seat.enabled = job.seated;
   auto solver = runtime::AvatarBodySolver::create(asset, bo);
   if (!solver) return fail("avatar " + job.avatar + ": " + solver.error());
 
@@ -185,6 +187,7 @@ int runRenderJob(const RenderJob& job) {
   ik.start();
   runtime::StatsRecorder stats;
   stats.reserve(size_t(frames));
+  runtime::SeatedStats seated;
   const int sheetCount = std::min(frames, 12);
   std::vector<avatar::Image> thumbs;
   const int shrinkFactor = std::max(1, (job.view == "stereo" ? 2 * job.width : job.width) / 280);
@@ -203,6 +206,8 @@ int runRenderJob(const RenderJob& job) {
     ik.acquire();
     const runtime::SolvedFrame& solved = ik.frame();
     runtime::FrameStats fs = solved.stats;
+    // The IK thread is idle until the next submit (waitForFrames synchronised with its solve).
+    if (job.seated) seated.add(**solver);
     const auto t0 = Clock::now();
     if (job.gizmos) fo.gizmos = renderer.trackingGizmos(solved.pose);
     Result<avatar::Image> image = Error{"no frame"};
@@ -256,6 +261,7 @@ int runRenderJob(const RenderJob& job) {
                {"three_point", body.threePoint()},
                {"steps", body.feet().steps()}};
   j["ik"]["samples_skipped"] = ik.samplesSkipped();
+  if (job.seated) seated.toJson(j);
   std::ofstream(job.out / "stats.json") << j.dump(2) << "\n";
 
   std::printf("wrote %d frames, contact_sheet.png and stats.json to %s\n", job.writeFrames ? frames : 0, job.out.c_str());

@@ -21,6 +21,7 @@ struct RenderJob {
   float userHeight = 0.0f;         // 0: the profile's, else from the first head sample
   double bvhScale = 0.0;
   bool threePoint = false;         // keep only head and hands
+  bool seated = false;             // seated mode (runtime::SeatOptions): the lower body sits on a seat
   int frames = 0;                  // 0: the motion's duration (at most 20 s)
   double fps = 90.0;
   int width = 480, height = 480;

@@ -73,6 +73,10 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
   rightShoulder_ = ikOf(avatar::HumanBone::rightUpperArm);
   const ik::JointId leftElbow = ikOf(avatar::HumanBone::leftLowerArm);
   if (leftShoulder_ < 0 || rightShoulder_ < 0 || leftElbow < 0) return Error{"the avatar's arms are not mapped"};
+  hipJoint_ = {ikOf(avatar::HumanBone::leftUpperLeg), ikOf(avatar::HumanBone::rightUpperLeg)};
+  kneeJoint_ = {ikOf(avatar::HumanBone::leftLowerLeg), ikOf(avatar::HumanBone::rightLowerLeg)};
+  const bool legs = hipJoint_[0] >= 0 && hipJoint_[1] >= 0 && kneeJoint_[0] >= 0 && kneeJoint_[1] >= 0;
+  if (options.seat.enabled && !legs) return Error{"seated mode: the avatar's upper and lower legs are not mapped"};
 
   // Rest geometry from the model without tasks (q = 0 is the rest pose).
   {
@@ -109,6 +113,23 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
     const Eigen::Vector3d eye = head + up_ * (floor_ + avatarEyeHeight_ - up_.dot(head)) + forward_ * dims.eyeForward;
     eyeInHead_ = restRotation_[0].conjugate() * (eye - head);
     restHeadToHips_ = pos(body_.hips) - head;
+    if (legs) {
+      // Seated mode's leg geometry. The hip joint centres sit about a thigh's thickness (5 % of
+      // stature) above the seat surface.
+      legs_.up = up_;
+      legs_.forward = forward_;
+      legs_.floor = floor_;
+      legs_.eye = eye;
+      for (size_t s = 0; s < 2; ++s) {
+        const ik::JointId foot = s == 0 ? body_.leftFoot : body_.rightFoot;
+        legs_.hip[s] = pos(hipJoint_[s]);
+        legs_.knee[s] = pos(kneeJoint_[s]);
+        legs_.ankle[s] = pos(foot);
+        legs_.footRotation[s] = Eigen::Quaterniond(rest.jointFrame(foot).rotation());
+      }
+      legs_.pelvisRotation = restRotation_[size_t(tracking::index(TrackerId::Hips))];
+      legs_.hipAboveSeat = 0.05 * avatarHeight_;
+    }
 
     // Tracker frame -> joint frame. Reference tracker orientations (tracking space) for the rest
     // pose: identity for head, hips, feet; the grip pose of the rest hand for the hands.
@@ -132,7 +153,7 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
   }
 
   // Tasks from the layout (layout priority 1 = solver level 0).
-  layout_ = taskLayoutFor(options.trackers);
+  layout_ = options.seat.enabled ? seatedTaskLayoutFor(options.trackers) : taskLayoutFor(options.trackers);
   std::vector<ik::TaskDesc> tasks;
   auto add = [&](ik::TaskDesc t, int priority, float weight) {
     t.level = priority - 1;
@@ -170,6 +191,23 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
         t.position_tolerance = 0.005;
         balanceTask_ = add(t, spec.priority, spec.weight);
         break;
+      case TaskKind::SeatedHip:
+      case TaskKind::SeatedKnee: {
+        const size_t side = spec.tracker == TrackerId::LeftFoot ? 0 : 1;
+        const bool hip = spec.kind == TaskKind::SeatedHip;
+        t.name = std::string(hip ? "seated_hip_" : "seated_knee_") + (side == 0 ? "left" : "right");
+        t.type = ik::TaskType::Position;
+        t.joint = hip ? hipJoint_[side] : kneeJoint_[side];
+        (hip ? seatHipTask_ : seatKneeTask_)[side] = add(t, spec.priority, spec.weight);
+        break;
+      }
+      case TaskKind::SeatedPelvis:
+        t.name = "seated_pelvis";
+        t.type = ik::TaskType::Orientation;
+        t.joint = body_.hips;
+        t.rotation_tolerance = 0.05;
+        seatPelvisTask_ = add(t, spec.priority, spec.weight);
+        break;
       case TaskKind::InferredHips:
         t.type = ik::TaskType::Position;
         t.position_tolerance = 0.05;
@@ -206,6 +244,7 @@ void AvatarBodySolver::resetWarmStart() {
   (void)data_->setConfiguration(restQ_);
   lastGoodQ_ = restQ_;
   heightsCalibrated_ = false;
+  seatPlaced_ = false;
   heightOffset_.fill(0.0);
   legRatio_ = 1.0;
   solvedOnce_ = false;
@@ -269,6 +308,10 @@ void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
     if (positionTask_[i] >= 0 && body_.model.tasks[size_t(positionTask_[i])].desc.type == ik::TaskType::Pose) continue;
     setPose(positionTask_[i], orientationTask_[i], targetPoint_[i], targetRotation_[i], w);
   }
+  if (layout_.seated) {
+    setSeatedTargets(targets);
+    return;
+  }
   // Tracked feet with a tracked pelvis: strides scaled by the leg ratio about the pelvis's ground
   // point, so a longer-legged user's steps stay within the avatar's legs.
   const size_t hipsI = size_t(tracking::index(TrackerId::Hips));
@@ -312,6 +355,76 @@ void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
   }
 }
 
+void AvatarBodySolver::setSeatedTargets(const tracking::GuardedSample& targets) {
+  ik::Data& d = *data_;
+  bool settleSeat = false;
+  const size_t headIndex = size_t(tracking::index(TrackerId::Head));
+  if (!seatPlaced_ && targets.status[headIndex] == TrackerStatus::Tracked && targets.pose[TrackerId::Head].valid) {
+    // The seat goes under the first tracked head, facing where it looks.
+    const Eigen::Quaterniond headTurn = targetRotation_[headIndex] * restRotation_[headIndex].conjugate();
+    const double seatHeight = options_.seat.seatHeight > 0.0f ? scale_ * double(options_.seat.seatHeight) : -1.0;
+    seat_ = placeSeat(legs_, targetPoint_[headIndex], headingOf(headTurn, up_, forward_), seatHeight);
+    seatPlaced_ = true;
+    if (!solvedOnce_) {
+      // Start the cold solve with the hips over the seat: the legs then only fold.
+      ik::kinematics(body_.model, d, false);
+      const ik::Model::Joint& root = body_.model.joints[size_t(body_.hips)];
+      if (root.desc.type == ik::JointType::Free && root.desc.parent == ik::kNoParent) {
+        const Eigen::Vector3d shift = 0.5 * (seat_.hip[0] + seat_.hip[1] - jointPosition(hipJoint_[0]) - jointPosition(hipJoint_[1]));
+        Eigen::VectorXd q = d.q();
+        q.segment<3>(root.first_dof) += root.desc.rest.linear().transpose() * shift;
+        (void)d.setConfiguration(q);
+      }
+      settleSeat = true;
+    }
+  }
+  // Until then (no tracked head yet) the lower body is left to the warm start.
+  const double w = seatPlaced_ ? 1.0 : 0.0;
+  const Eigen::Quaterniond none = Eigen::Quaterniond::Identity();
+  for (size_t s = 0; s < 2; ++s) {
+    setPose(seatHipTask_[s], -1, seat_.hip[s], none, w);
+    setPose(seatKneeTask_[s], -1, seat_.knee[s], none, w);
+    const size_t f = size_t(tracking::index(s == 0 ? TrackerId::LeftFoot : TrackerId::RightFoot));
+    targetPoint_[f] = seat_.ankle[s];
+    targetRotation_[f] = seat_.footRotation[s];
+    setPose(positionTask_[f], -1, targetPoint_[f], targetRotation_[f], w);
+  }
+  setPose(-1, seatPelvisTask_, Eigen::Vector3d::Zero(), seat_.pelvisRotation, w);
+  if (!settleSeat) return;
+  // A cold start sits down and reaches the first targets outside the budget (once per placement:
+  // the first frame and each recenter). Within a 1 ms budget the budgeted solve otherwise folded
+  // the legs and raised the arms over dozens of frames (hand p95 35 cm over the first 2 s of
+  // `embody xr --seated`).
+  ik::SolveOptions o;
+  o.max_iterations = 80;
+  (void)ik::solve(body_.model, d, o);
+}
+
+namespace {
+double angleBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
+}  // namespace
+
+LowerBodyPosture AvatarBodySolver::posture() const {
+  LowerBodyPosture p;
+  const Eigen::Isometry3d& root = data_->jointFrame(body_.hips);
+  p.pelvis = root.translation();
+  p.eye = eyePosition();
+  const Eigen::Quaterniond pelvisTurn =
+      Eigen::Quaterniond(root.rotation()) * restRotation_[size_t(tracking::index(TrackerId::Hips))].conjugate();
+  const Eigen::Vector3d trunkDown = pelvisTurn * -up_;
+  for (size_t s = 0; s < 2; ++s) {
+    if (hipJoint_[s] < 0 || kneeJoint_[s] < 0) continue;
+    p.hip[s] = jointPosition(hipJoint_[s]);
+    p.knee[s] = jointPosition(kneeJoint_[s]);
+    p.ankle[s] = jointPosition(s == 0 ? body_.leftFoot : body_.rightFoot);
+    p.hipFlexion[s] = angleBetween(trunkDown, p.knee[s] - p.hip[s]);
+    p.kneeFlexion[s] = angleBetween(p.knee[s] - p.hip[s], p.ankle[s] - p.knee[s]);
+  }
+  p.spineFlexion = angleBetween(pelvisTurn * -restHeadToHips_, jointPosition(body_.head) - p.pelvis);
+  p.pelvisPitch = angleBetween(pelvisTurn * up_, up_);
+  return p;
+}
+
 SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::SkeletonPose& pose) {
   SolveResult result;
   const Clock& clock = *request.clock;
@@ -322,8 +435,10 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
     const tracking::TrackerPose& head = targets.pose[TrackerId::Head];
     const float eye = head.position.y;
     const bool live = targets.status[headIndex] == TrackerStatus::Tracked && head.valid && eye > 0.4f && eye < 2.4f;
-    calibrate(live ? eye / 0.936f : 1.75f);
-    if (live) calibratedFromHead_ = true;
+    // Seated, the head's height says nothing about the user's stature: 1.75 m unless given.
+    const bool standing = live && !layout_.seated;
+    calibrate(standing ? eye / 0.936f : 1.75f);
+    if (standing) calibratedFromHead_ = true;
   }
   setTargets(targets);
 

@@ -28,6 +28,7 @@
 #include "avatar/body/body_model.h"
 #include "runtime/body_solver.h"
 #include "runtime/foot_planner.h"
+#include "runtime/seated_pose.h"
 #include "runtime/task_layout.h"
 
 namespace embody::runtime {
@@ -61,6 +62,22 @@ struct AvatarBodyOptions {
   // 0.025: 1.2/8.5 mm; docs/runtime.md). 0.05 keeps a per-frame step far above what tracking
   // needs.
   double maxLevelStep = 0.05;
+  // Seated mode (seatedTaskLayoutFor, seated_pose.h): the lower body sits on a seat placed under
+  // the first tracked head (again after resetWarmStart), the spine and arms follow the head and
+  // hands. A seated head says nothing about the user's stature: give userHeight (else 1.75 m).
+  SeatOptions seat;
+};
+
+// The solved lower body and trunk, measured (avatar space; angles in radians).
+struct LowerBodyPosture {
+  Eigen::Vector3d pelvis = Eigen::Vector3d::Zero();  // the root joint (hips) pivot
+  Eigen::Vector3d eye = Eigen::Vector3d::Zero();
+  std::array<Eigen::Vector3d, 2> hip{}, knee{}, ankle{};  // joint pivots, 0 = left
+  std::array<double, 2> hipFlexion{}, kneeFlexion{};  // 0 standing straight, about pi/2 seated
+  // The trunk's bend over the pelvis: the angle between the pelvis-to-head line and where the
+  // pelvis's rest frame would put it (0 upright, grows as the spine bends).
+  double spineFlexion = 0.0;
+  double pelvisPitch = 0.0;  // the pelvis's tilt from upright (either way)
 };
 
 class AvatarBodySolver final : public BodySolver {
@@ -91,12 +108,18 @@ class AvatarBodySolver final : public BodySolver {
   bool calibratedFromHead() const { return calibratedFromHead_; }
   ik::JointId shoulderJoint(tracking::Side side) const { return side == tracking::Side::Left ? leftShoulder_ : rightShoulder_; }
   const Eigen::Vector3d& up() const { return up_; }
+  bool seated() const { return layout_.seated; }
+  // Seated mode: the seat in avatar space, once placed (null before the first tracked head).
+  const SeatedPose* seat() const { return seatPlaced_ ? &seat_ : nullptr; }
+  const SeatedLegs& seatedLegs() const { return legs_; }
+  LowerBodyPosture posture() const;
 
  private:
   AvatarBodySolver(const avatar::AvatarAsset& avatar) : avatar_(avatar) {}
   Status build(const AvatarBodyOptions& options);
   void calibrate(float userHeight);
   void setTargets(const tracking::GuardedSample& targets);
+  void setSeatedTargets(const tracking::GuardedSample& targets);
   // Enables (weight > 0, times the task's own) or disables a position/orientation/pose task pair.
   void setPose(ik::TaskId position, ik::TaskId orientation, const Eigen::Vector3d& p, const Eigen::Quaterniond& q, double weight);
 
@@ -119,6 +142,13 @@ class AvatarBodySolver final : public BodySolver {
   std::array<Eigen::Quaterniond, tracking::kTrackerCount> restRotation_{};
   ik::TaskId balanceTask_ = -1, hipsPosTask_ = -1, hipsRotTask_ = -1;
   ik::JointId leftShoulder_ = -1, rightShoulder_ = -1;
+  // Seated mode: tasks per side (0 = left), the legs' rest geometry and the placed seat.
+  std::array<ik::TaskId, 2> seatHipTask_{-1, -1}, seatKneeTask_{-1, -1};
+  ik::TaskId seatPelvisTask_ = -1;
+  std::array<ik::JointId, 2> hipJoint_{-1, -1}, kneeJoint_{-1, -1};
+  SeatedLegs legs_;
+  SeatedPose seat_;
+  bool seatPlaced_ = false;
 
   Eigen::Vector3d up_ = Eigen::Vector3d::UnitY(), forward_ = Eigen::Vector3d::UnitZ();
   Eigen::Quaterniond fromTracking_ = Eigen::Quaterniond::Identity();  // -Z -> the avatar's forward

@@ -14,6 +14,9 @@ std::string_view taskKindName(TaskKind kind) {
     case TaskKind::TrackerPosition: return "position";
     case TaskKind::TrackerOrientation: return "orientation";
     case TaskKind::InferredHips: return "inferred_hips";
+    case TaskKind::SeatedHip: return "seated_hip";
+    case TaskKind::SeatedKnee: return "seated_knee";
+    case TaskKind::SeatedPelvis: return "seated_pelvis";
   }
   return "?";
 }
@@ -59,6 +62,42 @@ TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
   return l;
 }
 
+TaskLayout seatedTaskLayoutFor(tracking::TrackerMask trackers) {
+  TaskLayout l;
+  l.seated = true;
+  // 1: the seat. Both hip joint centres (the pelvis can only pitch about the line through them:
+  // leaning bends the hips and the spine, never lifts the pelvis), the knees (the one free turn of
+  // each leg about its hip-ankle line) and the feet (position and orientation, flat). The targets
+  // are one consistent rigid leg pose (seated_pose.h), so this level is met exactly.
+  for (auto foot : {TrackerId::LeftFoot, TrackerId::RightFoot}) {
+    l.tasks.push_back({TaskKind::SeatedHip, foot, 1, 1.0f});
+    l.tasks.push_back({TaskKind::SeatedKnee, foot, 1, 1.0f});
+    l.tasks.push_back({TaskKind::FootPlant, foot, 1, 1.0f});
+  }
+  // 2: the head position, as standing.
+  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Head, 2, 1.0f});
+  // 3: the hand positions, as standing.
+  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
+    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerPosition, hand, 3, 1.0f});
+  // 4: the pelvis upright, facing the seat, weight 0.1. With the hip joints pinned the pelvis
+  // can only pitch about them; this level leaves a lean to the spine wherever the head and hands
+  // leave it the freedom, so the pelvis tilts (the hips flex past 90 degrees) for the rest. Where
+  // it was tried instead:
+  //   - lowest (under the orientations, which leave it no freedom): a lean became pelvis tilt
+  //     alone, 30 degrees with a straight spine;
+  //   - above the hands (3): the shoulders stayed back and the hands out of reach when the user
+  //     leant sideways and forward;
+  //   - with a target tilted by a share of the lean (a lumbopelvic rhythm): where the coupled
+  //     spine's bands sat at their limits the head stalled 2-3 cm off its target.
+  // The low weight damps its steps while it conflicts (as the tracked pelvis's row standing).
+  l.tasks.push_back({TaskKind::SeatedPelvis, TrackerId::Hips, 4, 0.1f});
+  // 5: the orientations (level 4 standing).
+  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, 5, 1.0f});
+  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
+    if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerOrientation, hand, 5, 1.0f});
+  return l;
+}
+
 int TaskLayout::levels() const {
   int m = 0;
   for (const auto& t : tasks) m = std::max(m, t.priority);
@@ -69,11 +108,15 @@ std::string TaskLayout::describe() const {
   std::string s;
   for (const auto& t : tasks) {
     s += "  " + std::to_string(t.priority) + "  " + std::string(taskKindName(t.kind));
-    if (t.kind != TaskKind::Balance && t.kind != TaskKind::InferredHips) s += " " + std::string(tracking::trackerKey(t.tracker));
+    if (t.kind == TaskKind::SeatedHip || t.kind == TaskKind::SeatedKnee)
+      s += t.tracker == TrackerId::LeftFoot ? " left" : " right";
+    else if (t.kind != TaskKind::Balance && t.kind != TaskKind::InferredHips && t.kind != TaskKind::SeatedPelvis)
+      s += " " + std::string(tracking::trackerKey(t.tracker));
     if (t.weight != 1.0f) s += " (weight " + std::to_string(t.weight).substr(0, 4) + ")";
     s += "\n";
   }
-  if (inferLowerBody) s += "  lower body inferred: feet planted, stepping when the user walks or turns\n";
+  if (seated) s += "  seated: the lower body sits on the seat, the spine and arms follow the head and hands\n";
+  else if (inferLowerBody) s += "  lower body inferred: feet planted, stepping when the user walks or turns\n";
   return s;
 }
 

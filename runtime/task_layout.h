@@ -16,7 +16,10 @@ enum class TaskKind : uint8_t {
   FootPlant,         // an inferred planted foot (three-point mode): position + orientation
   TrackerPosition,   // a tracker's position (3 rows)
   TrackerOrientation, // a tracker's orientation (3 rows)
-  InferredHips        // three-point mode: the pelvis under the head, upright, facing the heading
+  InferredHips,       // three-point mode: the pelvis under the head, upright, facing the heading
+  SeatedHip,          // seated mode: a hip joint centre on the seat (3 rows; `tracker` names the side's foot)
+  SeatedKnee,         // seated mode: a knee ahead of its hip joint over the planted foot (3 rows)
+  SeatedPelvis        // seated mode: the pelvis upright, facing the seat (3 rows)
 };
 
 struct TaskSpec {
@@ -29,12 +32,19 @@ struct TaskSpec {
 struct TaskLayout {
   std::vector<TaskSpec> tasks;  // by priority, then tracker
   bool inferLowerBody = false;  // no foot trackers: feet planted and stepping procedurally
+  bool seated = false;          // seated mode: the lower body sits on a seat (seatedTaskLayoutFor)
   int levels() const;
   std::string describe() const;  // one line per task, for `embody motion info` and logs
 };
 
 // The layout for the trackers a source provides (e.g. threePoint() or all()).
 TaskLayout taskLayoutFor(tracking::TrackerMask trackers);
+
+// Seated mode: the lower body sits (hip joints, knees and feet pinned at priority 1), then the
+// head position (2), the hand positions (3), the pelvis upright (4: a lean bends the spine where
+// the head and hands leave it free, the pelvis tilts for the rest) and the orientations (5). Hips
+// and feet trackers are unused.
+TaskLayout seatedTaskLayoutFor(tracking::TrackerMask trackers);
 
 // How strongly a target with this status should pull (0 = drop the task this frame). Held and
 // easing targets still drive their limb; a never-tracked hand's neutral pose pulls gently.

@@ -21,7 +21,6 @@ Result<std::unique_ptr<TrackedAvatarBody>> TrackedAvatarBody::create(const avata
 }
 
 void TrackedAvatarBody::reset() {
-  lift_ = -1.0f;
   stage_->reset();
   solver_->resetWarmStart();
 }
@@ -40,6 +39,10 @@ glm::mat4 TrackedAvatarBody::avatarToTracking() const {
   return glm::inverse(forward);
 }
 
+glm::vec3 TrackedAvatarBody::toTracking(const Eigen::Vector3d& p) const {
+  return glm::vec3(avatarToTracking() * glm::vec4(float(p.x()), float(p.y()), float(p.z()), 1.0f));
+}
+
 bool TrackedAvatarBody::solve(const tracking::PoseSample& sample, avatar::SkeletonPose& pose) {
   const tracking::TrackerPose& head = sample[tracking::TrackerId::Head];
   const bool headUsable = head.valid && tracking::isUsable(head);
@@ -47,20 +50,9 @@ bool TrackedAvatarBody::solve(const tracking::PoseSample& sample, avatar::Skelet
   // height instead of the user's eye height.
   if (!seenHead_ && !headUsable) return false;
   seenHead_ = true;
-  const tracking::PoseSample* input = &sample;
-  if (options_.seated) {
-    if (lift_ < 0.0f && headUsable)
-      lift_ = std::max(0.0f, options_.standingEyeHeight - head.position.y);
-    if (lift_ < 0.0f) return false;
-    lifted_ = sample;
-    for (auto& t : lifted_.trackers)
-      if (t.valid) t.position.y += lift_;
-    input = &lifted_;
-  }
-  stage_->process(*input, frame_);
+  stage_->process(sample, frame_);
   if (!(solver_->scale() > 0.0)) return false;
-  const glm::mat4 m = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, options_.seated ? -lift_ : 0.0f, 0.0f)) *
-                      avatarToTracking();
+  const glm::mat4 m = avatarToTracking();
   const float s = glm::length(glm::vec3(m[0]));
   if (!std::isfinite(s) || s <= 0.0f) return false;
   const glm::quat r = glm::quat_cast(glm::mat3(m) / s);

@@ -11,10 +11,9 @@
 // height / user eye height, turned onto the avatar's forward); the inverse of that map is applied
 // to the skeleton's roots, which scales the avatar to the user.
 //
-// Seated mode: the trackers are lifted by (standing eye height - head height at the first valid
-// sample) before solving and the solved avatar is lowered by the same amount: the spine and arms
-// follow the head and hands, the legs keep the solver's standing stance (they are not bent into a
-// sitting pose; see docs/xr.md).
+// Seated mode (options.body.seat, AvatarBodySolver): the avatar sits on a seat placed under the
+// first valid head (reset() places it again), feet on the tracking floor; the spine and arms
+// follow the head and hands (docs/runtime.md, "Seated mode").
 #include <memory>
 
 #include "runtime/avatar_body_solver.h"
@@ -26,8 +25,6 @@ namespace embody::runtime {
 struct TrackedBodyOptions {
   AvatarBodyOptions body;  // trackers: threePoint() for an HMD with two controllers
   IkStageConfig stage;
-  bool seated = false;
-  float standingEyeHeight = 1.64f;  // seated mode: the user's eye height when standing (metres)
 };
 
 class TrackedAvatarBody {
@@ -38,13 +35,15 @@ class TrackedAvatarBody {
   // left alone, until the first valid head sample (it calibrates the solver when no user height
   // was given). Afterwards a lost head is the tracking-loss guard's business.
   bool solve(const tracking::PoseSample& sample, avatar::SkeletonPose& pose);
-  // Forgets the seated lift and the warm start (after a recenter or recalibration).
+  // Forgets the warm start and the seat (after a recenter or recalibration): the next valid head
+  // places the seat again.
   void reset();
 
   const AvatarBodySolver& solver() const { return *solver_; }
   const SolvedFrame& frame() const { return frame_; }
   // Avatar model space -> tracking space (a similarity: rotation, uniform scale, translation).
   glm::mat4 avatarToTracking() const;
+  glm::vec3 toTracking(const Eigen::Vector3d& avatarPoint) const;
 
  private:
   TrackedAvatarBody() = default;
@@ -54,8 +53,6 @@ class TrackedAvatarBody {
   const Clock* clock_ = &steadyClock();
   std::unique_ptr<IkStage> stage_;
   SolvedFrame frame_;
-  tracking::PoseSample lifted_;
-  float lift_ = -1.0f;  // seated: metres added to the trackers (< 0: not fixed yet)
   bool seenHead_ = false;
 };
 

@@ -9,10 +9,10 @@
 
 using embody::test::runEmbody;
 
-TEST_CASE("embody motion list names the six synthetic motions", "[cli]") {
+TEST_CASE("embody motion list names the seven synthetic motions", "[cli]") {
   auto r = runEmbody("motion list");
   REQUIRE(r.exitCode == 0);
-  for (const char* m : {"idle", "reach", "look", "bow", "figure8", "squat"})
+  for (const char* m : {"idle", "reach", "look", "bow", "figure8", "squat", "seated"})
     CHECK(r.output.find(std::string("synthetic:") + m) != std::string::npos);
 }
 

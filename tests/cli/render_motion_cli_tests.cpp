@@ -90,6 +90,27 @@ TEST_CASE("embody render --three-point on the BVH walk steps and keeps the head 
   CHECK(j["tracking"]["non_finite_frames"] == 0);
 }
 
+TEST_CASE("embody render --motion synthetic:seated --seated renders a seated avatar with its pose numbers", "[cli][render]") {
+  const auto out = outDir("render_seated");
+  auto r = runEmbody("render --motion synthetic:seated --seated --frames 60 --fps 30 --size 64x64 --ik-budget-ms 100 "
+                     "--out " + out.string(), true);
+  INFO(r.output);
+  REQUIRE(r.exitCode == 0);
+  CHECK(pngSize(out / "frame_00059.png") == std::pair<uint32_t, uint32_t>(64, 64));
+  const auto j = readJson(out / "stats.json");
+  INFO(j.dump());
+  CHECK(j["tracking"]["non_finite_frames"] == 0);
+  CHECK(j["tracking"]["head_error_p95_m"].get<double>() < 0.02);
+  REQUIRE(j["seated"].is_object());
+  CHECK(j["seated"]["frames"] == 60);
+  CHECK(j["seated"]["hip_joint_drift_max_m"].get<double>() < 0.01);
+  CHECK(j["seated"]["sole_height_m"][0].get<double>() > -0.01);
+  CHECK(j["seated"]["knee_flexion_deg"][0].get<double>() > 70.0);
+  CHECK(j["seated"]["knee_flexion_deg"][1].get<double>() < 110.0);
+  // Without --motion there is nothing to sit.
+  CHECK(runEmbody("render --seated --out " + out.string()).exitCode == 2);
+}
+
 TEST_CASE("embody render --motion reports bad input with exit codes 1 and 2", "[cli][render]") {
   const auto out = outDir("render_motion_errors");
   auto unknown = runEmbody("render --motion synthetic:moonwalk --out " + out.string(), true);

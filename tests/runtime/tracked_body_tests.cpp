@@ -1,6 +1,6 @@
 // TrackedAvatarBody: the three-point body solved from tracking-space trackers and placed back in
 // the tracking space (what `embody xr` renders): its solved wrists land on the tracked ones in
-// tracking metres, standing and seated, and the avatar -> tracking map inverts the solver's.
+// tracking metres, and the avatar -> tracking map inverts the solver's.
 #include <catch2/catch.hpp>
 #include <glm/glm.hpp>
 
@@ -28,27 +28,23 @@ tracking::PoseSample threePoint(float headY, double t) {
   return s;
 }
 
-glm::vec3 solvedInTracking(const runtime::TrackedAvatarBody& body, tracking::TrackerId id, float seatedLift) {
-  const Eigen::Vector3d j = body.solver().jointPosition(body.solver().trackerJoint(id));
-  return glm::vec3(body.avatarToTracking() * glm::vec4(float(j.x()), float(j.y()), float(j.z()), 1.0f)) -
-         glm::vec3(0.0f, seatedLift, 0.0f);
+glm::vec3 solvedInTracking(const runtime::TrackedAvatarBody& body, tracking::TrackerId id) {
+  return body.toTracking(body.solver().jointPosition(body.solver().trackerJoint(id)));
 }
 
-runtime::TrackedBodyOptions options(bool seated) {
+runtime::TrackedBodyOptions options() {
   runtime::TrackedBodyOptions o;
   o.body.trackers = tracking::TrackerMask::threePoint();
   o.stage.budgetSeconds = 0.2;  // generous: convergence, not timing, is under test
   o.stage.filter = false;
-  o.seated = seated;
-  o.standingEyeHeight = 1.62f;
-  o.body.userHeight = seated ? 1.62f / 0.936f : 0.0f;
   return o;
 }
 
 }  // namespace
 
 TEST_CASE("TrackedAvatarBody puts the avatar's wrists on the tracked wrists, in tracking metres", "[runtime]") {
-  auto body = runtime::TrackedAvatarBody::create(mannequin(), options(false));
+  // (Seated mode has its own tests: seated_tests.cpp.)
+  auto body = runtime::TrackedAvatarBody::create(mannequin(), options());
   REQUIRE(body.ok());
   avatar::SkeletonPose pose = avatar::SkeletonPose::rest(mannequin().skeleton);
   tracking::PoseSample s;
@@ -57,7 +53,7 @@ TEST_CASE("TrackedAvatarBody puts the avatar's wrists on the tracked wrists, in 
     REQUIRE((*body)->solve(s, pose));
   }
   for (auto id : {tracking::TrackerId::LeftHand, tracking::TrackerId::RightHand}) {
-    const glm::vec3 solved = solvedInTracking(**body, id, 0.0f);
+    const glm::vec3 solved = solvedInTracking(**body, id);
     INFO("tracker " << int(id) << " solved " << solved.x << " " << solved.y << " " << solved.z);
     CHECK(glm::distance(solved, s[id].position) < 0.01f);
   }
@@ -74,25 +70,8 @@ TEST_CASE("TrackedAvatarBody puts the avatar's wrists on the tracked wrists, in 
     }
 }
 
-TEST_CASE("TrackedAvatarBody seated: the body is solved standing and lowered, the wrists still follow",
-          "[runtime]") {
-  auto body = runtime::TrackedAvatarBody::create(mannequin(), options(true));
-  REQUIRE(body.ok());
-  avatar::SkeletonPose pose = avatar::SkeletonPose::rest(mannequin().skeleton);
-  tracking::PoseSample s;
-  for (int i = 0; i < 90; ++i) {
-    s = threePoint(1.20f, i / 90.0);  // a seated head, 42 cm below the standing eye height
-    REQUIRE((*body)->solve(s, pose));
-  }
-  // The solver saw the trackers lifted by 0.42 m; the pose it returns is lowered by as much.
-  for (auto id : {tracking::TrackerId::LeftHand, tracking::TrackerId::RightHand}) {
-    const glm::vec3 solved = solvedInTracking(**body, id, 0.42f);
-    CHECK(glm::distance(solved, s[id].position) < 0.01f);
-  }
-}
-
 TEST_CASE("TrackedAvatarBody waits for a valid head and never produces NaN from a broken sample", "[runtime]") {
-  auto body = runtime::TrackedAvatarBody::create(mannequin(), options(false));
+  auto body = runtime::TrackedAvatarBody::create(mannequin(), options());
   REQUIRE(body.ok());
   avatar::SkeletonPose pose = avatar::SkeletonPose::rest(mannequin().skeleton);
   tracking::PoseSample none;  // nothing valid: no calibration yet

@@ -13,7 +13,7 @@ float speed(const TrackerPose& a, const TrackerPose& b, double dt) {
 }  // namespace
 
 TEST_CASE("synthetic motions are deterministic, complete and finite") {
-  REQUIRE(syntheticMotions().size() == 6);
+  REQUIRE(syntheticMotions().size() == 7);
   for (const auto& m : syntheticMotions()) {
     INFO(m.name);
     auto a = SyntheticSource::create(m.name);

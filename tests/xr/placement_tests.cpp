@@ -36,7 +36,8 @@ TEST_CASE("calibration scales the avatar so its eyes are at the HMD, feet on the
         Approx(glm::radians(40.0f)).margin(1e-4));
 }
 
-TEST_CASE("a fixed eye height skips calibration, and seated mode keeps the eyes at the HMD", "[xr]") {
+TEST_CASE("a fixed eye height skips calibration, and the seated rest-pose fallback keeps the eyes at the HMD",
+          "[xr]") {
   const glm::vec3 avatarEye{0.0f, 1.5f, 0.0f};
   AvatarPlacement fixed(avatarEye, {0, 0, 1}, {false, 1.65f});
   CHECK(fixed.calibrated());
@@ -48,7 +49,11 @@ TEST_CASE("a fixed eye height skips calibration, and seated mode keeps the eyes 
   const Pose head = headAt({0.0f, 1.15f, 0.0f}, -30.0f);
   CHECK_FALSE(seated.calibrate(head));  // a seated head says nothing about standing height
   const glm::mat4 root = seated.root(head);
+  // Only the rest pose is placed here (embody xr --body rest, or before the first solve): it cannot
+  // sit, so its eyes go to the HMD and its feet sink below the floor. The solved seated body keeps
+  // its feet on the floor (tests/runtime/seated_tests.cpp, embody xr --seated in embody_xr_tests).
   CHECK(glm::distance(transformPoint(root, avatarEye), head.position) < 1e-4f);
+  CHECK(transformPoint(root, glm::vec3(0.0f)).y == Approx(1.15f - 1.5f).margin(1e-4));
 }
 
 TEST_CASE("recentering puts the head over the origin facing -Z", "[xr]") {

@@ -5,8 +5,11 @@
 //   calibrate(head):  scale = user's eye height (HMD y above the STAGE floor) / avatar eye height
 //   recenter(head):   the world is re-anchored so the head stands over the origin facing -Z
 //   root(head):       the avatar's root transform: its eyes under the HMD (horizontally), feet on
-//                     the floor (standing) or eyes at the HMD (seated: the body sinks with the
-//                     user, since a rest-pose avatar cannot sit), facing the head's yaw
+//                     the floor (standing) or eyes at the HMD (seated), facing the head's yaw
+//
+// This places the rest pose only: `embody xr --body rest`, and the frames before the solved body
+// exists. A rest pose cannot sit, so seated it sinks with the user's eyes; the solved body sits on
+// a seat (runtime::SeatOptions, docs/runtime.md "Seated mode").
 #include <glm/glm.hpp>
 
 #include "avatar/skeleton.h"

@@ -185,6 +185,7 @@ XrLoopReport runXrLoop(const XrLoopOptions& o) {
     if (views.valid && ((o.recenterAtStart && !recentered) || buttonRecenter)) {
       placement.recenter(headTracking);
       recentered = true;
+      if (o.onRecenter) o.onRecenter();
     }
     if (views.valid)
       for (auto& e : views.eyes) e.pose = placement.toWorld(e.pose);

@@ -42,6 +42,9 @@ struct XrLoopOptions {
   // `pose` (starts at the rest pose) and return true; false or unset = the rest pose placed under
   // the head. Called on the render thread with the trackers predicted for this frame's display.
   std::function<bool(const tracking::PoseSample& sample, avatar::SkeletonPose& pose)> bodyPose;
+  // Called after each recenter (the world moved under the user): e.g. a seated body places its
+  // seat again (runtime::TrackedAvatarBody::reset).
+  std::function<void()> onRecenter;
 };
 
 struct XrLoopReport {

@@ -11,15 +11,17 @@ namespace {
 
 constexpr float kTau = 6.28318530717958647692f;
 
-enum Kind { kIdle, kReach, kLook, kBow, kFigure8, kSquat };
+enum Kind { kIdle, kReach, kLook, kBow, kFigure8, kSquat, kSeated };
 
-constexpr std::array<SyntheticMotionInfo, 6> kMotions = {{
+constexpr std::array<SyntheticMotionInfo, 7> kMotions = {{
     {"idle", "weight-shifting sway, breathing, small head turns", 8.0},
     {"reach", "the hands reach forward, sideways, overhead, low and across the body in turn", 14.0},
     {"look", "the head looks around (yaw +-60 deg, pitch +-25 deg), the trunk turning a little", 10.0},
     {"bow", "bending forward at the hips to 50 deg and back, arms hanging", 6.0},
     {"figure8", "both hands trace a figure eight in front of the chest (Raunhardt & Boulic 2008, 5.2.2)", 6.0},
     {"squat", "squatting 0.35 m (for 1.75 m) with the arms rising forward for balance", 5.0},
+    {"seated", "sitting on a chair: leaning forward to reach a table and back, swaying sideways, looking around "
+               "(for embody render --seated)", 8.0},
 }};
 
 glm::quat yawPitch(float yaw, float pitch) {
@@ -47,6 +49,7 @@ struct Figure {
   glm::quat pelvisRot{1, 0, 0, 0};
   glm::quat trunkRot{1, 0, 0, 0};
   glm::quat headRot{1, 0, 0, 0};
+  bool seated = false;  // the feet trackers in front of a seat instead of under the pelvis
 };
 
 struct Posed {
@@ -92,8 +95,9 @@ struct Generator {
     s[TrackerId::RightHand] = right;
     s[TrackerId::Hips] = {f.pelvis, glm::normalize(f.pelvisRot), true};
     const float footX = d.hipHalfWidth + 0.01f * d.height;
-    s[TrackerId::LeftFoot] = {glm::vec3(-footX, d.ankleHeight, 0.01f * d.height), glm::quat(1, 0, 0, 0), true};
-    s[TrackerId::RightFoot] = {glm::vec3(footX, d.ankleHeight, 0.01f * d.height), glm::quat(1, 0, 0, 0), true};
+    const float footZ = f.seated ? f.pelvis.z - d.thigh : 0.01f * d.height;
+    s[TrackerId::LeftFoot] = {glm::vec3(-footX, d.ankleHeight, footZ), glm::quat(1, 0, 0, 0), true};
+    s[TrackerId::RightFoot] = {glm::vec3(footX, d.ankleHeight, footZ), glm::quat(1, 0, 0, 0), true};
     return s;
   }
 
@@ -191,6 +195,24 @@ struct Generator {
     return {f, hanging(f, Side::Left, 0.0f, true), hanging(f, Side::Right, 0.0f, true)};
   }
 
+  // Sitting on a chair (hip joints a thigh's thickness above a seat at 0.25 of stature): the trunk
+  // leans forward 14 degrees as the hands reach for a table and comes back, sways sideways at half
+  // the rate, the head looks at the hands and around.
+  Posed seated(float t) const {
+    Figure f;
+    f.seated = true;
+    f.pelvis = glm::vec3(0.0f, 0.30f * d.height, 0.0f);
+    const float w = kTau / 8.0f;
+    const float lean = 0.5f - 0.5f * std::cos(w * t), side = std::sin(0.5f * w * t);
+    f.trunkRot = glm::angleAxis(-0.1f * side, glm::vec3(0, 0, 1)) * glm::angleAxis(-0.25f * lean, glm::vec3(1, 0, 0));
+    f.headRot = yawPitch(0.3f * side, -0.3f + 0.1f * lean);
+    const glm::quat heading = headingOf(f.trunkRot);
+    const glm::vec3 dir = heading * glm::vec3(0.0f, -0.6f + 0.45f * lean, -1.0f);
+    const float frac = 0.5f + 0.1f * lean;
+    return {f, hand(f, Side::Left, dir, frac, heading * glm::vec3(1, -0.6f, 0)),
+            hand(f, Side::Right, dir, frac, heading * glm::vec3(-1, -0.6f, 0))};
+  }
+
   Posed figure8(float t) const {
     Figure f = standing();
     const float s = d.height / 1.75f;
@@ -268,6 +290,7 @@ Posed evaluate(const Generator& g, int kind, double time, double period) {
     case kLook: return g.look(t);
     case kBow: return g.bow(t);
     case kFigure8: return g.figure8(t);
+    case kSeated: return g.seated(t);
     default: return g.squat(t);
   }
 }

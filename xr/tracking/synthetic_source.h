@@ -8,6 +8,7 @@
 //   figure8  both hands trace a figure eight in front of the chest (Raunhardt & Boulic 2008,
 //            section 5.2.2), the head following them
 //   squat    squatting 0.35 m (scaled) with the arms rising forward for balance
+//   seated   sitting on a chair, leaning to reach forward and back, swaying (for seated mode)
 #include <span>
 #include <string_view>
 
