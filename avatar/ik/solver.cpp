@@ -95,11 +95,30 @@ Workspace::Workspace(const Model& model)
     eq_rows.push_back(static_cast<int>(i));
     ++eq_rank;
   }
+  // null(A) as [unit columns of the dofs no equality row touches | a basis of the constrained
+  // dofs' null space]: sparse, so J N costs a copy per free dof plus a product over the
+  // constrained dofs only (the coupled spine's 42 of the avatar's 87), where a QR of the whole
+  // basis would spread every column over the first rank rows.
   eq_nullspace.setZero(n, n);
   if (eq_rank > 0) {
-    Eigen::HouseholderQR<Eigen::MatrixXd> qr(eq_basis.leftCols(eq_rank));
+    std::vector<char> constrained(n, 0);
+    for (Eigen::Index i = 0; i < a.rows(); ++i)
+      for (int c = 0; c < n; ++c)
+        if (a(i, c) != 0.0) constrained[c] = 1;
+    std::vector<int> cdofs;
+    int col = 0;
+    for (int c = 0; c < n; ++c) {
+      if (constrained[c])
+        cdofs.push_back(c);
+      else
+        eq_nullspace(c, col++) = 1.0;
+    }
+    const int nc = static_cast<int>(cdofs.size());
+    Eigen::MatrixXd basisC(nc, eq_rank);
+    for (int i = 0; i < nc; ++i) basisC.row(i) = eq_basis.row(cdofs[i]).head(eq_rank);
+    Eigen::HouseholderQR<Eigen::MatrixXd> qr(basisC);
     const Eigen::MatrixXd full = qr.householderQ();
-    eq_nullspace.leftCols(n - eq_rank) = full.rightCols(n - eq_rank);
+    for (int i = 0; i < nc; ++i) eq_nullspace.row(cdofs[i]).segment(col, nc - eq_rank) = full.row(i).tail(nc - eq_rank);
   }
   eq_matrix.setZero(eq_rank, n);
   eq_rhs.setZero(eq_rank);
@@ -137,6 +156,7 @@ Workspace::Workspace(const Model& model)
   // has not computed anything yet reads its uninitialised flags (UBSan reports it).
   const size_t levels = model.levels.size();
   level_eig.reserve(levels);
+  null_groups.reserve(n);
   for (auto* v : {&level_j, &level_gram, &level_jw, &level_factor, &level_factor2, &level_inverse}) v->reserve(levels);
   for (auto* v : {&level_factor_inv, &level_factor2_inv}) v->reserve(levels);
   for (auto* v : {&level_res, &level_coef, &level_tmp}) v->reserve(levels);
@@ -491,6 +511,7 @@ void resetActiveSet(Workspace& w, Path path) {
   if (!w.mask_mode && w.nullspace_dirty) {
     w.nullspace.leftCols(w.null_dim) = w.eq_nullspace.leftCols(w.null_dim);
     w.nullspace_dirty = false;
+    w.null_ranges_dirty = true;
   }
   if (path == Path::Reference && w.projector0_dirty) {
     w.projector0 = w.eq_projector0;
@@ -545,6 +566,7 @@ bool addActiveRow(Workspace& w, double rhs_delta, int single_dof, Path path, dou
     w.mask(single_dof) = 0.0;
   } else {
     w.nullspace_dirty = true;
+    w.null_ranges_dirty = true;
     if (w.mask_mode) {  // materialise the diagonal projector's basis: the unmasked unit vectors
       w.nullspace.setZero();
       int k = 0;
@@ -671,6 +693,37 @@ void addProduct(Dst&& dst, const A& a, const B& b, double sign) {
   }
 }
 
+// J̃ = J N over N's sparsity: consecutive columns with the same span of non-zero rows form a
+// group (a free dof's unit column, or the constrained dofs' block), and each group costs a
+// product over its rows only. The groups are found again only after N changed.
+void nullspaceProduct(Workspace& w, int r) {
+  if (w.null_ranges_dirty || w.null_groups_cols != r) {
+    w.null_groups.clear();
+    for (int c = 0; c < r; ++c) {
+      int lo = 0, hi = w.n;
+      while (lo < hi && w.nullspace(lo, c) == 0.0) ++lo;
+      while (hi > lo && w.nullspace(hi - 1, c) == 0.0) --hi;
+      if (!w.null_groups.empty() && w.null_groups.back().row_begin == lo && w.null_groups.back().row_end == hi &&
+          w.null_groups.back().col_end == c)
+        w.null_groups.back().col_end = c + 1;
+      else
+        w.null_groups.push_back({c, c + 1, lo, hi});
+    }
+    w.null_ranges_dirty = false;
+    w.null_groups_cols = r;
+  }
+  for (const Workspace::ColumnGroup& g : w.null_groups) {
+    const int rows = g.row_end - g.row_begin, cols = g.col_end - g.col_begin;
+    auto dst = w.reduced_jacobian.middleCols(g.col_begin, cols);
+    if (rows == 0)
+      dst.setZero();
+    else if (rows == 1)
+      dst.noalias() = w.jacobian.col(g.row_begin) * w.nullspace.block(g.row_begin, g.col_begin, 1, cols);
+    else
+      dst.noalias() = w.jacobian.middleCols(g.row_begin, rows) * w.nullspace.block(g.row_begin, g.col_begin, rows, cols);
+  }
+}
+
 // Calls f(lo, hi) for every non-empty intersection of two sorted lists of disjoint [lo, hi).
 template <typename F>
 void forEachOverlap(const std::vector<Workspace::Range>& a, const std::vector<Workspace::Range>& b, F&& f) {
@@ -725,7 +778,7 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     jdq0.setZero();
   // Mask mode reads J̃ = J diag(mask) straight from J. Products with W may even use J itself:
   // W's rows at pinned dofs are zero, as W lies in the null space of the active rows.
-  if (!maskMode) w.reduced_jacobian.leftCols(r).noalias() = w.jacobian * w.nullspace.leftCols(r);
+  if (!maskMode) nullspaceProduct(w, r);
   const Eigen::MatrixXd& jFull = maskMode ? w.jacobian : w.reduced_jacobian;
   w.dense_ranges[0] = {0, r};
   int lastActive = -1;
@@ -912,7 +965,10 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
   if (maskMode)
     w.dq += z;
   else
-    w.dq.noalias() += w.nullspace.leftCols(r) * z;
+    for (const Workspace::ColumnGroup& g : w.null_groups)
+      w.dq.segment(g.row_begin, g.row_end - g.row_begin).noalias() +=
+          w.nullspace.block(g.row_begin, g.col_begin, g.row_end - g.row_begin, g.col_end - g.col_begin) *
+          z.segment(g.col_begin, g.col_end - g.col_begin);
 }
 
 

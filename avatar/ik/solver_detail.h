@@ -70,6 +70,13 @@ struct Workspace {
   int null_dim = 0;
   Eigen::MatrixXd eq_nullspace;  // equality-only null space, restored when pinned rows changed it
   bool nullspace_dirty = false;
+  // N's columns grouped by the span of rows they are non-zero on (see nullspaceProduct).
+  struct ColumnGroup {
+    int col_begin = 0, col_end = 0, row_begin = 0, row_end = 0;
+  };
+  std::vector<ColumnGroup> null_groups;  // reserved to n
+  bool null_ranges_dirty = true;
+  int null_groups_cols = -1;
 
   Eigen::VectorXd dq0, dq, tmp_n, tmp_n2, y;
   // Oscillation guard: the task part of the previous step and the current step scale.
