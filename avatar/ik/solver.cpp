@@ -157,6 +157,7 @@ Workspace::Workspace(const Model& model)
   const size_t levels = model.levels.size();
   level_eig.reserve(levels);
   null_groups.reserve(n);
+  eq_null_groups.reserve(n);
   for (auto* v : {&level_j, &level_gram, &level_jw, &level_factor, &level_factor2, &level_inverse}) v->reserve(levels);
   for (auto* v : {&level_factor_inv, &level_factor2_inv}) v->reserve(levels);
   for (auto* v : {&level_res, &level_coef, &level_tmp}) v->reserve(levels);
@@ -188,8 +189,8 @@ Workspace::Workspace(const Model& model)
       if (used[i]) support.push_back(i);
   }
   gathered_j.setZero(max_level_rows, n);
-  for (int i = 0; i < n; ++i) all_support.push_back(i);
-  dense_ranges.push_back({0, n});
+  dense_support.reserve(n);
+  dense_support_ranges.reserve(n);
   for (const std::vector<int>& support : level_support) {
     std::vector<Range>& ranges = level_ranges.emplace_back();
     for (size_t i = 0; i < support.size();) {
@@ -511,7 +512,9 @@ void resetActiveSet(Workspace& w, Path path) {
   if (!w.mask_mode && w.nullspace_dirty) {
     w.nullspace.leftCols(w.null_dim) = w.eq_nullspace.leftCols(w.null_dim);
     w.nullspace_dirty = false;
-    w.null_ranges_dirty = true;
+    w.null_groups = w.eq_null_groups;  // reserved: no allocation
+    w.null_groups_cols = w.null_dim;
+    w.null_ranges_dirty = w.eq_null_groups.empty();
   }
   if (path == Path::Reference && w.projector0_dirty) {
     w.projector0 = w.eq_projector0;
@@ -711,16 +714,41 @@ void nullspaceProduct(Workspace& w, int r) {
     }
     w.null_ranges_dirty = false;
     w.null_groups_cols = r;
+    if (!w.nullspace_dirty && r == w.n - w.eq_rank && w.eq_null_groups.empty()) w.eq_null_groups = w.null_groups;
   }
   for (const Workspace::ColumnGroup& g : w.null_groups) {
     const int rows = g.row_end - g.row_begin, cols = g.col_end - g.col_begin;
     auto dst = w.reduced_jacobian.middleCols(g.col_begin, cols);
     if (rows == 0)
       dst.setZero();
+    else if (rows == 1 && cols == 1)  // a free dof's unit column (±1 after a reflection)
+      dst.col(0) = w.nullspace(g.row_begin, g.col_begin) * w.jacobian.col(g.row_begin);
     else if (rows == 1)
       dst.noalias() = w.jacobian.col(g.row_begin) * w.nullspace.block(g.row_begin, g.col_begin, 1, cols);
     else
       dst.noalias() = w.jacobian.middleCols(g.row_begin, rows) * w.nullspace.block(g.row_begin, g.col_begin, rows, cols);
+  }
+}
+
+// Dense mode: the reduced columns (and their ranges) whose column group of N reaches any of the
+// dof ranges `dofs` (a level's recruited dofs), into w.dense_support / w.dense_support_ranges.
+void denseSupport(Workspace& w, const std::vector<Workspace::Range>& dofs, int r) {
+  w.dense_support.clear();
+  w.dense_support_ranges.clear();
+  for (const Workspace::ColumnGroup& g : w.null_groups) {
+    bool reaches = false;
+    for (const Workspace::Range& d : dofs)
+      if (d.begin < g.row_end && g.row_begin < d.end) {
+        reaches = true;
+        break;
+      }
+    if (!reaches || g.col_begin >= r) continue;
+    const int end = std::min(g.col_end, r);
+    for (int c = g.col_begin; c < end; ++c) w.dense_support.push_back(c);
+    if (!w.dense_support_ranges.empty() && w.dense_support_ranges.back().end == g.col_begin)
+      w.dense_support_ranges.back().end = end;
+    else
+      w.dense_support_ranges.push_back({g.col_begin, end});
   }
 }
 
@@ -780,7 +808,6 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
   // W's rows at pinned dofs are zero, as W lies in the null space of the active rows.
   if (!maskMode) nullspaceProduct(w, r);
   const Eigen::MatrixXd& jFull = maskMode ? w.jacobian : w.reduced_jacobian;
-  w.dense_ranges[0] = {0, r};
   int lastActive = -1;
   for (size_t k = 0; k < model.levels.size(); ++k)
     if (levelActive(model.levels[k], w)) lastActive = static_cast<int>(k);
@@ -790,25 +817,32 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     const Model::Level& level = model.levels[k];
     if (!levelActive(level, w) || s >= r) continue;
     const int m = level.rows;
-    const std::vector<int>& support = maskMode ? w.level_support[k] : w.all_support;
-    const std::vector<Workspace::Range>& ranges = maskMode ? w.level_ranges[k] : w.dense_ranges;
-    const int p = maskMode ? static_cast<int>(support.size()) : r;
+    // The level's support in reduced coordinates: its recruited dofs in mask mode; in dense mode
+    // the columns of N that reach any of them (N's column groups over the level's dof ranges).
+    if (!maskMode) denseSupport(w, w.level_ranges[k], r);
+    const std::vector<int>& support = maskMode ? w.level_support[k] : w.dense_support;
+    const std::vector<Workspace::Range>& ranges = maskMode ? w.level_ranges[k] : w.dense_support_ranges;
+    const int p = static_cast<int>(support.size());
+    const bool gather = maskMode || p < r;
     const auto jRows = jFull.middleRows(level.first_row, m);
 
-    // J̃ on the level's support: gathered in mask mode, a block of J N in dense mode.
-    if (maskMode) {
+    // J̃ on the level's support: gathered (mask mode: J diag(mask) read straight from J), or the
+    // block of J N when the level reaches every reduced coordinate.
+    if (gather) {
       auto g = w.gathered_j.topLeftCorner(m, p);
       for (int i = 0; i < p; ++i) {
         const int c = support[i];
-        if (w.rank == 0 || w.mask(c) != 0.0)  // no pinned dof: J̃ = J
+        if (!maskMode)
+          g.col(i) = w.reduced_jacobian.col(c).segment(level.first_row, m);
+        else if (w.rank == 0 || w.mask(c) != 0.0)  // no pinned dof: J̃ = J
           g.col(i) = w.jacobian.col(c).segment(level.first_row, m);
         else
           g.col(i).setZero();
       }
     }
     const Eigen::Ref<const Eigen::MatrixXd> js =
-        maskMode ? Eigen::Ref<const Eigen::MatrixXd>(w.gathered_j.topLeftCorner(m, p))
-                 : Eigen::Ref<const Eigen::MatrixXd>(w.reduced_jacobian.block(level.first_row, 0, m, r));
+        gather ? Eigen::Ref<const Eigen::MatrixXd>(w.gathered_j.topLeftCorner(m, p))
+               : Eigen::Ref<const Eigen::MatrixXd>(w.reduced_jacobian.block(level.first_row, 0, m, r));
     // J̃W block by block, over the rows the level shares with each block.
     auto jw = w.level_jw[k].leftCols(s);
     for (int b = 0; b < blocks; ++b) {
@@ -825,7 +859,7 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     Eigen::VectorXd& res = w.level_res[k];
     res = w.error.segment(level.first_row, m);
     res -= jdq0.segment(level.first_row, m);  // compensated error
-    if (maskMode) {
+    if (gather) {
       auto zs = w.small_b.head(p);
       for (int i = 0; i < p; ++i) zs(i) = z(support[i]);
       res.noalias() -= js * zs;
@@ -856,7 +890,7 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
       detail::choleskySolve(w.level_factor[k], w.level_factor_inv[k], y.data());
     }
     auto dz = w.tmp_n.head(r);
-    if (maskMode) {
+    if (gather) {
       auto jty = w.small_a.head(p);
       jty.noalias() = js.transpose() * y;
       dz.setZero();
@@ -881,7 +915,7 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     // W as a new block. Ĵᵀ = J̃ᵀ - W (J̃W)ᵀ first (in `jt`, r x m, non-zero on the marked rows).
     auto jt = w.level_cols.topLeftCorner(r, m);
     std::fill(w.row_mark.begin(), w.row_mark.begin() + r, 0);
-    if (maskMode) {
+    if (gather) {
       for (const Workspace::Range& g : ranges) {
         jt.middleRows(g.begin, g.end - g.begin).setZero();
         std::fill(w.row_mark.begin() + g.begin, w.row_mark.begin() + g.end, 1);

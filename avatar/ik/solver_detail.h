@@ -74,7 +74,8 @@ struct Workspace {
   struct ColumnGroup {
     int col_begin = 0, col_end = 0, row_begin = 0, row_end = 0;
   };
-  std::vector<ColumnGroup> null_groups;  // reserved to n
+  std::vector<ColumnGroup> null_groups;     // reserved to n
+  std::vector<ColumnGroup> eq_null_groups;  // the same for the equality rows' N (set on first use)
   bool null_ranges_dirty = true;
   int null_groups_cols = -1;
 
@@ -107,8 +108,8 @@ struct Workspace {
   struct Range {
     int begin = 0, end = 0;  // [begin, end)
   };
-  std::vector<int> all_support;              // 0..n-1 (dense mode)
-  std::vector<Range> dense_ranges;           // {[0, r)} (dense mode)
+  std::vector<int> dense_support;            // dense mode: the current level's reduced columns
+  std::vector<Range> dense_support_ranges;   // the same as ranges (both reserved to n)
   std::vector<std::vector<Range>> level_ranges;  // each level's support as ranges
   // W's blocks (one per level that added rows): first column, width, the row ranges it is
   // non-zero on (each reserved to n), and whether the current level overlaps it.
