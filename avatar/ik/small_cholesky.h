@@ -72,8 +72,8 @@ inline void choleskySolve(const Eigen::MatrixXd& l, const Eigen::VectorXd& inv_d
 // j of the result is (B.col(j) - Σ_{i<j} L(j, i) result.col(i)) / L(j, j): every operation is an
 // axpy down a column, so this layout vectorises where the row-wise L⁻¹ B would not. L⁻¹ B is
 // this applied to Bᵀ.
-template <typename Block>
-void solveRightLowerTransposed(const Eigen::MatrixXd& l, const Eigen::VectorXd& inv_diag, Block&& b) {
+template <typename Lower, typename Block>
+void solveRightLowerTransposed(const Lower& l, const Eigen::VectorXd& inv_diag, Block&& b) {
   const Eigen::Index m = l.rows();
   const Eigen::Index rows = b.rows();
   for (Eigen::Index j = 0; j < m; ++j) {
@@ -96,6 +96,39 @@ inline void choleskyInverse(const Eigen::MatrixXd& l, const Eigen::VectorXd& inv
   inverse.setZero();
   inverse.selfadjointView<Eigen::Lower>().rankUpdate(scratch);
   inverse.triangularView<Eigen::StrictlyUpper>() = inverse.transpose();
+}
+
+// Rank-revealing Cholesky with diagonal pivoting of a positive semidefinite g (m x m, lower
+// triangle read): G(I, I) = L Lᵀ for the rows I = perm[0, rank) picked greatest remaining
+// diagonal first, stopping when that diagonal is ≤ tol2 (or at max_rank). `work` (m x m) ends
+// with L in its leading rank x rank lower triangle and inv_diag with its diagonal's reciprocals.
+// The rows I of a matrix whose Gram matrix is g then span its row space (to the tolerance):
+// a rank-deficient level's projector update needs this, not an eigen-decomposition. Returns rank.
+inline int pivotedCholesky(const Eigen::MatrixXd& g, double tol2, int max_rank, Eigen::MatrixXd& work,
+                           Eigen::VectorXi& perm, Eigen::VectorXd& inv_diag) {
+  const Eigen::Index m = g.rows();
+  work = g.selfadjointView<Eigen::Lower>();
+  for (Eigen::Index i = 0; i < m; ++i) perm(i) = static_cast<int>(i);
+  for (Eigen::Index j = 0; j < m; ++j) {
+    Eigen::Index p = j;
+    for (Eigen::Index i = j + 1; i < m; ++i)
+      if (work(i, i) > work(p, p)) p = i;
+    const double d = work(p, p);
+    if (j >= max_rank || !(d > tol2) || !(d < std::numeric_limits<double>::infinity())) return static_cast<int>(j);
+    if (p != j) {  // symmetric swap of j and p (rows and columns, factored part included)
+      work.row(j).swap(work.row(p));
+      work.col(j).swap(work.col(p));
+      std::swap(perm(j), perm(p));
+    }
+    const double l = std::sqrt(work(j, j));
+    work(j, j) = l;
+    inv_diag(j) = 1.0 / l;
+    work.col(j).tail(m - j - 1) *= inv_diag(j);
+    for (Eigen::Index k = j + 1; k < m; ++k)  // trailing update, both triangles (the swaps read rows)
+      work.col(k).tail(m - j - 1) -= work(k, j) * work.col(j).tail(m - j - 1);
+    work.row(j).tail(m - j - 1) = work.col(j).tail(m - j - 1).transpose();
+  }
+  return static_cast<int>(m);
 }
 
 }  // namespace embody::ik::detail

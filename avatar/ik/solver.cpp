@@ -160,6 +160,7 @@ Workspace::Workspace(const Model& model)
   eq_null_groups.reserve(n);
   for (auto* v : {&level_j, &level_gram, &level_jw, &level_factor, &level_factor2, &level_inverse}) v->reserve(levels);
   for (auto* v : {&level_factor_inv, &level_factor2_inv}) v->reserve(levels);
+  level_perm.reserve(levels);
   for (auto* v : {&level_res, &level_coef, &level_tmp}) v->reserve(levels);
   for (const Model::Level& level : model.levels) {
     const int m = level.rows;
@@ -178,6 +179,7 @@ Workspace::Workspace(const Model& model)
     level_factor_inv.emplace_back(Eigen::VectorXd::Zero(m));
     level_factor2_inv.emplace_back(Eigen::VectorXd::Zero(m));
     level_inverse.emplace_back(Eigen::MatrixXd::Zero(m, m));
+    level_perm.emplace_back(Eigen::VectorXi::Zero(m));
     level_y.emplace_back(Eigen::VectorXd::Zero(m));
     level_svd.emplace_back(m, n, Eigen::ComputeThinU | Eigen::ComputeThinV);
     max_level_rows = std::max(max_level_rows, m);
@@ -958,24 +960,27 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
         if (i + 1 == static_cast<int>(newRanges.size())) u.bottomRows(r - g.end).setZero();
       }
     } else {
-      // Rank-deficient level: eigen-decompose G (σ² are its eigenvalues), keep σ > tolerance,
-      // U = Ĵᵀ V Σ⁻¹.
-      auto& eig = w.level_eig[k];
-      eig.compute(gram);
-      const auto& values = eig.eigenvalues();
-      for (int i = m; i-- > 0 && added < r - s;) {
-        if (!(std::sqrt(std::max(values(i), 0.0)) > o.rank_tolerance)) break;  // eigenvalues ascend
-        ++added;
-      }
+      // Rank-deficient level: a pivoted Cholesky of G picks rows I of Ĵ that span its row space
+      // (pivots > tolerance²); then U = Ĵ_Iᵀ L_II⁻ᵀ as for a full-rank level. An eigen-
+      // decomposition would do too, at ten times the cost for a 24-row level (the seated legs).
+      Eigen::MatrixXd& work = w.level_factor2[k];
+      Eigen::VectorXi& perm = w.level_perm[k];
+      added = detail::pivotedCholesky(gram, o.rank_tolerance * o.rank_tolerance, r - s, work, perm,
+                                      w.level_factor2_inv[k]);
       if (added == 0) continue;
+      auto lower = work.topLeftCorner(added, added);
+      auto linvT = w.level_inverse[k].topLeftCorner(added, added);  // L_II⁻ᵀ
+      linvT.setIdentity();
+      detail::solveRightLowerTransposed(lower, w.level_factor2_inv[k], linvT);
+      auto coef = w.level_solve.topLeftCorner(m, added);
+      coef.setZero();
+      for (int a = 0; a < added; ++a) coef.row(perm(a)) = linvT.row(a);
       auto u = w.row_space.block(0, s, r, added);
       u.setZero();
-      auto coef = w.level_solve.topLeftCorner(m, added);
-      for (int c = 0; c < added; ++c)
-        coef.col(c) = eig.eigenvectors().col(m - added + c) / std::sqrt(values(m - added + c));
       for (const Workspace::Range& g : newRanges)
         u.middleRows(g.begin, g.end - g.begin).noalias() = jt.middleRows(g.begin, g.end - g.begin) * coef;
-      smallest = std::sqrt(values(m - added));
+      smallest = std::numeric_limits<double>::infinity();
+      for (int a = 0; a < added; ++a) smallest = std::min(smallest, work(a, a));
     }
     // The new rows are analytically orthogonal to W; round-off grows like eps |J̃| / σ, so
     // re-orthogonalise (densely; rare) when a kept singular value is small.

@@ -99,6 +99,7 @@ struct Workspace {
   // G shifted by -eps² (the damping test) or +λ² (the damped solve).
   std::vector<Eigen::MatrixXd> level_factor, level_factor2;
   std::vector<Eigen::VectorXd> level_factor_inv, level_factor2_inv;
+  std::vector<Eigen::VectorXi> level_perm;  // pivoted Cholesky's row order (rank-deficient levels)
   std::vector<Eigen::VectorXd> level_y;
   // Columns a level's Jacobian can be non-zero in (its tasks' recruited dofs, sorted): in mask
   // mode the pass works on these columns only.
