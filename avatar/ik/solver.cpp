@@ -120,11 +120,9 @@ Workspace::Workspace(const Model& model)
     const Eigen::MatrixXd full = qr.householderQ();
     for (int i = 0; i < nc; ++i) eq_nullspace.row(cdofs[i]).segment(col, nc - eq_rank) = full.row(i).tail(nc - eq_rank);
   }
-  eq_matrix.setZero(eq_rank, n);
   eq_rhs.setZero(eq_rank);
   eq_begin.push_back(0);
   for (int i = 0; i < eq_rank; ++i) {
-    eq_matrix.row(i) = a.row(eq_rows[i]);
     eq_rhs(i) = model.equality_rhs(eq_rows[i]);
     for (int c = 0; c < n; ++c)
       if (a(eq_rows[i], c) != 0.0) {
@@ -155,7 +153,6 @@ Workspace::Workspace(const Model& model)
   // Reserve first: growing a vector moves its elements, and moving an Eigen decomposition that
   // has not computed anything yet reads its uninitialised flags (UBSan reports it).
   const size_t levels = model.levels.size();
-  level_eig.reserve(levels);
   null_groups.reserve(n);
   eq_null_groups.reserve(n);
   for (auto* v : {&level_j, &level_gram, &level_jw, &level_factor, &level_factor2, &level_inverse}) v->reserve(levels);
@@ -170,10 +167,6 @@ Workspace::Workspace(const Model& model)
     level_coef.emplace_back(Eigen::VectorXd::Zero(m));
     level_tmp.emplace_back(Eigen::VectorXd::Zero(m));
     level_jw.emplace_back(Eigen::MatrixXd::Zero(m, n));
-    // Each decomposition computes once here (on I, m <= a dozen rows): a never-computed Eigen
-    // decomposition holds an uninitialised status that copying a Data would read (UBSan).
-    const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(m, m);
-    level_eig.emplace_back(m).compute(identity);
     level_factor.emplace_back(Eigen::MatrixXd::Zero(m, m));
     level_factor2.emplace_back(Eigen::MatrixXd::Zero(m, m));
     level_factor_inv.emplace_back(Eigen::VectorXd::Zero(m));

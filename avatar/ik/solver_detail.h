@@ -3,7 +3,6 @@
 // Data's constructor, so an iteration only writes into existing storage.
 #include <Eigen/Core>
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 
@@ -55,8 +54,7 @@ struct Workspace {
   Eigen::VectorXd active_rhs;
   int rank = 0;
   Eigen::MatrixXd eq_basis, eq_factor;
-  Eigen::MatrixXd eq_matrix;  // the independent equality rows (eq_rank x n) and their rhs
-  Eigen::VectorXd eq_rhs;
+  Eigen::VectorXd eq_rhs;  // the independent equality rows' right-hand sides
   std::vector<int> eq_rows;  // independent equality row indices
   std::vector<int> eq_begin, eq_dof;  // the same rows' non-zero terms (sparse), for b - A q
   std::vector<double> eq_coef;
@@ -93,7 +91,6 @@ struct Workspace {
   std::vector<Eigen::MatrixXd> level_gram;   // m_k x m_k
   std::vector<Eigen::VectorXd> level_res, level_coef, level_tmp;
   std::vector<Eigen::MatrixXd> level_jw;     // m_k x n (J W)
-  std::vector<Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>> level_eig;
   std::vector<Eigen::MatrixXd> level_inverse;  // G⁻¹ (damping estimate)
   // Cholesky factors (lower, small_cholesky.h) and their diagonals' reciprocals: of G, and of
   // G shifted by -eps² (the damping test) or +λ² (the damped solve).
