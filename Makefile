@@ -54,7 +54,7 @@ sanitize: deps
 tsan: deps
 	cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMBODY_TSAN=ON -DEMBODY_BUILD_BENCH=OFF $(WERROR)
 	cmake --build build-tsan -j $(JOBS)
-	cd build-tsan && TSAN_OPTIONS=halt_on_error=1 ctest --output-on-failure -j $(JOBS) -L unit $(CTEST_ARGS)
+	cd build-tsan && TSAN_OPTIONS=halt_on_error=1:suppressions=$(CURDIR)/scripts/tsan.supp ctest --output-on-failure -j $(JOBS) -L unit $(CTEST_ARGS)
 
 format:
 	git ls-files '*.cpp' '*.h' '*.vert' '*.frag' '*.comp' | xargs clang-format -i
