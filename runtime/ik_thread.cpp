@@ -41,7 +41,14 @@ void IkThread::run() {
     if (!running_.load(std::memory_order_acquire)) break;
     if (now - seen > 1) skipped_.fetch_add(now - seen - 1, std::memory_order_relaxed);
     seen = now;
-    if (!input_.acquire()) continue;
+    if (!input_.acquire()) {
+      // submit() publishes before it counts, so an earlier acquire can already have taken this
+      // sample (solving it for the previous count, whose own sample it overwrote). That earlier
+      // sample was skipped: count it, or framesSolved() + samplesSkipped() falls one short of
+      // the samples submitted (a waiter for all of them hung under load).
+      skipped_.fetch_add(1, std::memory_order_relaxed);
+      continue;
+    }
     stage_.process(input_.front(), output_.back());
     output_.publish();
     solved_.fetch_add(1, std::memory_order_acq_rel);
