@@ -8,10 +8,9 @@
 #include <optional>
 #include <stdexcept>
 
+#include "app/avatar_arg.h"
 #include "app/args.h"
 #include "app/render_job.h"
-#include "avatar/procedural/default_avatar.h"
-#include "avatar/gltf/gltf_loader.h"
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
 #include "engine/image_io.h"
@@ -143,18 +142,13 @@ int runRender(cli::Argv argv) {
   }
 
   // The avatar first: a bad file is the most likely error and needs no GPU to report.
-  avatar::AvatarAsset asset;
   const std::string avatarArg = args.get("avatar");
-  if (avatarArg == "default") {
-    asset = avatar::buildDefaultAvatar();
-  } else {
-    auto loaded = avatar::loadAvatarFile(avatarArg);
-    if (!loaded) {
-      std::fprintf(stderr, "error: %s\n", loaded.error().c_str());
-      return 1;
-    }
-    asset = std::move(loaded).value();
+  auto loaded = app::loadAvatarArg(avatarArg);
+  if (!loaded) {
+    std::fprintf(stderr, "error: %s\n", loaded.error().c_str());
+    return 1;
   }
+  avatar::AvatarAsset asset = std::move(loaded).value();
 
   gfx::InstanceOptions io;
 #ifdef NDEBUG

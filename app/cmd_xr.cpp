@@ -4,9 +4,8 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "app/avatar_arg.h"
 #include "app/args.h"
-#include "avatar/gltf/gltf_loader.h"
-#include "avatar/procedural/default_avatar.h"
 #include "runtime/frame_stats.h"
 #include "runtime/seated_stats.h"
 #include "runtime/tracked_avatar_body.h"
@@ -96,18 +95,13 @@ int runXr(cli::Argv argv) {
     return 2;
   }
 
-  avatar::AvatarAsset asset;
   const std::string avatarArg = args.get("avatar");
-  if (avatarArg == "default") {
-    asset = avatar::buildDefaultAvatar();
-  } else {
-    auto loaded = avatar::loadAvatarFile(avatarArg);
-    if (!loaded) {
-      std::fprintf(stderr, "error: %s\n", loaded.error().c_str());
-      return 1;
-    }
-    asset = std::move(loaded).value();
+  auto loaded = app::loadAvatarArg(avatarArg);
+  if (!loaded) {
+    std::fprintf(stderr, "error: %s\n", loaded.error().c_str());
+    return 1;
   }
+  avatar::AvatarAsset asset = std::move(loaded).value();
   lo.avatar = &asset;
 
   // The body: three-point PIK (head + controllers), solved synchronously each frame from the

@@ -7,10 +7,8 @@
 #include <glm/gtc/constants.hpp>
 #include <thread>
 
-#include "avatar/avatar_loader.h"
+#include "app/avatar_arg.h"
 #include "avatar/body/calibration.h"
-#include "avatar/gltf/gltf_loader.h"
-#include "avatar/procedural/default_avatar.h"
 #include "engine/avatar_renderer.h"
 #include "engine/desktop_window.h"
 #include "engine/image_io.h"
@@ -29,21 +27,6 @@ using Clock = std::chrono::steady_clock;
 int fail(const std::string& message, int code = 1) {
   std::fprintf(stderr, "error: %s\n", message.c_str());
   return code;
-}
-
-Result<avatar::AvatarAsset> loadAvatar(const RenderJob& job) {
-  if (job.avatar != "default") {
-    avatar::AvatarLoadOptions lo;
-    lo.boneMapFile = job.boneMap;
-    return avatar::loadAvatarFile(job.avatar, lo);
-  }
-  avatar::AvatarAsset asset = avatar::buildDefaultAvatar();
-  if (!job.boneMap.empty()) {
-    auto text = avatar::readBoneMapFile(job.boneMap);
-    if (!text) return Error{text.error()};
-    if (auto s = avatar::prepareAvatar(asset, *text); !s) return Error{s.error()};
-  }
-  return asset;
 }
 
 }  // namespace
@@ -74,7 +57,7 @@ int runMirror(const MirrorJob& mj) {
   }
 
   // Files first (the likely errors, no display needed to report them), then the display.
-  auto asset = loadAvatar(job);
+  auto asset = loadAvatarArg(job.avatar, job.boneMap);
   if (!asset) return fail(asset.error());
   tracking::SourceOptions so;
   so.userHeight = userHeight > 0.0f ? userHeight : 1.75f;

@@ -11,10 +11,8 @@
 #include <glm/gtc/constants.hpp>
 #include <nlohmann/json.hpp>
 
-#include "avatar/avatar_loader.h"
+#include "app/avatar_arg.h"
 #include "avatar/body/calibration.h"
-#include "avatar/gltf/gltf_loader.h"
-#include "avatar/procedural/default_avatar.h"
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
 #include "engine/image_io.h"
@@ -117,21 +115,9 @@ int runRenderJob(const RenderJob& job) {
   }
 
   // The avatar and the motion first: bad files are the likely errors and need no GPU to report.
-  avatar::AvatarAsset asset;
-  if (job.avatar == "default") {
-    asset = avatar::buildDefaultAvatar();
-    if (!job.boneMap.empty()) {
-      auto text = avatar::readBoneMapFile(job.boneMap);
-      if (!text) return fail(text.error());
-      if (auto s = avatar::prepareAvatar(asset, *text); !s) return fail(s.error());
-    }
-  } else {
-    avatar::AvatarLoadOptions lo;
-    lo.boneMapFile = job.boneMap;
-    auto loaded = avatar::loadAvatarFile(job.avatar, lo);
-    if (!loaded) return fail(loaded.error());
-    asset = std::move(loaded).value();
-  }
+  auto loaded = loadAvatarArg(job.avatar, job.boneMap);
+  if (!loaded) return fail(loaded.error());
+  avatar::AvatarAsset asset = std::move(loaded).value();
   tracking::SourceOptions so;
   so.userHeight = userHeight > 0.0f ? userHeight : 1.75f;
   so.bvhScale = job.bvhScale;
