@@ -786,7 +786,9 @@ void markedRanges(const std::vector<char>& mark, int r, std::vector<Workspace::R
 // one block of columns per level, each non-zero only on the ranges of rows of its level and of
 // the blocks it was projected against. Products with W then run over the overlapping ranges
 // only (a hand shares just the root with the feet), and the last active level skips the
-// projector update altogether. Dense mode (equality rows) has one range, every coordinate.
+// projector update altogether. Dense mode (equality rows, N = [free dofs' unit columns | the
+// constrained dofs' block]) does the same over the reduced columns whose group of N reaches a
+// level's dofs (denseSupport).
 void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
   const bool maskMode = w.mask_mode;
   const int r = maskMode ? w.n : w.null_dim;
