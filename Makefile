@@ -50,7 +50,8 @@ sanitize: deps
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --output-on-failure -j $(JOBS) -R '^cli:' $(CTEST_ARGS)
 
-# ThreadSanitizer on the CPU-only tests (IK, tracking, runtime hand-off): Mesa is not instrumented.
+# ThreadSanitizer on the `unit` tests (IK, tracking, runtime hand-off, and the cli tests, which start
+# lavapipe): Mesa and the validation layer are not instrumented, scripts/tsan.supp silences them.
 tsan: deps
 	cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMBODY_TSAN=ON -DEMBODY_BUILD_BENCH=OFF $(WERROR)
 	cmake --build build-tsan -j $(JOBS)
