@@ -7,8 +7,7 @@
 #include <glm/gtc/constants.hpp>
 #include <thread>
 
-#include "app/avatar_arg.h"
-#include "avatar/body/calibration.h"
+#include "app/job_inputs.h"
 #include "engine/avatar_renderer.h"
 #include "engine/desktop_window.h"
 #include "engine/image_io.h"
@@ -49,30 +48,13 @@ int runMirror(const MirrorJob& mj) {
     return fail("--user-height must be 0.5 .. 2.5 m", 2);
   avatar::SpineMode spine;
   if (!avatar::parseSpineMode(job.spine, spine)) return fail("--spine must be auto, full or simplified", 2);
-  float userHeight = job.userHeight;
-  if (userHeight == 0.0f && !job.profile.empty()) {
-    auto profile = avatar::loadProfile(job.profile);  // avatar/body/calibration.h, `embody avatar calibrate`
-    if (!profile) return fail("profile " + job.profile + ": " + profile.error());
-    userHeight = float(profile->userHeight);
-  }
-
   // Files first (the likely errors, no display needed to report them), then the display.
-  auto asset = loadAvatarArg(job.avatar, job.boneMap);
-  if (!asset) return fail(asset.error());
-  tracking::SourceOptions so;
-  so.userHeight = userHeight > 0.0f ? userHeight : 1.75f;
-  so.bvhScale = job.bvhScale;
-  if (job.threePoint) so.trackers = tracking::TrackerMask::threePoint();
-  auto opened = tracking::openPoseSource(job.motion, so);
-  if (!opened) return fail(opened.error());
-  tracking::PoseSource& source = **opened;
-  runtime::AvatarBodyOptions bo;
-  bo.spine = spine;
-  bo.coupledSpine = job.coupledSpine;
-  bo.trackers = source.trackers();
-  const bool trace = job.motion.size() > 6 && job.motion.substr(job.motion.size() - 6) == ".jsonl";
-  bo.userHeight = userHeight > 0.0f ? userHeight : (trace ? 0.0f : so.userHeight);
-  auto solver = runtime::AvatarBodySolver::create(*asset, bo);
+  auto inputs = openJobInputs(job);
+  if (!inputs) return fail(inputs.error());
+  const avatar::AvatarAsset& asset = inputs->asset;
+  const tracking::SourceOptions& so = inputs->sourceOptions;
+  tracking::PoseSource& source = *inputs->source;
+  auto solver = runtime::AvatarBodySolver::create(asset, bodyOptionsFor(job, spine, *inputs));
   if (!solver) return fail("avatar " + job.avatar + ": " + solver.error());
 
   auto extensions = gfx::DesktopWindow::requiredInstanceExtensions();
@@ -88,7 +70,7 @@ int runMirror(const MirrorJob& mj) {
   gfx::AvatarRendererOptions ro;
   ro.width = uint32_t(job.width);  // its offscreen target is unused; the size gives the cameras' aspect
   ro.height = uint32_t(job.height);
-  auto created = gfx::AvatarRenderer::create(device, *asset, ro);
+  auto created = gfx::AvatarRenderer::create(device, asset, ro);
   if (!created) return fail(created.error());
   gfx::AvatarRenderer& ar = **created;
   gfx::DesktopWindow::Keys keys;
@@ -98,7 +80,7 @@ int runMirror(const MirrorJob& mj) {
   if (!window) return fail(window.error());
   gfx::DesktopWindow& win = **window;
 
-  const avatar::SkeletonPose rest = avatar::SkeletonPose::rest(asset->skeleton);
+  const avatar::SkeletonPose rest = avatar::SkeletonPose::rest(asset.skeleton);
   runtime::IkStageConfig cfg;
   cfg.budgetSeconds = job.budgetMs * 1e-3;
   cfg.guard.userHeight = so.userHeight;

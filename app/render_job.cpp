@@ -11,8 +11,7 @@
 #include <glm/gtc/constants.hpp>
 #include <nlohmann/json.hpp>
 
-#include "app/avatar_arg.h"
-#include "avatar/body/calibration.h"
+#include "app/job_inputs.h"
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
 #include "engine/image_io.h"
@@ -107,37 +106,17 @@ int runRenderJob(const RenderJob& job) {
   avatar::SpineMode spine;
   if (!avatar::parseSpineMode(job.spine, spine)) return fail("--spine must be auto, full or simplified", 2);
 
-  float userHeight = job.userHeight;
-  if (userHeight == 0.0f && !job.profile.empty()) {
-    auto profile = avatar::loadProfile(job.profile);  // avatar/body/calibration.h, `embody avatar calibrate`
-    if (!profile) return fail("profile " + job.profile + ": " + profile.error());
-    userHeight = float(profile->userHeight);
-  }
-
   // The avatar and the motion first: bad files are the likely errors and need no GPU to report.
-  auto loaded = loadAvatarArg(job.avatar, job.boneMap);
-  if (!loaded) return fail(loaded.error());
-  avatar::AvatarAsset asset = std::move(loaded).value();
-  tracking::SourceOptions so;
-  so.userHeight = userHeight > 0.0f ? userHeight : 1.75f;
-  so.bvhScale = job.bvhScale;
-  if (job.threePoint) so.trackers = tracking::TrackerMask::threePoint();
-  auto opened = tracking::openPoseSource(job.motion, so);
-  if (!opened) return fail(opened.error());
-  tracking::PoseSource& source = **opened;
+  auto inputs = openJobInputs(job);
+  if (!inputs) return fail(inputs.error());
+  const float userHeight = inputs->userHeight;
+  const avatar::AvatarAsset& asset = inputs->asset;
+  const tracking::SourceOptions& so = inputs->sourceOptions;
+  tracking::PoseSource& source = *inputs->source;
   for (const auto& note : source.notes()) std::printf("motion: %s\n", note.c_str());
   const int frames = job.frames > 0 ? job.frames : std::max(1, int(std::min(source.duration(), 20.0) * job.fps));
 
-  runtime::AvatarBodyOptions bo;
-  bo.spine = spine;
-  bo.coupledSpine = job.coupledSpine;
-  bo.trackers = source.trackers();
-  // Synthetic motions and BVH clips are built for (fitted to) so.userHeight; a recorded trace's
-  // user is unknown unless given: calibrate from its first head sample.
-  const bool trace = job.motion.size() > 6 && job.motion.substr(job.motion.size() - 6) == ".jsonl";
-  bo.userHeight = userHeight > 0.0f ? userHeight : (trace ? 0.0f : so.userHeight);
-  bo.seat.enabled = job.seated;
-  auto solver = runtime::AvatarBodySolver::create(asset, bo);
+  auto solver = runtime::AvatarBodySolver::create(asset, bodyOptionsFor(job, spine, *inputs));
   if (!solver) return fail("avatar " + job.avatar + ": " + solver.error());
 
   tracking::TraceWriter recorder;

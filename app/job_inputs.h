@@ -1,0 +1,30 @@
+#pragma once
+// What `embody render --motion` and `embody mirror` both open before any GPU or window work:
+// the user's height (--user-height, else the --profile's), the avatar, the pose source, and the
+// body solver's options. Files first: bad files are the likely errors and need no device.
+#include <memory>
+
+#include "app/render_job.h"
+#include "avatar/avatar_asset.h"
+#include "core/result.h"
+#include "runtime/avatar_body_solver.h"
+#include "xr/tracking/pose_source.h"
+
+namespace embody::app {
+
+struct JobInputs {
+  float userHeight = 0.0f;  // 0: unknown (calibrate from the first head sample)
+  avatar::AvatarAsset asset;
+  tracking::SourceOptions sourceOptions;  // sourceOptions.userHeight: what the motion is fitted to
+  std::unique_ptr<tracking::PoseSource> source;
+};
+
+// Errors (exit code 1) name the file that failed.
+Result<JobInputs> openJobInputs(const RenderJob& job);
+
+// The body solver's options for the job. Synthetic motions and BVH clips are built for (fitted
+// to) sourceOptions.userHeight; a recorded trace's user is unknown unless given: the solver
+// calibrates from its first head sample.
+runtime::AvatarBodyOptions bodyOptionsFor(const RenderJob& job, avatar::SpineMode spine, const JobInputs& in);
+
+}  // namespace embody::app
