@@ -5,7 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace embody::cli {
+namespace embody::app {
 
 Args::Args(std::string usagePrefix, std::string summary)
     : prefix_(std::move(usagePrefix)), summary_(std::move(summary)) {}
@@ -133,4 +133,4 @@ int Args::integer(const std::string& name) const {
   return static_cast<int>(n);
 }
 
-}  // namespace embody::cli
+}  // namespace embody::app

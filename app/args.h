@@ -8,7 +8,7 @@
 
 #include "app/cli.h"
 
-namespace embody::cli {
+namespace embody::app {
 
 class Args {
  public:
@@ -48,4 +48,4 @@ class Args {
   const Spec* find(const std::string& name) const;
 };
 
-}  // namespace embody::cli
+}  // namespace embody::app

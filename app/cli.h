@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-namespace embody::cli {
+namespace embody::app {
 
 using Argv = std::span<const std::string>;
 using CommandFn = int (*)(Argv args);  // args exclude the command name; returns the exit code
@@ -19,10 +19,10 @@ struct Command {
 bool registerCommand(const Command& command);
 const std::vector<Command>& commands();
 
-}  // namespace embody::cli
+}  // namespace embody::app
 
 #define EMBODY_CLI_CONCAT2(a, b) a##b
 #define EMBODY_CLI_CONCAT(a, b) EMBODY_CLI_CONCAT2(a, b)
 #define EMBODY_COMMAND(name, summary, fn)                                                   \
   [[maybe_unused]] static const bool EMBODY_CLI_CONCAT(embody_command_registered_, __LINE__) = \
-      ::embody::cli::registerCommand({name, summary, fn})
+      ::embody::app::registerCommand({name, summary, fn})

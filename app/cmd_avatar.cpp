@@ -136,8 +136,8 @@ void printText(const nlohmann::json& j) {
   for (const auto& w : j["warnings"]) std::printf("  warning: %s\n", s(w).c_str());
 }
 
-int runInfo(cli::Argv argv) {
-  cli::Args args("embody avatar info",
+int runInfo(app::Argv argv) {
+  app::Args args("embody avatar info",
                  "Loads an avatar (.gltf, .glb, .vrm, or 'default' for the built-in mannequin) and "
                  "reports its format, humanoid bone mapping, spine vertebrae and first-person mode.");
   args.positional("FILE", "avatar file, or 'default'");
@@ -151,7 +151,7 @@ int runInfo(cli::Argv argv) {
               "auto");
   args.option("user-height", "METRES", "scale the body model to this user height");
   args.option("profile", "FILE", "calibration profile to read (written by 'embody avatar calibrate')");
-  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
   BodyModelOptions bodyOptions;
   if (!parseSpineMode(args.get("spine"), bodyOptions.spine)) {
     std::fprintf(stderr, "error: --spine must be full, simplified or auto\n\n%s", args.usage().c_str());
@@ -213,8 +213,8 @@ int runInfo(cli::Argv argv) {
   return 0;
 }
 
-int runCalibrate(cli::Argv argv) {
-  cli::Args args("embody avatar calibrate",
+int runCalibrate(app::Argv argv) {
+  app::Args args("embody avatar calibrate",
                  "Scales the avatar to the user and writes the calibration profile (JSON).");
   args.positional("FILE", "avatar file, or 'default'");
   args.option("user-height", "METRES", "the user's height");
@@ -223,7 +223,7 @@ int runCalibrate(cli::Argv argv) {
   args.option("arm-span", "METRES", "fingertip to fingertip (stored, not applied)");
   args.option("profile", "FILE", "where to write the profile");
   args.option("bone-map", "FILE", "JSON bone map, as for info");
-  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
   if (!args.has("profile") || (!args.has("user-height") && !args.has("eye-height"))) {
     std::fprintf(stderr, "error: need --profile and --user-height or --eye-height\n\n%s",
                  args.usage().c_str());
@@ -264,14 +264,14 @@ int runCalibrate(cli::Argv argv) {
   return 0;
 }
 
-int runExportDefault(cli::Argv argv) {
-  cli::Args args("embody avatar export-default",
+int runExportDefault(app::Argv argv) {
+  app::Args args("embody avatar export-default",
                  "Writes the built-in mannequin as a standard glTF 2.0 binary (GLB).");
   args.positional("FILE", "output .glb path");
   args.flag("fingers",
             "add finger bones (thumb/index/middle/ring/pinky 1..3 per hand, the 30 humanoid finger bones) "
             "and skinned fingers, for hand tracking");
-  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
   const AvatarAsset a = buildDefaultAvatar(DefaultAvatarOptions{.fingers = args.has("fingers")});
   if (auto s = writeGlbFile(a, args.get("FILE")); !s.ok()) {
     std::fprintf(stderr, "error: %s\n", s.error().c_str());
@@ -282,7 +282,7 @@ int runExportDefault(cli::Argv argv) {
   return 0;
 }
 
-int runAvatar(cli::Argv argv) {
+int runAvatar(app::Argv argv) {
   static const char* usage =
       "usage: embody avatar info FILE|default [--json] [--fingers] [--bone-map FILE] [--spine "
       "full|simplified|auto]\n"

@@ -15,14 +15,14 @@ namespace {
 
 using namespace embody;
 
-const cli::Command* findCommand(const char* name) {
-  for (const auto& c : cli::commands())
+const app::Command* findCommand(const char* name) {
+  for (const auto& c : app::commands())
     if (std::string(c.name) == name) return &c;
   return nullptr;
 }
 
-int runDemo(cli::Argv argv) {
-  cli::Args args("embody demo",
+int runDemo(app::Argv argv) {
+  app::Args args("embody demo",
                  "The main job on the embedded defaults: the default avatar follows a built-in motion through the IK "
                  "runtime; frames, contact_sheet.png and stats.json go to --out. Opens the mirror window too when a "
                  "display is available.");
@@ -33,7 +33,7 @@ int runDemo(cli::Argv argv) {
   args.option("ik-budget-ms", "MS", "IK time budget per frame", "1");
   args.option("device", "SELECTOR", "Vulkan device: auto, an index, 'lavapipe', or part of its name", "auto");
   args.flag("no-mirror", "do not open the mirror window even when a display is available");
-  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
 
   app::RenderJob job;
   try {
@@ -62,7 +62,7 @@ int runDemo(cli::Argv argv) {
 
   // The mirror window: only with a display, and only where the command exists.
   const bool display = std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY");
-  const cli::Command* mirror = findCommand("mirror");
+  const app::Command* mirror = findCommand("mirror");
   if (args.has("no-mirror")) {
     std::printf("mirror: skipped (--no-mirror)\n");
   } else if (!display) {

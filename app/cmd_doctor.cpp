@@ -7,7 +7,7 @@
 
 #include "app/args.h"
 #include "engine/instance.h"
-#include "xr/openxr/loader_info.h"
+#include "xr/loader_info.h"
 
 namespace {
 
@@ -31,21 +31,21 @@ DisplayInfo probeDisplay() {
   return d;
 }
 
-int runDoctor(embody::cli::Argv argv) {
+int runDoctor(embody::app::Argv argv) {
   using namespace embody;
-  cli::Args args("embody doctor", "Lists what this machine offers Embody: Vulkan devices, the validation "
+  app::Args args("embody doctor", "Lists what this machine offers Embody: Vulkan devices, the validation "
                                   "layer, the OpenXR loader and runtime, and the display.");
   args.flag("json", "print one JSON object instead of text");
-  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
 
   nlohmann::json j;
-  const bool layer = gfx::Instance::validationLayerAvailable();
-  gfx::InstanceOptions opts;
-  opts.validation = layer ? gfx::Validation::Required : gfx::Validation::Off;
-  auto inst = gfx::Instance::create(opts);
-  j["vulkan"]["loader_api_version"] = std::to_string(VK_API_VERSION_MAJOR(gfx::Instance::loaderApiVersion())) +
-                                      "." + std::to_string(VK_API_VERSION_MINOR(gfx::Instance::loaderApiVersion())) +
-                                      "." + std::to_string(VK_API_VERSION_PATCH(gfx::Instance::loaderApiVersion()));
+  const bool layer = engine::Instance::validationLayerAvailable();
+  engine::InstanceOptions opts;
+  opts.validation = layer ? engine::Validation::Required : engine::Validation::Off;
+  auto inst = engine::Instance::create(opts);
+  j["vulkan"]["loader_api_version"] = std::to_string(VK_API_VERSION_MAJOR(engine::Instance::loaderApiVersion())) +
+                                      "." + std::to_string(VK_API_VERSION_MINOR(engine::Instance::loaderApiVersion())) +
+                                      "." + std::to_string(VK_API_VERSION_PATCH(engine::Instance::loaderApiVersion()));
   j["vulkan"]["validation_layer"] = layer && inst.ok() && inst->validationEnabled();
   j["vulkan"]["devices"] = nlohmann::json::array();
   if (inst.ok()) {

@@ -13,7 +13,7 @@
 #include <string>
 
 #include "app/args.h"
-#include "avatar/spine/isolated_experiment.h"
+#include "ik/spine/isolated_experiment.h"
 
 namespace {
 
@@ -119,28 +119,28 @@ bool writeFile(const fs::path& path, const std::string& text) {
   return static_cast<bool>(out);
 }
 
-void writeRun(const fs::path& dir, const spine::ExperimentRun& run, std::string& error) {
+void writeRun(const fs::path& dir, const ik::spine::ExperimentRun& run, std::string& error) {
   std::string it = "iteration,time_us,position_error_m,orientation_error_deg,dq_norm_rad\n";
   char line[256];
-  for (const spine::IterationSample& s : run.samples) {
+  for (const ik::spine::IterationSample& s : run.samples) {
     std::snprintf(line, sizeof line, "%d,%.3f,%.9g,%.9g,%.9g\n", s.iteration, s.time_us, s.position_error,
                   s.orientation_error / kDeg, s.step_norm);
     it += line;
   }
-  const spine::SpineDescription& d = run.description;
+  const ik::spine::SpineDescription& d = run.description;
   std::string vs = "index,site,region,s_x_deg,s_y_deg,torsion_deg,s_x_norm,s_y_norm\n";
   std::string shape = "index,joint,rest_x,rest_y,rest_z,final_x,final_y,final_z\n";
   for (size_t k = 0; k < d.sites.size(); ++k) {
-    const spine::SiteMotion& m = run.motion[k];
+    const ik::spine::SiteMotion& m = run.motion[k];
     const Eigen::Vector3d& r = run.joints.ranges[k];
-    auto norm = [&](spine::Component c, double v) {
+    auto norm = [&](ik::spine::Component c, double v) {
       const double range = r[static_cast<int>(c)];
       if (range <= 0) return 0.0;
-      return v / (v >= 0 ? spine::upperLimit(d, c, range) : -spine::lowerLimit(d, c, range));
+      return v / (v >= 0 ? ik::spine::upperLimit(d, c, range) : -ik::spine::lowerLimit(d, c, range));
     };
     std::snprintf(line, sizeof line, "%zu,%s,%s,%.6f,%.6f,%.6f,%.6f,%.6f\n", k, d.sites[k].name.c_str(),
-                  spine::toString(d.sites[k].region), m.s_x / kDeg, m.s_y / kDeg, m.torsion / kDeg,
-                  norm(spine::Component::Flexion, m.s_x), norm(spine::Component::Bending, m.s_y));
+                  ik::spine::toString(d.sites[k].region), m.s_x / kDeg, m.s_y / kDeg, m.torsion / kDeg,
+                  norm(ik::spine::Component::Flexion, m.s_x), norm(ik::spine::Component::Bending, m.s_y));
     vs += line;
   }
   for (size_t k = 0; k < run.final_centres.size(); ++k) {
@@ -156,9 +156,9 @@ void writeRun(const fs::path& dir, const spine::ExperimentRun& run, std::string&
     error = "cannot write the " + run.variant + " CSV files in " + dir.string();
 }
 
-int runIsolatedSpine(const cli::Args& args) {
+int runIsolatedSpine(const app::Args& args) {
   const fs::path out = args.get("out");
-  spine::ExperimentOptions o;
+  ik::spine::ExperimentOptions o;
   try {
     o.iterations = args.integer("iterations");
     o.pull = args.number("pull");
@@ -167,12 +167,12 @@ int runIsolatedSpine(const cli::Args& args) {
     return 2;
   }
   o.axis_coupling = args.has("axis-coupling");
-  auto desc = spine::loadSpineModel(args.get("model"));
+  auto desc = ik::spine::loadSpineModel(args.get("model"));
   if (!desc) {
     std::fprintf(stderr, "embody experiment: error: %s\n", desc.error().c_str());
     return 1;
   }
-  auto result = spine::runIsolatedSpineExperiment(*desc, o);
+  auto result = ik::spine::runIsolatedSpineExperiment(*desc, o);
   if (!result) {
     std::fprintf(stderr, "embody experiment: error: %s\n", result.error().c_str());
     return 1;
@@ -186,7 +186,7 @@ int runIsolatedSpine(const cli::Args& args) {
   std::string error;
   writeRun(out, result->coupled, error);
   writeRun(out, result->uncoupled, error);
-  const nlohmann::json summary = spine::experimentSummary(*result, o);
+  const nlohmann::json summary = ik::spine::experimentSummary(*result, o);
   char target[128];
   std::snprintf(target, sizeof target, "x,y,z\n%.6f,%.6f,%.6f\n", result->neck_target.x(), result->neck_target.y(),
                 result->neck_target.z());
@@ -224,8 +224,8 @@ int runIsolatedSpine(const cli::Args& args) {
   return 0;
 }
 
-int runExperiment(cli::Argv argv) {
-  cli::Args args("embody experiment",
+int runExperiment(app::Argv argv) {
+  app::Args args("embody experiment",
                  "Runs a reproducible experiment and writes CSV, summary.json and PNG plots (gnuplot).\n"
                  "  isolated-spine: Raunhardt & Boulic 2008 §5.1 on the 24-vertebra spine, coupled and uncoupled: "
                  "the head's orientation is kept (priority 0) while the neck is pulled sideways (priority 1).");
@@ -236,7 +236,7 @@ int runExperiment(cli::Argv argv) {
   args.option("pull", "METRES", "how far the neck target is moved to the character's left", "0.12");
   args.flag("axis-coupling", "add the cross-axis rows to the coupled model");
   args.flag("no-plots", "write CSV and summary.json only");
-  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
   if (args.get("name") != "isolated-spine") {
     std::fprintf(stderr, "error: unknown experiment '%s' (expected: isolated-spine)\n\n%s", args.get("name").c_str(),
                  args.usage().c_str());

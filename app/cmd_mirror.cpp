@@ -12,8 +12,8 @@ namespace {
 
 using namespace embody;
 
-int runMirrorCommand(cli::Argv argv) {
-  cli::Args args("embody mirror",
+int runMirrorCommand(app::Argv argv) {
+  app::Args args("embody mirror",
                  "Shows the avatar live in a desktop window, driven by a motion through the IK runtime (pose source -> "
                  "budgeted IK thread -> skinning -> render). Keys: V first/third person, Space pause, Esc quit. Needs a "
                  "display (X11 or Wayland; Xvfb works).");
@@ -38,7 +38,7 @@ int runMirrorCommand(cli::Argv argv) {
   args.flag("three-point", "keep only head and hands (HMD + controllers): the lower body is inferred, feet step");
   args.flag("no-grid", "hide the ground grid");
   args.flag("validate", "enable the Khronos validation layer and print the message count at exit");
-  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
 
   app::MirrorJob mj;
   app::RenderJob& job = mj.run;

@@ -12,16 +12,16 @@
 
 #include "app/args.h"
 #include "runtime/task_layout.h"
-#include "xr/tracking/one_euro_filter.h"
-#include "xr/tracking/synthetic_source.h"
-#include "xr/tracking/trace.h"
+#include "tracking/one_euro_filter.h"
+#include "tracking/synthetic_source.h"
+#include "tracking/trace.h"
 
 namespace {
 
 using namespace embody;
 using namespace embody::tracking;
 
-void sourceOptions(cli::Args& args) {
+void sourceOptions(app::Args& args) {
   args.option("user-height", "METRES", "the user's height: synthetic motions are built for it, BVH fitted to it", "1.75");
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (e.g. 0.0564 for CMU); default: fit the rest skeleton to --user-height");
   args.flag("three-point", "keep only the head and hands (an HMD with two controllers)");
@@ -29,7 +29,7 @@ void sourceOptions(cli::Args& args) {
 }
 
 // Opens the source with the shared options; the error is printed, exit code in `code`.
-std::unique_ptr<PoseSource> openSource(const cli::Args& args, const std::string& spec, const SourceOptions& opts,
+std::unique_ptr<PoseSource> openSource(const app::Args& args, const std::string& spec, const SourceOptions& opts,
                                        const char* command, int& code) {
   std::optional<TrackingLossSpec> loss;
   if (args.has("lose")) {
@@ -53,7 +53,7 @@ std::unique_ptr<PoseSource> openSource(const cli::Args& args, const std::string&
 }
 
 // Reads the shared source options; throws std::invalid_argument on bad values (usage errors).
-SourceOptions readSourceOptions(const cli::Args& args) {
+SourceOptions readSourceOptions(const app::Args& args) {
   SourceOptions o;
   o.userHeight = static_cast<float>(args.number("user-height"));
   if (!(o.userHeight >= 0.5f && o.userHeight <= 2.5f)) throw std::invalid_argument("--user-height must be 0.5 .. 2.5 m");
@@ -79,13 +79,13 @@ int list() {
   return 0;
 }
 
-int info(cli::Argv argv) {
-  cli::Args args("embody motion info", "Describes a pose source: trackers, duration, rate, notes, and what the "
+int info(app::Argv argv) {
+  app::Args args("embody motion info", "Describes a pose source: trackers, duration, rate, notes, and what the "
                                        "trackers do over the whole motion.");
   args.positional("SOURCE", "synthetic:NAME, FILE.bvh or FILE.jsonl");
   args.flag("json", "print one JSON object instead of text");
   sourceOptions(args);
-  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
   SourceOptions opts;
   try {
     opts = readSourceOptions(args);
@@ -185,8 +185,8 @@ int info(cli::Argv argv) {
   return 0;
 }
 
-int record(cli::Argv argv) {
-  cli::Args args("embody motion record", "Records any pose source as a JSON Lines trace (docs/tracking.md), "
+int record(app::Argv argv) {
+  app::Args args("embody motion record", "Records any pose source as a JSON Lines trace (docs/tracking.md), "
                                          "sampled at a fixed rate; replay it with --motion FILE.jsonl.");
   args.option("motion", "SOURCE", "synthetic:NAME, FILE.bvh or FILE.jsonl");
   args.option("out", "FILE.jsonl", "the trace to write");
@@ -194,7 +194,7 @@ int record(cli::Argv argv) {
   args.option("fps", "HZ", "sample rate", "90");
   args.flag("filter", "apply the One Euro filter (as the runtime does) before writing");
   sourceOptions(args);
-  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
   SourceOptions opts;
   double fps = 0.0;
   int frames = -1;
@@ -240,7 +240,7 @@ int record(cli::Argv argv) {
   return 0;
 }
 
-int runMotion(cli::Argv argv) {
+int runMotion(app::Argv argv) {
   const std::string usage =
       "usage: embody motion <list|info|record> ...\n\n"
       "  list                       the built-in synthetic motions\n"

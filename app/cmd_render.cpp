@@ -22,15 +22,15 @@ using namespace embody;
 
 // Prints the validation count when the instance goes away, on every exit path.
 struct ValidationReport {
-  const gfx::Instance* instance = nullptr;
+  const engine::Instance* instance = nullptr;
   ~ValidationReport() {
     if (instance && instance->validationEnabled())
       std::fprintf(stderr, "validation messages: %u\n", instance->messageCount());
   }
 };
 
-int runRender(cli::Argv argv) {
-  cli::Args args("embody render",
+int runRender(app::Argv argv) {
+  app::Args args("embody render",
                  "Drives an avatar with a motion through the runtime (tracking -> budgeted IK thread -> skinning -> "
                  "offscreen frames) and writes frame_00000.png..., contact_sheet.png and stats.json into --out. "
                  "Without --motion: one frame of the rest pose (frame_0000.png).");
@@ -66,7 +66,7 @@ int runRender(cli::Argv argv) {
   args.flag("gizmos", "draw the tracking-target gizmos (head, hands)");
   args.flag("no-grid", "hide the ground grid");
   args.flag("validate", "enable the Khronos validation layer and print the message count at exit");
-  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
 
   if (!args.has("out")) {
     std::fprintf(stderr, "error: --out DIR is required\n\n%s", args.usage().c_str());
@@ -150,13 +150,13 @@ int runRender(cli::Argv argv) {
   }
   avatar::AvatarAsset asset = std::move(loaded).value();
 
-  gfx::InstanceOptions io;
+  engine::InstanceOptions io;
 #ifdef NDEBUG
-  io.validation = args.has("validate") ? gfx::Validation::IfPresent : gfx::Validation::Off;
+  io.validation = args.has("validate") ? engine::Validation::IfPresent : engine::Validation::Off;
 #else
-  io.validation = gfx::Validation::IfPresent;  // debug builds always validate when the layer exists
+  io.validation = engine::Validation::IfPresent;  // debug builds always validate when the layer exists
 #endif
-  auto instance = gfx::Instance::create(io);
+  auto instance = engine::Instance::create(io);
   if (!instance) {
     std::fprintf(stderr, "error: %s\n", instance.error().c_str());
     return 1;
@@ -164,31 +164,31 @@ int runRender(cli::Argv argv) {
   ValidationReport report{&instance.value()};
   if (args.has("validate") && !instance->validationEnabled())
     std::fprintf(stderr, "warning: the validation layer is not installed (vulkan-validationlayers)\n");
-  auto device = gfx::Device::create(*instance, args.get("device"));
+  auto device = engine::Device::create(*instance, args.get("device"));
   if (!device) {
     std::fprintf(stderr, "error: %s\n", device.error().c_str());
     return 1;
   }
 
-  gfx::AvatarRendererOptions ro;
+  engine::AvatarRendererOptions ro;
   ro.width = uint32_t(width);
   ro.height = uint32_t(height);
   ro.samples = args.has("msaa") ? VK_SAMPLE_COUNT_4_BIT : VK_SAMPLE_COUNT_1_BIT;
   ro.stereo = view == "stereo";
   if (const std::string m = args.get("stereo-mode"); m == "multiview" || m == "two-pass") {
-    ro.stereoMode = m == "multiview" ? gfx::StereoMode::Multiview : gfx::StereoMode::TwoPass;
+    ro.stereoMode = m == "multiview" ? engine::StereoMode::Multiview : engine::StereoMode::TwoPass;
   } else if (m != "default") {
     std::fprintf(stderr, "error: --stereo-mode must be multiview, two-pass or default\n");
     return 2;
   }
-  auto renderer = gfx::AvatarRenderer::create(**device, asset, ro);
+  auto renderer = engine::AvatarRenderer::create(**device, asset, ro);
   if (!renderer) {
     std::fprintf(stderr, "error: %s\n", renderer.error().c_str());
     return 1;
   }
   auto& r = **renderer;
   const auto pose = avatar::SkeletonPose::rest(asset.skeleton);
-  gfx::FrameOptions fo;
+  engine::FrameOptions fo;
   fo.grid = !args.has("no-grid");
   fo.skeleton = args.has("skeleton");
   if (args.has("gizmos")) fo.gizmos = r.trackingGizmos(pose);
@@ -207,23 +207,23 @@ int runRender(cli::Argv argv) {
     if (!img) return std::fprintf(stderr, "error: %s\n", img.error().c_str()), 1;
     frames.emplace_back(out / "frame_0000.png", std::move(img).value());
   } else if (view == "first") {
-    fo.view = gfx::ViewKind::FirstPerson;
+    fo.view = engine::ViewKind::FirstPerson;
     // Look a little down at the own body, as a person in a headset does.
     const glm::mat4 eye = r.eyePose(pose) * glm::mat4_cast(glm::angleAxis(glm::radians(-60.0f), glm::vec3(1, 0, 0)));
-    auto img = r.render(pose, gfx::cameraFromPose(eye, gfx::FovAngles::symmetric(glm::radians(90.0f), aspect), 0.02f), fo);
+    auto img = r.render(pose, engine::cameraFromPose(eye, engine::FovAngles::symmetric(glm::radians(90.0f), aspect), 0.02f), fo);
     if (!img) return std::fprintf(stderr, "error: %s\n", img.error().c_str()), 1;
     frames.emplace_back(out / "frame_0000.png", std::move(img).value());
   } else {
     // Third-person stereo pair from the orbit camera's position, with headset-like asymmetric fovs.
-    const gfx::Camera orbit = r.orbitAround(pose, yaw, pitch);
-    const gfx::FovAngles left{-0.82f, 0.70f, 0.75f, -0.80f}, right{-0.70f, 0.82f, 0.75f, -0.80f};
-    auto pair = r.renderStereo(pose, gfx::stereoCameras(glm::inverse(orbit.view), 0.064f, left, right), fo);
+    const engine::Camera orbit = r.orbitAround(pose, yaw, pitch);
+    const engine::FovAngles left{-0.82f, 0.70f, 0.75f, -0.80f}, right{-0.70f, 0.82f, 0.75f, -0.80f};
+    auto pair = r.renderStereo(pose, engine::stereoCameras(glm::inverse(orbit.view), 0.064f, left, right), fo);
     if (!pair) return std::fprintf(stderr, "error: %s\n", pair.error().c_str()), 1;
     frames.emplace_back(out / "frame_0000_left.png", std::move((*pair)[0]));
     frames.emplace_back(out / "frame_0000_right.png", std::move((*pair)[1]));
   }
   for (const auto& [path, img] : frames) {
-    if (auto s = gfx::writePng(path.string(), img); !s) {
+    if (auto s = engine::writePng(path.string(), img); !s) {
       std::fprintf(stderr, "error: %s\n", s.error().c_str());
       return 1;
     }

@@ -8,21 +8,21 @@
 #include <string>
 
 #include "app/args.h"
-#include "avatar/spine/spine_description.h"
-#include "avatar/spine/spine_model.h"
+#include "ik/spine/spine_description.h"
+#include "ik/spine/spine_model.h"
 
 namespace {
 
 using namespace embody;
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-const char* jointsOf(const spine::Site& s, bool coupled) {
+const char* jointsOf(const ik::spine::Site& s, bool coupled) {
   if (!coupled) return "ball";
   return s.swing && s.revolute ? "swing+revolute" : s.swing ? "swing" : "revolute";
 }
 
-int runSpine(cli::Argv argv) {
-  cli::Args args("embody spine",
+int runSpine(app::Argv argv) {
+  app::Args args("embody spine",
                  "Describes a spine model: its vertebrae and joint sites, joints by type, dofs before and after "
                  "coupling, and the equality and inequality rows (Raunhardt & Boulic 2008).");
   args.positional("action", "describe");
@@ -34,7 +34,7 @@ int runSpine(cli::Argv argv) {
   args.option("height", "METRES", "body height the spine is scaled to", "1.75");
   args.flag("json", "print one JSON object instead of text");
   args.flag("dump", "print the model's JSON description (a starting point for your own file) and stop");
-  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
   if (args.get("action") != "describe") {
     std::fprintf(stderr, "error: unknown action '%s' (expected: describe)\n\n%s", args.get("action").c_str(),
                  args.usage().c_str());
@@ -48,25 +48,25 @@ int runSpine(cli::Argv argv) {
     return 2;
   }
 
-  auto desc = spine::loadSpineModel(args.get("model"));
+  auto desc = ik::spine::loadSpineModel(args.get("model"));
   if (!desc) {
     std::fprintf(stderr, "embody spine: error: %s\n", desc.error().c_str());
     return 1;
   }
   if (args.has("dump")) {
-    std::printf("%s\n", spine::toJson(*desc).dump(2).c_str());
+    std::printf("%s\n", ik::spine::toJson(*desc).dump(2).c_str());
     return 0;
   }
-  spine::SpineOptions options;
+  ik::spine::SpineOptions options;
   options.coupled = !args.has("uncoupled");
   options.axis_coupling = args.has("axis-coupling");
   options.check_all_limits = args.has("check-all-limits");
-  auto model = spine::buildIsolatedSpine(*desc, options, height);
+  auto model = ik::spine::buildIsolatedSpine(*desc, options, height);
   if (!model) {
     std::fprintf(stderr, "embody spine: error: %s\n", model.error().c_str());
     return 1;
   }
-  const spine::SpineSummary s = spine::summarize(*desc, *model);
+  const ik::spine::SpineSummary s = ik::spine::summarize(*desc, *model);
 
   // Which joints carry limits (the first of each region, or all).
   auto limited = [&](ik::JointId j) {
@@ -99,13 +99,13 @@ int runSpine(cli::Argv argv) {
   j["band_slack_deg"] = desc->band_slack / kDeg;
   j["site_list"] = nlohmann::json::array();
   for (size_t k = 0; k < desc->sites.size(); ++k) {
-    const spine::Site& site = desc->sites[k];
+    const ik::spine::Site& site = desc->sites[k];
     const auto& sj = model->joints.sites[k];
     const Eigen::Vector3d r = model->joints.ranges[k] / kDeg;
     nlohmann::json vs = nlohmann::json::array();
     for (int v = site.first; v < site.first + site.count; ++v) vs.push_back(desc->vertebrae[v].name);
     j["site_list"].push_back({{"name", site.name},
-                              {"region", spine::toString(site.region)},
+                              {"region", ik::spine::toString(site.region)},
                               {"vertebrae", vs},
                               {"joints", jointsOf(site, options.coupled)},
                               {"range_deg", {{"flexion_extension", r[0]}, {"bending", r[1]}, {"torsion", r[2]}}},

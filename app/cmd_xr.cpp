@@ -9,15 +9,15 @@
 #include "runtime/frame_stats.h"
 #include "runtime/seated_stats.h"
 #include "runtime/tracked_avatar_body.h"
-#include "xr/tracking/trace.h"
-#include "xr/openxr/xr_loop.h"
+#include "tracking/trace.h"
+#include "xr/xr_loop.h"
 
 namespace {
 
 using namespace embody;
 
-int runXr(cli::Argv argv) {
-  cli::Args args(
+int runXr(app::Argv argv) {
+  app::Args args(
       "embody xr",
       "Puts you in the avatar through the active OpenXR runtime (a headset, or the headless runtime "
       "selected by XR_RUNTIME_JSON). The avatar's body is solved from the HMD and the controllers "
@@ -43,7 +43,7 @@ int runXr(cli::Argv argv) {
       "show the left eye in a desktop window (V: third-person view, R: recenter, C: recalibrate, Esc: quit)");
   args.flag("validate", "enable the Khronos validation layer on the Vulkan device and count its messages");
   args.flag("verbose", "print every session state change");
-  if (auto o = args.parse(argv); o != cli::Args::Outcome::Ok) return cli::Args::exitCode(o);
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
 
   xr::XrLoopOptions lo;
   try {

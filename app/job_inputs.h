@@ -8,7 +8,7 @@
 #include "avatar/avatar_asset.h"
 #include "core/result.h"
 #include "runtime/avatar_body_solver.h"
-#include "xr/tracking/pose_source.h"
+#include "tracking/pose_source.h"
 
 namespace embody::app {
 

@@ -7,7 +7,7 @@
 
 #include "app/cli.h"
 
-namespace embody::cli {
+namespace embody::app {
 
 std::vector<Command>& registry() {
   static std::vector<Command> r;
@@ -19,7 +19,7 @@ bool registerCommand(const Command& command) {
 }
 const std::vector<Command>& commands() { return registry(); }
 
-}  // namespace embody::cli
+}  // namespace embody::app
 
 namespace {
 
@@ -28,7 +28,7 @@ void printUsage(std::FILE* to) {
                "usage: embody <command> [options]\n\n"
                "Embody puts a person inside a VR avatar: tracking -> prioritized IK with a coupled\n"
                "spine -> skinning -> rendering (headless, desktop mirror or OpenXR).\n\ncommands:\n");
-  auto cmds = embody::cli::commands();
+  auto cmds = embody::app::commands();
   std::sort(cmds.begin(), cmds.end(), [](const auto& a, const auto& b) { return std::string(a.name) < b.name; });
   for (const auto& c : cmds) std::fprintf(to, "  %-12s %s\n", c.name, c.summary);
   std::fprintf(to, "\nRun 'embody <command> --help' for a command's options.\n");
@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
     std::printf("embody %s\n", EMBODY_VERSION);
     return 0;
   }
-  for (const auto& c : embody::cli::commands()) {
+  for (const auto& c : embody::app::commands()) {
     if (args[0] != c.name) continue;
     try {
       return c.run(std::span<const std::string>(args).subspan(1));

@@ -15,7 +15,7 @@
 #include "runtime/avatar_body_solver.h"
 #include "runtime/frame_stats.h"
 #include "runtime/ik_thread.h"
-#include "xr/tracking/pose_source.h"
+#include "tracking/pose_source.h"
 
 namespace embody::app {
 
@@ -57,28 +57,28 @@ int runMirror(const MirrorJob& mj) {
   auto solver = runtime::AvatarBodySolver::create(asset, bodyOptionsFor(job, spine, *inputs));
   if (!solver) return fail("avatar " + job.avatar + ": " + solver.error());
 
-  auto extensions = gfx::DesktopWindow::requiredInstanceExtensions();
+  auto extensions = engine::DesktopWindow::requiredInstanceExtensions();
   if (!extensions) return fail("embody mirror: " + extensions.error());
-  gfx::InstanceOptions io;
-  io.validation = job.validate ? gfx::Validation::IfPresent : gfx::Validation::Off;
+  engine::InstanceOptions io;
+  io.validation = job.validate ? engine::Validation::IfPresent : engine::Validation::Off;
   io.extensions = *extensions;
-  auto instance = gfx::Instance::create(io);
+  auto instance = engine::Instance::create(io);
   if (!instance) return fail(instance.error());
-  auto windowDevice = gfx::WindowDevice::create(*instance, job.device == "auto" ? "" : job.device);
+  auto windowDevice = engine::WindowDevice::create(*instance, job.device == "auto" ? "" : job.device);
   if (!windowDevice) return fail(windowDevice.error());
-  gfx::Device& device = (*windowDevice)->device();
-  gfx::AvatarRendererOptions ro;
+  engine::Device& device = (*windowDevice)->device();
+  engine::AvatarRendererOptions ro;
   ro.width = uint32_t(job.width);  // its offscreen target is unused; the size gives the cameras' aspect
   ro.height = uint32_t(job.height);
-  auto created = gfx::AvatarRenderer::create(device, asset, ro);
+  auto created = engine::AvatarRenderer::create(device, asset, ro);
   if (!created) return fail(created.error());
-  gfx::AvatarRenderer& ar = **created;
-  gfx::DesktopWindow::Keys keys;
+  engine::AvatarRenderer& ar = **created;
+  engine::DesktopWindow::Keys keys;
   keys.thirdPerson = job.view == "third";
-  auto window = gfx::DesktopWindow::create(device, uint32_t(job.width), uint32_t(job.height),
+  auto window = engine::DesktopWindow::create(device, uint32_t(job.width), uint32_t(job.height),
                                            "embody mirror - V: view, Space: pause, Esc: quit", keys);
   if (!window) return fail(window.error());
-  gfx::DesktopWindow& win = **window;
+  engine::DesktopWindow& win = **window;
 
   const avatar::SkeletonPose rest = avatar::SkeletonPose::rest(asset.skeleton);
   runtime::IkStageConfig cfg;
@@ -120,24 +120,24 @@ int runMirror(const MirrorJob& mj) {
       error = s.error();
       break;
     }
-    gfx::Camera cam;
+    engine::Camera cam;
     const bool third = win.thirdPerson();
     if (third) {
       cam = ar.orbitAround(pose, job.yaw, job.pitch);
     } else {
       // At the eyes, looking down at the own body (the head is hidden; arms, chest and feet show).
       const glm::mat4 eye = ar.eyePose(pose) * glm::mat4_cast(glm::angleAxis(glm::radians(-60.0f), glm::vec3(1, 0, 0)));
-      cam = gfx::cameraFromPose(eye, gfx::FovAngles::symmetric(glm::radians(90.0f), win.aspect()), 0.02f);
+      cam = engine::cameraFromPose(eye, engine::FovAngles::symmetric(glm::radians(90.0f), win.aspect()), 0.02f);
     }
-    gfx::SceneFrame scene;
+    engine::SceneFrame scene;
     scene.avatar = &ar.gpuAvatar();
     scene.palette = ar.palette();
     scene.firstPerson = !third;
     scene.grid = job.grid;
-    gfx::Renderer& r = ar.renderer();
+    engine::Renderer& r = ar.renderer();
     const bool lastFrame = mj.frames > 0 && shown + 1 == uint64_t(mj.frames);
     if (lastFrame && !mj.screenshot.empty()) win.requestScreenshot();
-    gfx::SubmitSync sync;
+    engine::SubmitSync sync;
     Status st = r.beginFrame();
     if (st) st = r.setScene(scene);
     ++rendererFrames;
@@ -157,7 +157,7 @@ int runMirror(const MirrorJob& mj) {
     if (drawn && win.screenshotReady()) {
       auto img = win.takeScreenshot();
       if (!img) error = img.error();
-      else if (auto s = gfx::writePng(mj.screenshot, *img); !s) error = s.error();
+      else if (auto s = engine::writePng(mj.screenshot, *img); !s) error = s.error();
       else std::printf("screenshot: %s (%dx%d)\n", mj.screenshot.c_str(), img->width, img->height);
     }
     // Without --frames, keep to the motion's rate instead of spinning the GPU.

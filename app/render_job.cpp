@@ -19,8 +19,8 @@
 #include "runtime/avatar_body_solver.h"
 #include "runtime/ik_thread.h"
 #include "runtime/seated_stats.h"
-#include "xr/tracking/pose_source.h"
-#include "xr/tracking/trace.h"
+#include "tracking/pose_source.h"
+#include "tracking/trace.h"
 
 namespace embody::app {
 
@@ -123,20 +123,20 @@ int runRenderJob(const RenderJob& job) {
   if (!job.record.empty())
     if (auto s = recorder.open(job.record, source.trackers(), source.name(), so.userHeight); !s) return fail(s.error());
 
-  gfx::InstanceOptions io;
-  io.validation = job.validate ? gfx::Validation::IfPresent : gfx::Validation::Off;
-  auto instance = gfx::Instance::create(io);
+  engine::InstanceOptions io;
+  io.validation = job.validate ? engine::Validation::IfPresent : engine::Validation::Off;
+  auto instance = engine::Instance::create(io);
   if (!instance) return fail(instance.error());
-  auto device = gfx::Device::create(*instance, job.device);
+  auto device = engine::Device::create(*instance, job.device);
   if (!device) return fail(device.error());
-  gfx::AvatarRendererOptions ro;
+  engine::AvatarRendererOptions ro;
   ro.width = uint32_t(job.width);
   ro.height = uint32_t(job.height);
   ro.samples = job.msaa ? VK_SAMPLE_COUNT_4_BIT : VK_SAMPLE_COUNT_1_BIT;
   ro.stereo = job.view == "stereo";
-  auto created = gfx::AvatarRenderer::create(**device, asset, ro);
+  auto created = engine::AvatarRenderer::create(**device, asset, ro);
   if (!created) return fail(created.error());
-  gfx::AvatarRenderer& renderer = **created;
+  engine::AvatarRenderer& renderer = **created;
 
   std::error_code ec;
   std::filesystem::create_directories(job.out, ec);
@@ -158,7 +158,7 @@ int runRenderJob(const RenderJob& job) {
   const int shrinkFactor = std::max(1, (job.view == "stereo" ? 2 * job.width : job.width) / 280);
   const bool bar = job.progress && isatty(STDOUT_FILENO);
   const auto started = Clock::now();
-  gfx::FrameOptions fo;
+  engine::FrameOptions fo;
   fo.grid = job.grid;
   fo.skeleton = job.skeleton;
   const float aspect = float(job.width) / float(job.height);
@@ -179,14 +179,14 @@ int runRenderJob(const RenderJob& job) {
     if (job.view == "third") {
       image = renderer.render(solved.pose, renderer.orbitAround(solved.pose, job.yaw, job.pitch), fo);
     } else {
-      fo.view = gfx::ViewKind::FirstPerson;
+      fo.view = engine::ViewKind::FirstPerson;
       // Looking a little down at the own body, as a person in a headset does.
       const glm::mat4 eye = renderer.eyePose(solved.pose) * glm::mat4_cast(glm::angleAxis(glm::radians(-35.0f), glm::vec3(1, 0, 0)));
       if (job.view == "first") {
-        image = renderer.render(solved.pose, gfx::cameraFromPose(eye, gfx::FovAngles::symmetric(glm::radians(90.0f), aspect), 0.02f), fo);
+        image = renderer.render(solved.pose, engine::cameraFromPose(eye, engine::FovAngles::symmetric(glm::radians(90.0f), aspect), 0.02f), fo);
       } else {
-        const gfx::FovAngles left{-0.82f, 0.70f, 0.75f, -0.80f}, right{-0.70f, 0.82f, 0.75f, -0.80f};
-        auto pair = renderer.renderStereo(solved.pose, gfx::stereoCameras(eye, 0.064f, left, right), fo);
+        const engine::FovAngles left{-0.82f, 0.70f, 0.75f, -0.80f}, right{-0.70f, 0.82f, 0.75f, -0.80f};
+        auto pair = renderer.renderStereo(solved.pose, engine::stereoCameras(eye, 0.064f, left, right), fo);
         if (pair) image = sideBySide((*pair)[0], (*pair)[1]);
         else image = Error{pair.error()};
       }
@@ -197,7 +197,7 @@ int runRenderJob(const RenderJob& job) {
     char name[32];
     std::snprintf(name, sizeof(name), "frame_%05d.png", i);
     if (job.writeFrames)
-      if (auto s = gfx::writePng((job.out / name).string(), *image); !s) return ik.stop(), fail(s.error());
+      if (auto s = engine::writePng((job.out / name).string(), *image); !s) return ik.stop(), fail(s.error());
     if (sheetCount > 0 && (i * sheetCount) / frames != ((i + 1) * sheetCount) / frames) thumbs.push_back(shrink(*image, shrinkFactor));
     if (bar) progressBar(i + 1, frames, std::chrono::duration<double>(Clock::now() - started).count());
   }
@@ -206,7 +206,7 @@ int runRenderJob(const RenderJob& job) {
   if (!job.record.empty())
     if (auto s = recorder.close(); !s) return fail(s.error());
 
-  if (auto s = gfx::writePng((job.out / "contact_sheet.png").string(), contactSheet(thumbs)); !s) return fail(s.error());
+  if (auto s = engine::writePng((job.out / "contact_sheet.png").string(), contactSheet(thumbs)); !s) return fail(s.error());
   const runtime::StatsSummary sum = stats.summary();
   nlohmann::json j;
   runtime::toJson(j, sum);
@@ -238,7 +238,7 @@ int runRenderJob(const RenderJob& job) {
   return 0;
 }
 
-void readSharedJobOptions(const cli::Args& args, RenderJob& job) {
+void readSharedJobOptions(const app::Args& args, RenderJob& job) {
   job.avatar = args.get("avatar");
   job.motion = args.get("motion");
   job.spine = args.get("spine");

@@ -14,7 +14,7 @@ struct RenderJob {
   std::string avatar = "default";  // FILE or "default"
   std::string boneMap;             // --bone-map FILE ("" none)
   std::string spine = "auto";      // auto | full | simplified
-  bool coupledSpine = true;        // avatar/spine's coupled joints; --uncoupled-spine: one ball per site
+  bool coupledSpine = true;        // ik/spine's coupled joints; --uncoupled-spine: one ball per site
   std::string motion = "synthetic:figure8";
   std::string profile;             // --profile FILE (avatar/body/calibration.h: saveProfile)
   std::string record;              // --record FILE.jsonl ("" none)
@@ -42,6 +42,6 @@ int runRenderJob(const RenderJob& job);
 // Reads the options `embody render --motion` and `embody mirror` share (avatar, motion, spine,
 // bone map, profile, user height, BVH scale, fps, IK budget) into `job`; throws
 // std::invalid_argument with a message naming the option on a bad value.
-void readSharedJobOptions(const cli::Args& args, RenderJob& job);
+void readSharedJobOptions(const app::Args& args, RenderJob& job);
 
 }  // namespace embody::app

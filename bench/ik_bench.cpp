@@ -4,7 +4,7 @@
 //   BM_Iteration/<model>/<path>  a full iteration: FK, Jacobians, every clamping pass, q += Δq
 //   BM_Peer/kdl/pass, BM_Peer/kdl/solve   Orocos KDL on the same humanoid targets (when found)
 // <model>: humanoid60 | spine24_coupled | spine24_uncoupled;  <path>: fast | reference.
-// The spine models are avatar/ik's sample spine (sample_models.h), not the anatomical spine.
+// The spine models are ik's sample spine (sample_models.h), not the anatomical spine.
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "avatar/ik/sample_models.h"
-#include "avatar/ik/solver.h"
+#include "tests/support/sample_models.h"
+#include "ik/solver.h"
 
 #ifdef EMBODY_HAVE_KDL
 #include <kdl/tree.hpp>
@@ -28,12 +28,13 @@
 
 namespace {
 
+using namespace embody;
 using namespace embody::ik;
 
 const Model& modelByName(const std::string& name) {
-  static const Model humanoid = sampleHumanoid().value();
-  static const Model coupled = sampleSpine(true).value();
-  static const Model uncoupled = sampleSpine(false).value();
+  static const Model humanoid = test::sampleHumanoid().value();
+  static const Model coupled = test::sampleSpine(true).value();
+  static const Model uncoupled = test::sampleSpine(false).value();
   if (name == "humanoid60") return humanoid;
   if (name == "spine24_coupled") return coupled;
   return uncoupled;

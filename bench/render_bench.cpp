@@ -22,7 +22,7 @@
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
 #include "engine/instance.h"
-#include "engine/test_avatar.h"
+#include "tests/support/test_avatar.h"
 #include "test_paths.h"
 
 using namespace embody;
@@ -30,8 +30,8 @@ using namespace embody;
 namespace {
 
 struct Context {
-  gfx::Instance instance;
-  std::unique_ptr<gfx::Device> device;
+  engine::Instance instance;
+  std::unique_ptr<engine::Device> device;
   avatar::AvatarAsset defaultAvatar, dense, cesium;
   bool haveCesium = false;
 };
@@ -39,26 +39,26 @@ struct Context {
 Context& context() {
   static Context* c = [] {
     auto* ctx = new Context();
-    gfx::InstanceOptions io;
-    io.validation = gfx::Validation::Off;
-    auto inst = gfx::Instance::create(io);
+    engine::InstanceOptions io;
+    io.validation = engine::Validation::Off;
+    auto inst = engine::Instance::create(io);
     if (!inst) {
       std::fprintf(stderr, "error: %s\n", inst.error().c_str());
       std::exit(1);
     }
     ctx->instance = std::move(inst).value();
     const char* sel = std::getenv("EMBODY_BENCH_DEVICE");
-    auto dev = gfx::Device::create(ctx->instance, sel ? sel : "auto");
+    auto dev = engine::Device::create(ctx->instance, sel ? sel : "auto");
     if (!dev) {
       std::fprintf(stderr, "error: %s\n", dev.error().c_str());
       std::exit(1);
     }
     ctx->device = std::move(dev).value();
     ctx->defaultAvatar = avatar::buildDefaultAvatar();
-    gfx::TestAvatarOptions denseOptions;
+    test::TestAvatarOptions denseOptions;
     denseOptions.rings = 200;
     denseOptions.segments = 48;
-    ctx->dense = gfx::makeTestAvatar(denseOptions);
+    ctx->dense = test::makeTestAvatar(denseOptions);
     if (const auto path = test::sharedAsset("CesiumMan.glb"); !path.empty()) {
       if (auto a = avatar::loadAvatarFile(path)) {
         ctx->cesium = std::move(a).value();
@@ -79,25 +79,25 @@ const avatar::AvatarAsset* avatarNamed(const std::string& name) {
 }
 
 struct Setup {
-  std::unique_ptr<gfx::AvatarRenderer> renderer;
+  std::unique_ptr<engine::AvatarRenderer> renderer;
   avatar::SkeletonPose pose;
-  std::vector<gfx::Camera> cameras;
-  gfx::FrameOptions options;
+  std::vector<engine::Camera> cameras;
+  engine::FrameOptions options;
 };
 
 bool makeSetup(benchmark::State& state, const std::string& avatarName, uint32_t w, uint32_t h, bool stereo,
-               gfx::StereoMode mode, Setup& s) {
+               engine::StereoMode mode, Setup& s) {
   const auto* asset = avatarNamed(avatarName);
   if (!asset) {
     state.SkipWithError(("avatar '" + avatarName + "' not available").c_str());
     return false;
   }
-  gfx::AvatarRendererOptions o;
+  engine::AvatarRendererOptions o;
   o.width = w;
   o.height = h;
   o.stereo = stereo;
   o.stereoMode = mode;
-  auto r = gfx::AvatarRenderer::create(*context().device, *asset, o);
+  auto r = engine::AvatarRenderer::create(*context().device, *asset, o);
   if (!r) {
     state.SkipWithError(r.error().c_str());
     return false;
@@ -105,10 +105,10 @@ bool makeSetup(benchmark::State& state, const std::string& avatarName, uint32_t 
   s.renderer = std::move(r).value();
   s.pose = avatar::SkeletonPose::rest(asset->skeleton);
   s.options.gizmos = s.renderer->trackingGizmos(s.pose);
-  const gfx::Camera orbit = s.renderer->orbitAround(s.pose, 0.5f, 0.15f);
+  const engine::Camera orbit = s.renderer->orbitAround(s.pose, 0.5f, 0.15f);
   if (stereo) {
     // Headset-like per-eye fovs (asymmetric), eyes 64 mm apart at the orbit camera.
-    const auto eyes = gfx::stereoCameras(glm::inverse(orbit.view), 0.064f, {-0.90f, 0.75f, 0.80f, -0.85f},
+    const auto eyes = engine::stereoCameras(glm::inverse(orbit.view), 0.064f, {-0.90f, 0.75f, 0.80f, -0.85f},
                                          {-0.75f, 0.90f, 0.80f, -0.85f});
     s.cameras.assign(eyes.begin(), eyes.end());
   } else {
@@ -122,7 +122,7 @@ double seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_cloc
 }
 
 void frame(benchmark::State& state, const std::string& avatarName, uint32_t w, uint32_t h, bool cold, bool stereo,
-           gfx::StereoMode mode, bool readback) {
+           engine::StereoMode mode, bool readback) {
   state.counters["triangles"] = avatarNamed(avatarName) ? double(avatarNamed(avatarName)->mesh.triangleCount()) : 0.0;
   if (cold) {
     // Each iteration: a fresh renderer (not timed), then its first frame (timed).
@@ -165,17 +165,17 @@ void registerAll() {
         const std::string name = std::string("BM_Frame/") + a + "/" + std::to_string(sz.w) + "x" + std::to_string(sz.h) +
                                  (cold ? "/cold" : "/warm");
         auto* b = benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& st) {
-          frame(st, a, sz.w, sz.h, cold, false, gfx::kDefaultStereoMode, false);
+          frame(st, a, sz.w, sz.h, cold, false, engine::kDefaultStereoMode, false);
         });
         b->UseManualTime()->Unit(benchmark::kMillisecond);
         if (cold) b->Iterations(3);
         else b->MinTime(1.0)->Repetitions(3)->ReportAggregatesOnly(true);
       }
   for (const char* a : {"default", "cesiumman"})
-    for (auto mode : {gfx::StereoMode::Multiview, gfx::StereoMode::TwoPass})
+    for (auto mode : {engine::StereoMode::Multiview, engine::StereoMode::TwoPass})
       for (bool cold : {true, false}) {
         const std::string name = std::string("BM_Stereo/") + a + "/2x1440x1584/" +
-                                 (mode == gfx::StereoMode::Multiview ? "multiview" : "twopass") +
+                                 (mode == engine::StereoMode::Multiview ? "multiview" : "twopass") +
                                  (cold ? "/cold" : "/warm");
         auto* b = benchmark::RegisterBenchmark(name.c_str(), [=](benchmark::State& st) {
           frame(st, a, 1440, 1584, cold, true, mode, false);
@@ -185,7 +185,7 @@ void registerAll() {
         else b->MinTime(1.0)->Repetitions(3)->ReportAggregatesOnly(true);
       }
   auto* rb = benchmark::RegisterBenchmark("BM_Readback/cesiumman/1280x720", [](benchmark::State& st) {
-    frame(st, "cesiumman", 1280, 720, false, false, gfx::kDefaultStereoMode, true);
+    frame(st, "cesiumman", 1280, 720, false, false, engine::kDefaultStereoMode, true);
   });
   rb->UseManualTime()->Unit(benchmark::kMillisecond)->MinTime(1.0);
 }

@@ -2,13 +2,13 @@
 // full IkStage step on the sample humanoid with the real PIK solver.
 #include <benchmark/benchmark.h>
 
-#include "avatar/ik/sample_models.h"
+#include "tests/support/sample_models.h"
 #include "runtime/ik_stage.h"
 #include "runtime/pik_body_solver.h"
 #include "runtime/triple_buffer.h"
 #include "test_paths.h"
-#include "xr/tracking/bvh_source.h"
-#include "xr/tracking/synthetic_source.h"
+#include "tracking/bvh_source.h"
+#include "tracking/synthetic_source.h"
 
 using namespace embody;
 
@@ -63,7 +63,7 @@ BENCHMARK(BM_LoadCmuWalk)->Unit(benchmark::kMillisecond);
 // One runtime frame (filter, guard, PIK on the 61-dof sample humanoid, 6 tasks) with a 1 ms
 // budget, the hands following synthetic:reach.
 static void BM_IkStageSampleHumanoid(benchmark::State& state) {
-  auto model = std::make_shared<const ik::Model>(ik::sampleHumanoid().value());
+  auto model = std::make_shared<const ik::Model>(test::sampleHumanoid().value());
   runtime::PikBinding binding = runtime::PikBinding::byTaskNames(*model);
   binding.modelFromTracking = Eigen::Isometry3d(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()));
   ik::SolveOptions opts;

@@ -3,8 +3,8 @@
 // is that coupling costs no more per iteration than the uncoupled spine, despite the rows.
 #include <benchmark/benchmark.h>
 
-#include "avatar/ik/solver.h"
-#include "avatar/spine/spine_model.h"
+#include "ik/solver.h"
+#include "ik/spine/spine_model.h"
 
 namespace {
 
@@ -16,10 +16,10 @@ using namespace embody;
 // whole = false: kinematics + one priority pass with only the equality rows active, i.e. the
 // cost of the solve itself without the clamping loop (how many passes that takes depends on
 // how many bands and limits a pose touches).
-void iteration(benchmark::State& state, const spine::SpineDescription& d, bool coupled, bool whole = true) {
-  spine::SpineOptions o;
+void iteration(benchmark::State& state, const ik::spine::SpineDescription& d, bool coupled, bool whole = true) {
+  ik::spine::SpineOptions o;
   o.coupled = coupled;
-  auto s = spine::buildIsolatedSpine(d, o);
+  auto s = ik::spine::buildIsolatedSpine(d, o);
   if (!s) {
     state.SkipWithError(s.error().c_str());
     return;
@@ -46,17 +46,17 @@ void iteration(benchmark::State& state, const spine::SpineDescription& d, bool c
   state.counters["clamp_passes"] = data.report().clamp_passes;
 }
 
-void BM_IterationFullCoupled(benchmark::State& s) { iteration(s, spine::defaultFullSpine(), true); }
-void BM_IterationFullUncoupled(benchmark::State& s) { iteration(s, spine::defaultFullSpine(), false); }
-void BM_IterationSimplifiedCoupled(benchmark::State& s) { iteration(s, spine::defaultSimplifiedSpine(), true); }
-void BM_IterationSimplifiedUncoupled(benchmark::State& s) { iteration(s, spine::defaultSimplifiedSpine(), false); }
+void BM_IterationFullCoupled(benchmark::State& s) { iteration(s, ik::spine::defaultFullSpine(), true); }
+void BM_IterationFullUncoupled(benchmark::State& s) { iteration(s, ik::spine::defaultFullSpine(), false); }
+void BM_IterationSimplifiedCoupled(benchmark::State& s) { iteration(s, ik::spine::defaultSimplifiedSpine(), true); }
+void BM_IterationSimplifiedUncoupled(benchmark::State& s) { iteration(s, ik::spine::defaultSimplifiedSpine(), false); }
 
-void BM_PriorityPassFullCoupled(benchmark::State& s) { iteration(s, spine::defaultFullSpine(), true, false); }
-void BM_PriorityPassFullUncoupled(benchmark::State& s) { iteration(s, spine::defaultFullSpine(), false, false); }
+void BM_PriorityPassFullCoupled(benchmark::State& s) { iteration(s, ik::spine::defaultFullSpine(), true, false); }
+void BM_PriorityPassFullUncoupled(benchmark::State& s) { iteration(s, ik::spine::defaultFullSpine(), false, false); }
 
 void BM_BuildFullCoupledModel(benchmark::State& state) {
   for (auto _ : state) {
-    auto s = spine::buildIsolatedSpine(spine::defaultFullSpine());
+    auto s = ik::spine::buildIsolatedSpine(ik::spine::defaultFullSpine());
     benchmark::DoNotOptimize(s.ok());
   }
 }

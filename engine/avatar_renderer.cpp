@@ -5,7 +5,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <string>
 
-namespace embody::gfx {
+namespace embody::engine {
 
 namespace {
 
@@ -242,4 +242,4 @@ Result<std::array<avatar::Image, 2>> AvatarRenderer::renderStereo(const avatar::
   return std::array<avatar::Image, 2>{target_.pixels(0), target_.pixels(1)};
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -14,7 +14,7 @@
 #include "engine/overlay.h"
 #include "engine/renderer.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 enum class ViewKind { ThirdPerson, FirstPerson };
 // Stereo pair: one multiview pass into a 2-layer image, or one pass per eye. On lavapipe both
@@ -98,4 +98,4 @@ class AvatarRenderer {
   glm::vec3 eyeOffsetInHead_{0.0f};  // eye position in the head joint's rest frame
 };
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 
-namespace embody::gfx {
+namespace embody::engine {
 
 FovAngles FovAngles::symmetric(float verticalFovRadians, float aspect) {
   const float halfV = verticalFovRadians * 0.5f;
@@ -64,4 +64,4 @@ float framingDistance(float radius, const FovAngles& fov, float margin) {
   return margin * radius / std::sin(std::max(halfAngle, 0.05f));
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -7,7 +7,7 @@
 #include <glm/glm.hpp>
 #include <span>
 
-namespace embody::gfx {
+namespace embody::engine {
 
 // Same meaning and signs as XrFovf: angleLeft and angleDown are usually negative.
 struct FovAngles {
@@ -55,4 +55,4 @@ Bounds boundsOf(std::span<const glm::vec3> points);
 // Distance at which a sphere of `radius` fills a view of fov `fov` (the narrower axis), with margin.
 float framingDistance(float radius, const FovAngles& fov, float margin = 1.1f);
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cstring>
 
-namespace embody::gfx {
+namespace embody::engine {
 
 namespace {
 void keyCallback(GLFWwindow* w, int key, int, int action, int) {
@@ -315,4 +315,4 @@ Result<avatar::Image> DesktopWindow::takeScreenshot() {
   return img;
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

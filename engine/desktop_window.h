@@ -29,10 +29,10 @@
 #include "engine/renderer.h"
 #include "engine/resources.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 // A VkDevice with the renderer's required features plus VK_KHR_swapchain, owned (destroyed with
-// this object, after the gfx::Device that adopts it).
+// this object, after the engine::Device that adopts it).
 class WindowDevice {
  public:
   static Result<std::unique_ptr<WindowDevice>> create(const Instance& instance, std::string_view selector = "");
@@ -115,4 +115,4 @@ class DesktopWindow {
   Keys keys_;
 };
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -4,7 +4,7 @@
 #include <cctype>
 #include <charconv>
 
-namespace embody::gfx {
+namespace embody::engine {
 
 const char* vkResultName(VkResult r) {
   switch (r) {
@@ -247,4 +247,4 @@ void Device::waitIdle() const {
   if (device_ != VK_NULL_HANDLE) vkDeviceWaitIdle(device_);
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

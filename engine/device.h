@@ -15,7 +15,7 @@
 #include "engine/instance.h"
 #include "engine/vk_handle.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 // Picks a physical device from `devices`. selector: "" or "auto" = best by type (discrete,
 // integrated, virtual, CPU) among devices with Vulkan >= 1.3; a decimal number = that index;
@@ -95,4 +95,4 @@ class Device {
   UniqueCommandPool oneShotPool_;
 };
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -5,7 +5,7 @@
 
 #include "engine/renderer.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 std::string GpuAvatar::validate(const avatar::AvatarAsset& asset) {
   const auto& mesh = asset.mesh;
@@ -162,4 +162,4 @@ Result<std::unique_ptr<GpuAvatar>> Renderer::upload(const avatar::AvatarAsset& a
   return a;
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -8,7 +8,7 @@
 #include "avatar/avatar_asset.h"
 #include "engine/resources.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 struct GpuMaterial {
   glm::vec4 baseColorFactor{1.0f};
@@ -62,4 +62,4 @@ class GpuAvatar {
   size_t triangles_ = 0;
 };
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cstdlib>
 
-namespace embody::gfx {
+namespace embody::engine {
 
 Status writePng(const std::string& path, const avatar::Image& image) {
   if (image.width <= 0 || image.height <= 0 || image.rgba.size() != size_t(image.width) * image.height * 4)
@@ -55,4 +55,4 @@ ImageDifference compareImages(const avatar::Image& actual, const avatar::Image& 
   return d;
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

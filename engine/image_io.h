@@ -6,7 +6,7 @@
 #include "avatar/avatar_asset.h"
 #include "core/result.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 Status writePng(const std::string& path, const avatar::Image& image);
 Result<avatar::Image> readPng(const std::string& path);
@@ -23,4 +23,4 @@ struct ImageDifference {
 
 ImageDifference compareImages(const avatar::Image& actual, const avatar::Image& expected, int tolerance);
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

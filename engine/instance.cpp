@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <cstring>
 
-namespace embody::gfx {
+namespace embody::engine {
 
 namespace {
 constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
@@ -192,4 +192,4 @@ std::string PhysicalDeviceInfo::apiVersionString() const {
          std::to_string(VK_API_VERSION_PATCH(apiVersion));
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

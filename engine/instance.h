@@ -11,7 +11,7 @@
 
 #include "core/result.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 struct ValidationMessage {
   VkDebugUtilsMessageSeverityFlagBitsEXT severity;
@@ -85,4 +85,4 @@ class Instance {
   bool owned_ = false;
 };
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

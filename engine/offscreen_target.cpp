@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cstring>
 
-namespace embody::gfx {
+namespace embody::engine {
 
 Result<OffscreenTarget> OffscreenTarget::create(const Device& device, const OffscreenDesc& desc) {
   if (desc.width == 0 || desc.height == 0 || desc.layers == 0 || desc.layers > 2)
@@ -88,4 +88,4 @@ avatar::Image OffscreenTarget::pixels(uint32_t layer) const {
   return img;
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -8,7 +8,7 @@
 #include "engine/renderer.h"
 #include "engine/resources.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 struct OffscreenDesc {
   uint32_t width = 256, height = 256;
@@ -45,4 +45,4 @@ class OffscreenTarget {
   uint32_t rowPitch_ = 0;
 };
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

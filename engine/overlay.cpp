@@ -1,6 +1,6 @@
 #include "engine/overlay.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 void appendGizmo(std::vector<LineVertex>& lines, const Gizmo& g) {
   const glm::vec3 o(g.pose[3]);
@@ -36,4 +36,4 @@ void appendSkeleton(std::vector<LineVertex>& lines, const avatar::Skeleton& skel
   }
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

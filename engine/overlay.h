@@ -6,7 +6,7 @@
 #include "avatar/skeleton.h"
 #include "engine/renderer.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 struct Gizmo {
   glm::mat4 pose{1.0f};               // world pose of the tracked target (rotation + position)
@@ -20,4 +20,4 @@ void appendGizmo(std::vector<LineVertex>& lines, const Gizmo& gizmo);
 void appendSkeleton(std::vector<LineVertex>& lines, const avatar::Skeleton& skeleton,
                     const std::vector<glm::mat4>& globals, const glm::vec4& color = {1.0f, 0.9f, 0.2f, 1.0f});
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

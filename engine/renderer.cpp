@@ -3,7 +3,7 @@
 #include <cstring>
 #include <string>
 
-namespace embody::gfx {
+namespace embody::engine {
 
 namespace {
 
@@ -438,4 +438,4 @@ void Renderer::waitIdle() {
   for (auto& f : frames_) f.retired.releaseAll();
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -23,7 +23,7 @@
 #include "engine/gpu_avatar.h"
 #include "engine/resources.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 constexpr uint32_t kMaxViewsPerFrame = 8;  // matches kMaxViews in shaders/common.glsl
 constexpr uint32_t kFramesInFlight = 2;
@@ -167,4 +167,4 @@ class Renderer {
   RendererStats stats_;
 };
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -9,7 +9,7 @@
 #include "shaders/skinned_frag.spv.h"
 #include "shaders/skinned_vert.spv.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 namespace {
 
@@ -174,4 +174,4 @@ Result<const Renderer::PipelineSet*> Renderer::pipelines(const PipelineKey& key)
   return &pipelines_.emplace(key, std::move(set)).first->second;
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -3,7 +3,7 @@
 #include <cstring>
 #include <string>
 
-namespace embody::gfx {
+namespace embody::engine {
 
 namespace {
 
@@ -263,4 +263,4 @@ Status Uploader::flush() {
   return status;
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

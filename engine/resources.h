@@ -11,7 +11,7 @@
 #include "engine/device.h"
 #include "engine/vk_handle.h"
 
-namespace embody::gfx {
+namespace embody::engine {
 
 enum class MemoryUse {
   DeviceLocal,  // filled through the staging Uploader
@@ -120,4 +120,4 @@ std::span<const std::byte> asBytes(const std::vector<T>& v) {
   return std::as_bytes(std::span<const T>(v));
 }
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-namespace embody::gfx {
+namespace embody::engine {
 
 // Owns one handle created from `device`; destroys it with Destroy (vkDestroyX / vkFreeMemory all
 // share the (VkDevice, T, const VkAllocationCallbacks*) signature).
@@ -82,4 +82,4 @@ class RetireQueue {
 // Throws nothing: turns a VkResult into a readable message for Error{}.
 const char* vkResultName(VkResult r);
 
-}  // namespace embody::gfx
+}  // namespace embody::engine

@@ -1,6 +1,6 @@
 #pragma once
 // The runtime's BodySolver on a real avatar: the IK body model (avatar/body) with the PIK solver
-// (avatar/ik), tasks from the tracker layout (task_layout.h), calibration from the user's height,
+// (ik), tasks from the tracker layout (task_layout.h), calibration from the user's height,
 // procedural stepping in three-point mode (foot_planner.h), and retargeting onto the skeleton.
 //
 //   auto solver = AvatarBodySolver::create(avatar, options);   // builds the model, calibrates
@@ -52,7 +52,7 @@ struct AvatarBodyOptions {
   // A tracked pelvis steers the trunk over the ground at the lowest level (it yields to the
   // head and hands whenever the user's proportions differ from the avatar's).
   bool pelvisRow = true;
-  // The coupled spine (avatar/spine, Raunhardt & Boulic 2008; default) or one uncoupled ball
+  // The coupled spine (ik/spine, Raunhardt & Boulic 2008; default) or one uncoupled ball
   // joint per spine site with its vertebrae's summed ranges (the escape hatch).
   bool coupledSpine = true;
   // ik::SolveOptions::max_level_step for this solver (the per-level trust region). Smaller than

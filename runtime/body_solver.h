@@ -2,13 +2,13 @@
 // The seam between the runtime and an IK solver. The runtime owns timing (budget, deadline,
 // clock), the tracking-loss policy and the hand-off; a BodySolver turns guarded tracker targets
 // into a skeleton pose before a deadline. The PIK solver with the avatar's body model
-// (avatar/ik, avatar/body) is adapted to this interface where they are integrated; tests use
+// (ik, avatar/body) is adapted to this interface where they are integrated; tests use
 // fakes whose cost is simulated on a ManualClock.
 #include <array>
 
 #include "avatar/skeleton.h"
 #include "runtime/clock.h"
-#include "xr/tracking/tracking_guard.h"
+#include "tracking/tracking_guard.h"
 
 namespace embody::runtime {
 

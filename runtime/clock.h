@@ -1,13 +1,13 @@
 #pragma once
 // Time for the runtime. One clock abstraction for the runtime and the IK solver: ik::Clock
-// (avatar/ik/solver.h, std::chrono::steady_clock time points), injectable so budgets and
+// (ik/solver.h, std::chrono::steady_clock time points), injectable so budgets and
 // deadlines are tested deterministically. Adds a thread-safe manual clock for tests and
 // IterationBudget, which lets an iterative solver stop *before* its deadline instead of after it.
 #include <atomic>
 #include <chrono>
 #include <cstdint>
 
-#include "avatar/ik/solver.h"
+#include "ik/solver.h"
 
 namespace embody::runtime {
 

@@ -6,7 +6,7 @@
 #include <nlohmann/json_fwd.hpp>
 #include <vector>
 
-#include "xr/tracking/tracking_guard.h"
+#include "tracking/tracking_guard.h"
 
 namespace embody::runtime {
 

@@ -5,7 +5,7 @@
 #include "avatar/skeleton.h"
 #include "runtime/body_solver.h"
 #include "runtime/frame_stats.h"
-#include "xr/tracking/one_euro_filter.h"
+#include "tracking/one_euro_filter.h"
 
 namespace embody::runtime {
 

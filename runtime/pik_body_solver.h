@@ -1,5 +1,5 @@
 #pragma once
-// The runtime's BodySolver on top of the prioritized IK solver (avatar/ik): guarded tracker
+// The runtime's BodySolver on top of the prioritized IK solver (ik): guarded tracker
 // targets become task targets, the solve runs warm-started against the frame's deadline, and an
 // optional writer turns the solved configuration into the avatar's SkeletonPose (retargeting,
 // owned by the body model).
@@ -12,8 +12,8 @@
 #include <functional>
 #include <memory>
 
-#include "avatar/ik/model.h"
-#include "avatar/ik/solver.h"
+#include "ik/model.h"
+#include "ik/solver.h"
 #include "runtime/body_solver.h"
 
 namespace embody::runtime {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "xr/tracking/tracking_guard.h"
+#include "tracking/tracking_guard.h"
 
 namespace embody::runtime {
 

@@ -5,7 +5,7 @@
 #include <array>
 #include <cmath>
 
-#include "avatar/spine/spine_model.h"
+#include "ik/spine/spine_model.h"
 
 namespace embody::avatar {
 namespace {
@@ -261,7 +261,7 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
     return id;
   };
 
-  // The coupled spine (Raunhardt & Boulic 2008, avatar/spine) laid onto the avatar's spine
+  // The coupled spine (Raunhardt & Boulic 2008, ik/spine) laid onto the avatar's spine
   // bones: one site per bone (split where a bone spans two regions, the pieces sharing its
   // pivot), or the default full / simplified descriptions for a bone-per-vertebra avatar. Each
   // site takes the coupling rows and ranges of the vertebrae it stands for; the head (Occ-C1) is
@@ -276,14 +276,14 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
     const SpineBone headSite = sites.back();
     if (headSite.endLevel != kVertebralJointCount)
       return Error{"spine: the head bone does not close the spine"};
-    spine::SpineDescription desc;
+    ik::spine::SpineDescription desc;
     std::vector<int> siteJoint;  // avatar joint of each description site
     if (perVertebra && options.spine != SpineMode::Simplified) {
-      desc = spine::defaultFullSpine();
+      desc = ik::spine::defaultFullSpine();
     } else if (perVertebra) {
-      desc = spine::defaultSimplifiedSpine();
+      desc = ik::spine::defaultSimplifiedSpine();
     } else {
-      std::vector<spine::SiteSpec> specs;
+      std::vector<ik::spine::SiteSpec> specs;
       const int regionEnd[] = {5, 17, 24};
       for (const SpineBone& sb : vertebral)
         for (int from = sb.firstLevel; from < sb.endLevel;) {
@@ -296,7 +296,7 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
                            true, true});
           from = to;
         }
-      auto d = spine::withSites(spine::defaultFullSpine(), specs);
+      auto d = ik::spine::withSites(ik::spine::defaultFullSpine(), specs);
       if (!d.ok()) return Error{"spine: " + d.error()};
       desc = std::move(d.value());
     }
@@ -328,8 +328,8 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
       rests[k] = (k == 0 ? world[static_cast<size_t>(body.hips)] : siteWorld[k - 1]).inverse() * siteWorld[k];
     }
     const size_t before = b.joints().size();
-    spine::SpineOptions so;
-    auto added = spine::appendSpine(b, desc, body.hips, rests, so);
+    ik::spine::SpineOptions so;
+    auto added = ik::spine::appendSpine(b, desc, body.hips, rests, so);
     if (!added.ok()) return Error{"spine: " + added.error()};
     // Book-keeping for the joints appendSpine added: pivot, rest rotation, masses.
     for (size_t id = before; id < b.joints().size(); ++id) {

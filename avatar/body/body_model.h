@@ -22,15 +22,15 @@
 // Segment masses and centres of mass: de Leva (1996) fractions scaled to the total mass,
 // centres along each segment towards its child pivot.
 //
-// The spine sites carry the coupled spine of avatar/spine (appendSpine on the avatar's own spine
+// The spine sites carry the coupled spine of ik/spine (appendSpine on the avatar's own spine
 // bones, see docs/avatars.md); `coupledSpine = false` gives one uncoupled Ball per site.
 #include <Eigen/Geometry>
 #include <string>
 #include <vector>
 
 #include "avatar/avatar_asset.h"
-#include "avatar/ik/model.h"
-#include "avatar/ik/solver.h"
+#include "ik/model.h"
+#include "ik/solver.h"
 #include "core/result.h"
 
 namespace embody::avatar {
@@ -46,7 +46,7 @@ struct BodyModelOptions {
   // user's size; retargeting divides the hips translation back, so the renderer draws the avatar
   // with this scale on its model matrix.
   double scale = 1.0;
-  // true: the coupled spine (avatar/spine: swing + torsion joints per site, coupling rows);
+  // true: the coupled spine (ik/spine: swing + torsion joints per site, coupling rows);
   // false: one uncoupled Ball joint per site with its vertebrae's summed ranges.
   bool coupledSpine = true;
 };

@@ -1,7 +1,7 @@
 #pragma once
 // BVH motion capture (Biovision Hierarchy): the skeleton (HIERARCHY: joints, OFFSETs, CHANNELS
 // in any order) and the MOTION frames, parsed into immutable data plus forward kinematics.
-// Import code only: the tracking side (xr/tracking/bvh_source.h) turns a clip into trackers.
+// Import code only: the tracking side (tracking/bvh_source.h) turns a clip into trackers.
 //
 // Robust against broken files: every error names the line; nothing is allocated beyond the
 // limits below, whatever the file declares.

@@ -27,7 +27,7 @@ size_t idx(HandJoint j) {
   return static_cast<size_t>(j);
 }
 
-// The headless runtime's synthetic hand (xr/runtime/poses.cpp, handJointsFromGrip) in its palm
+// The headless runtime's synthetic hand (tools/xr_runtime/poses.cpp, handJointsFromGrip) in its palm
 // frame, with the bend per finger joint given directly (the runtime's curl c is 12 + 60 c
 // degrees), then moved by a rigid transform: only the joints' relative placement may matter.
 TrackedHandJoints syntheticHand(bool left, float bendDeg, const glm::quat& q = glm::quat(1, 0, 0, 0),
@@ -334,7 +334,7 @@ TEST_CASE("a curled tracked hand (the headless runtime's curl) bends the avatar'
   const AvatarAsset& a = fingerAvatar();
   const FingerRig rig = buildFingerRig(a.skeleton, a.humanoid);
   const float curl = GENERATE(0.0f, 0.5f, 1.0f);
-  const float bend = 12.0f + 60.0f * curl;  // degrees per finger joint (xr/runtime/poses.cpp)
+  const float bend = 12.0f + 60.0f * curl;  // degrees per finger joint (tools/xr_runtime/poses.cpp)
   INFO("curl " << curl);
   const glm::quat q = glm::angleAxis(-0.7f, glm::normalize(glm::vec3(1.0f, 0.2f, 0.1f)));
   const TrackedHandJoints left = syntheticHand(true, bend, q, {-0.2f, 1.3f, -0.3f});

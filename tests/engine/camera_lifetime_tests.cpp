@@ -20,9 +20,9 @@ glm::vec3 ndc(const glm::mat4& m, const glm::vec3& p) {
 }  // namespace
 
 TEST_CASE("projectionFromFov maps the asymmetric frustum edges to the Vulkan clip square", "[unit][camera]") {
-  const gfx::FovAngles fov{-0.9f, 0.6f, 0.7f, -0.8f};
+  const engine::FovAngles fov{-0.9f, 0.6f, 0.7f, -0.8f};
   const float n = 0.1f, f = 50.0f;
-  const glm::mat4 p = gfx::projectionFromFov(fov, n, f);
+  const glm::mat4 p = engine::projectionFromFov(fov, n, f);
   for (float z : {n, 1.0f, f}) {
     // Points on the left/right/up/down frustum planes at depth z (view looks down -Z).
     CHECK(ndc(p, {std::tan(fov.angleLeft) * z, 0.0f, -z}).x == Approx(-1.0f).margin(1e-5));
@@ -33,23 +33,23 @@ TEST_CASE("projectionFromFov maps the asymmetric frustum edges to the Vulkan cli
   CHECK(ndc(p, {0.0f, 0.0f, -n}).z == Approx(0.0f).margin(1e-6));
   CHECK(ndc(p, {0.0f, 0.0f, -f}).z == Approx(1.0f).margin(1e-5));
 
-  const auto sym = gfx::FovAngles::symmetric(glm::radians(60.0f), 2.0f);
+  const auto sym = engine::FovAngles::symmetric(glm::radians(60.0f), 2.0f);
   CHECK(sym.angleUp == Approx(glm::radians(30.0f)));
   CHECK(std::tan(sym.angleRight) == Approx(2.0f * std::tan(sym.angleUp)));
 }
 
 TEST_CASE("orbit and stereo cameras sit where they should", "[unit][camera]") {
-  const gfx::FovAngles fov = gfx::FovAngles::symmetric(1.0f, 1.0f);
-  const gfx::Camera front = gfx::orbitCamera({0.0f, 1.0f, 0.0f}, 3.0f, 0.0f, 0.0f, fov);
+  const engine::FovAngles fov = engine::FovAngles::symmetric(1.0f, 1.0f);
+  const engine::Camera front = engine::orbitCamera({0.0f, 1.0f, 0.0f}, 3.0f, 0.0f, 0.0f, fov);
   CHECK(glm::length(front.position() - glm::vec3(0.0f, 1.0f, 3.0f)) < 1e-5f);  // yaw 0: from +Z
   const glm::vec3 target = ndc(front.viewProjection(), {0.0f, 1.0f, 0.0f});
   CHECK(std::abs(target.x) < 1e-5f);
   CHECK(std::abs(target.y) < 1e-5f);
-  const gfx::Camera above = gfx::orbitCamera({0.0f, 0.0f, 0.0f}, 2.0f, 0.0f, 0.5f, fov);
+  const engine::Camera above = engine::orbitCamera({0.0f, 0.0f, 0.0f}, 2.0f, 0.0f, 0.5f, fov);
   CHECK(above.position().y > 0.9f);  // positive pitch looks down from above
 
   const glm::mat4 head = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 1.6f, 0.0f));
-  const auto eyes = gfx::stereoCameras(head, 0.064f, fov, fov);
+  const auto eyes = engine::stereoCameras(head, 0.064f, fov, fov);
   CHECK(eyes[0].position().x == Approx(-0.032f));
   CHECK(eyes[1].position().x == Approx(0.032f));
   CHECK(eyes[0].position().y == Approx(1.6f));
@@ -63,9 +63,9 @@ TEST_CASE("retired objects live until their frame has retired", "[gpu][lifetime]
     std::shared_ptr<int> alive;
   };
   test::GpuContext ctx;
-  auto renderer = gfx::Renderer::create(*ctx.device);
+  auto renderer = engine::Renderer::create(*ctx.device);
   REQUIRE(renderer);
-  gfx::Renderer& r = **renderer;
+  engine::Renderer& r = **renderer;
   auto alive = std::make_shared<int>(1);
   std::weak_ptr<int> watch = alive;
 

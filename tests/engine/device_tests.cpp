@@ -5,15 +5,15 @@
 
 #include "engine/avatar_renderer.h"
 #include "engine/image_io.h"
-#include "engine/test_avatar.h"
+#include "tests/support/test_avatar.h"
 #include "engine_test_support.h"
 
 using namespace embody;
 
 namespace {
 
-gfx::PhysicalDeviceInfo fakeDevice(const char* name, VkPhysicalDeviceType type, uint32_t minor = 3) {
-  gfx::PhysicalDeviceInfo d;
+engine::PhysicalDeviceInfo fakeDevice(const char* name, VkPhysicalDeviceType type, uint32_t minor = 3) {
+  engine::PhysicalDeviceInfo d;
   d.name = name;
   d.type = type;
   d.apiVersion = VK_MAKE_API_VERSION(0, 1, minor, 0);
@@ -23,37 +23,37 @@ gfx::PhysicalDeviceInfo fakeDevice(const char* name, VkPhysicalDeviceType type, 
 }  // namespace
 
 TEST_CASE("device selection prefers discrete, then integrated, then lavapipe", "[unit][device]") {
-  const std::vector<gfx::PhysicalDeviceInfo> devices = {
+  const std::vector<engine::PhysicalDeviceInfo> devices = {
       fakeDevice("llvmpipe (LLVM 15.0.6, 256 bits)", VK_PHYSICAL_DEVICE_TYPE_CPU),
       fakeDevice("Intel(R) UHD Graphics 630", VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU),
       fakeDevice("NVIDIA GeForce RTX 4090", VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU),
       fakeDevice("Old Discrete", VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU, 2)};
-  CHECK(gfx::choosePhysicalDevice(devices, "").value() == 2);
-  CHECK(gfx::choosePhysicalDevice(devices, "auto").value() == 2);
-  CHECK(gfx::choosePhysicalDevice(devices, "lavapipe").value() == 0);
-  CHECK(gfx::choosePhysicalDevice(devices, "cpu").value() == 0);
-  CHECK(gfx::choosePhysicalDevice(devices, "intel").value() == 1);
-  CHECK(gfx::choosePhysicalDevice(devices, "1").value() == 1);
-  const std::vector<gfx::PhysicalDeviceInfo> noDiscrete = {devices[0], devices[1]};
-  CHECK(gfx::choosePhysicalDevice(noDiscrete, "").value() == 1);
-  const std::vector<gfx::PhysicalDeviceInfo> onlyCpu = {devices[0], devices[3]};
-  CHECK(gfx::choosePhysicalDevice(onlyCpu, "").value() == 0);  // the 1.2 discrete GPU is skipped
+  CHECK(engine::choosePhysicalDevice(devices, "").value() == 2);
+  CHECK(engine::choosePhysicalDevice(devices, "auto").value() == 2);
+  CHECK(engine::choosePhysicalDevice(devices, "lavapipe").value() == 0);
+  CHECK(engine::choosePhysicalDevice(devices, "cpu").value() == 0);
+  CHECK(engine::choosePhysicalDevice(devices, "intel").value() == 1);
+  CHECK(engine::choosePhysicalDevice(devices, "1").value() == 1);
+  const std::vector<engine::PhysicalDeviceInfo> noDiscrete = {devices[0], devices[1]};
+  CHECK(engine::choosePhysicalDevice(noDiscrete, "").value() == 1);
+  const std::vector<engine::PhysicalDeviceInfo> onlyCpu = {devices[0], devices[3]};
+  CHECK(engine::choosePhysicalDevice(onlyCpu, "").value() == 0);  // the 1.2 discrete GPU is skipped
 
-  auto bad = gfx::choosePhysicalDevice(devices, "radeon");
+  auto bad = engine::choosePhysicalDevice(devices, "radeon");
   REQUIRE_FALSE(bad);
   CHECK_THAT(bad.error(), Catch::Contains("NVIDIA GeForce RTX 4090"));  // lists what exists
-  CHECK_FALSE(gfx::choosePhysicalDevice(devices, "7"));
-  CHECK_FALSE(gfx::choosePhysicalDevice({}, ""));
+  CHECK_FALSE(engine::choosePhysicalDevice(devices, "7"));
+  CHECK_FALSE(engine::choosePhysicalDevice({}, ""));
 }
 
 TEST_CASE("a device is created on lavapipe with the 1.3 features", "[gpu][device]") {
   test::TestInstance vk;
-  auto d = gfx::Device::create(vk.instance(), "lavapipe");
+  auto d = engine::Device::create(vk.instance(), "lavapipe");
   REQUIRE(d);
   CHECK((*d)->owned());
   CHECK((*d)->info().type == VK_PHYSICAL_DEVICE_TYPE_CPU);
   CHECK_THAT((*d)->driverString(), Catch::Contains("llvmpipe"));
-  CHECK(gfx::missingRequiredFeatures((*d)->physical()).empty());
+  CHECK(engine::missingRequiredFeatures((*d)->physical()).empty());
   CHECK((*d)->supportsSamples(VK_SAMPLE_COUNT_4_BIT));
 }
 
@@ -64,7 +64,7 @@ TEST_CASE("a device is created on lavapipe with the 1.3 features", "[gpu][device
 TEST_CASE("an adopted device renders into externally owned images", "[gpu][device][xr]") {
   test::TestInstance vk;
   const VkPhysicalDevice physical = vk.lavapipe();
-  gfx::RequiredDeviceFeatures features;
+  engine::RequiredDeviceFeatures features;
   const float priority = 1.0f;
   VkDeviceQueueCreateInfo q{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
   q.queueFamilyIndex = 0;
@@ -77,33 +77,33 @@ TEST_CASE("an adopted device renders into externally owned images", "[gpu][devic
   VkDevice rawDevice = VK_NULL_HANDLE;
   REQUIRE(vkCreateDevice(physical, &dci, nullptr, &rawDevice) == VK_SUCCESS);
 
-  const auto asset = gfx::makeTestAvatar();
-  const auto pose = gfx::bentTestPose(asset.skeleton, 0.2f);
+  const auto asset = test::makeTestAvatar();
+  const auto pose = test::bentTestPose(asset.skeleton, 0.2f);
   avatar::Image external[2], reference[2];
   {
-    auto device = gfx::Device::adopt({vk.handle(), physical, rawDevice, 0, 0});
+    auto device = engine::Device::adopt({vk.handle(), physical, rawDevice, 0, 0});
     REQUIRE(device);
     CHECK_FALSE((*device)->owned());
     const uint32_t w = 96, h = 104;
 
     // The "swapchain" image and a depth image, owned outside the renderer.
-    gfx::ImageDesc cd;
+    engine::ImageDesc cd;
     cd.extent = {w, h};
     cd.format = VK_FORMAT_B8G8R8A8_SRGB;
     cd.layers = 2;
     cd.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-    auto color = gfx::Image::create(**device, cd);
-    gfx::ImageDesc dd = cd;
+    auto color = engine::Image::create(**device, cd);
+    engine::ImageDesc dd = cd;
     dd.format = VK_FORMAT_D32_SFLOAT;
     dd.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
-    auto depth = gfx::Image::create(**device, dd);
+    auto depth = engine::Image::create(**device, dd);
     REQUIRE(color);
     REQUIRE(depth);
-    auto readback = gfx::Buffer::create(**device, VkDeviceSize(w) * h * 4 * 2, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                        gfx::MemoryUse::HostReadback);
+    auto readback = engine::Buffer::create(**device, VkDeviceSize(w) * h * 4 * 2, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                        engine::MemoryUse::HostReadback);
     REQUIRE(readback);
 
-    auto renderer = gfx::Renderer::create(**device);
+    auto renderer = engine::Renderer::create(**device);
     REQUIRE(renderer);
     auto gpu = (*renderer)->upload(asset);
     REQUIRE(gpu);
@@ -112,11 +112,11 @@ TEST_CASE("an adopted device renders into externally owned images", "[gpu][devic
     avatar::computeSkinningPalette(asset, globals, palette);
     const glm::mat4 head = glm::inverse(glm::lookAt(glm::vec3(0.0f, 1.3f, 2.2f), glm::vec3(0.0f, 1.0f, 0.0f),
                                                     glm::vec3(0.0f, 1.0f, 0.0f)));
-    const auto eyes = gfx::stereoCameras(head, 0.064f, gfx::FovAngles{-0.9f, 0.7f, 0.8f, -0.85f},
-                                         gfx::FovAngles{-0.7f, 0.9f, 0.8f, -0.85f});
+    const auto eyes = engine::stereoCameras(head, 0.064f, engine::FovAngles{-0.9f, 0.7f, 0.8f, -0.85f},
+                                         engine::FovAngles{-0.7f, 0.9f, 0.8f, -0.85f});
 
     REQUIRE((*renderer)->beginFrame());
-    gfx::SceneFrame scene;
+    engine::SceneFrame scene;
     scene.avatar = gpu->get();
     scene.palette = palette;
     REQUIRE((*renderer)->setScene(scene));
@@ -133,19 +133,19 @@ TEST_CASE("an adopted device renders into externally owned images", "[gpu][devic
       vci.format = dd.format;
       vci.subresourceRange = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, eye, 1};
       REQUIRE(vkCreateImageView(rawDevice, &vci, nullptr, &dv) == VK_SUCCESS);
-      gfx::PassTarget t;
+      engine::PassTarget t;
       t.color = {color->handle(), cv, cd.format, {w, h}, eye, 1, VK_IMAGE_LAYOUT_UNDEFINED,
                  VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
-      t.depth = gfx::TargetImage{depth->handle(), dv, dd.format, {w, h}, eye, 1, VK_IMAGE_LAYOUT_UNDEFINED,
+      t.depth = engine::TargetImage{depth->handle(), dv, dd.format, {w, h}, eye, 1, VK_IMAGE_LAYOUT_UNDEFINED,
                                  VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL};
       REQUIRE((*renderer)->drawPass(std::span(&eyes[eye], 1), t));
       // The views belong to this frame: release them when it has retired.
-      (*renderer)->retire(gfx::UniqueImageView(rawDevice, cv));
-      (*renderer)->retire(gfx::UniqueImageView(rawDevice, dv));
+      (*renderer)->retire(engine::UniqueImageView(rawDevice, cv));
+      (*renderer)->retire(engine::UniqueImageView(rawDevice, dv));
     }
     // What the compositor would read: copy both layers out (COLOR_ATTACHMENT -> TRANSFER_SRC).
     const VkCommandBuffer cmd = (*renderer)->commandBuffer();
-    gfx::transitionImage(cmd, color->handle(), VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+    engine::transitionImage(cmd, color->handle(), VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
                          VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
     VkBufferImageCopy regions[2] = {};
     for (uint32_t eye = 0; eye < 2; ++eye) {
@@ -154,7 +154,7 @@ TEST_CASE("an adopted device renders into externally owned images", "[gpu][devic
       regions[eye].imageExtent = {w, h, 1};
     }
     vkCmdCopyImageToBuffer(cmd, color->handle(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, readback->handle(), 2, regions);
-    gfx::SubmitSync sync;
+    engine::SubmitSync sync;
     sync.waitForCompletion = true;
     REQUIRE((*renderer)->endFrame(sync));
     for (int eye = 0; eye < 2; ++eye) {
@@ -167,15 +167,15 @@ TEST_CASE("an adopted device renders into externally owned images", "[gpu][devic
     }
 
     // The same views through the high-level path on the same adopted device.
-    gfx::AvatarRendererOptions o;
+    engine::AvatarRendererOptions o;
     o.width = w;
     o.height = h;
     o.stereo = true;
-    o.stereoMode = gfx::StereoMode::TwoPass;
-    auto r = gfx::AvatarRenderer::create(**device, asset, o);
+    o.stereoMode = engine::StereoMode::TwoPass;
+    auto r = engine::AvatarRenderer::create(**device, asset, o);
     REQUIRE(r);
-    gfx::FrameOptions fo;
-    fo.clearColor = gfx::PassTarget{}.clearColor;
+    engine::FrameOptions fo;
+    fo.clearColor = engine::PassTarget{}.clearColor;
     auto pair = (*r)->renderStereo(pose, eyes, fo);
     REQUIRE(pair);
     reference[0] = (*pair)[0];
@@ -184,10 +184,10 @@ TEST_CASE("an adopted device renders into externally owned images", "[gpu][devic
   vkDestroyDevice(rawDevice, nullptr);
 
   for (int eye = 0; eye < 2; ++eye) {
-    const auto d = gfx::compareImages(external[eye], reference[eye], 1);
+    const auto d = engine::compareImages(external[eye], reference[eye], 1);
     CHECK(d.failingPixels == 0);
   }
-  CHECK(gfx::compareImages(external[0], external[1], 5).failingPixels > 50);
+  CHECK(engine::compareImages(external[0], external[1], 5).failingPixels > 50);
 }
 
 TEST_CASE("image comparison counts pixels beyond the tolerance and marks them", "[unit][image]") {
@@ -198,7 +198,7 @@ TEST_CASE("image comparison counts pixels beyond the tolerance and marks them", 
   avatar::Image b = a;
   b.rgba[0] = 105;   // within 5
   b.rgba[4 * 3 + 1] = 94;  // pixel 3, off by 6
-  const auto d = gfx::compareImages(a, b, 5);
+  const auto d = engine::compareImages(a, b, 5);
   CHECK(d.sameSize);
   CHECK(d.failingPixels == 1);
   CHECK(d.maxChannelDelta == 6);
@@ -207,5 +207,5 @@ TEST_CASE("image comparison counts pixels beyond the tolerance and marks them", 
   avatar::Image c = a;
   c.width = 2;
   c.height = 4;
-  CHECK_FALSE(gfx::compareImages(a, c, 5).sameSize);
+  CHECK_FALSE(engine::compareImages(a, c, 5).sameSize);
 }

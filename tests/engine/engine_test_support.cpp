@@ -12,7 +12,7 @@
 namespace embody::test {
 
 GpuContext::GpuContext() {
-  auto d = gfx::Device::create(vk.instance(), vk.lavapipe());
+  auto d = engine::Device::create(vk.instance(), vk.lavapipe());
   if (!d) FAIL("could not create a lavapipe device: " << d.error());
   device = std::move(d).value();
 }
@@ -33,12 +33,12 @@ void checkGolden(const std::string& name, const avatar::Image& image, const std:
   const fs::path golden = fs::path(kSourceDir) / "tests" / "golden" / (name + ".png");
   const fs::path driverFile = fs::path(kSourceDir) / "tests" / "golden" / (name + ".driver.txt");
   if (const char* u = std::getenv("EMBODY_UPDATE_GOLDENS"); u && std::string(u) == "1") {
-    REQUIRE(gfx::writePng(golden.string(), image));
+    REQUIRE(engine::writePng(golden.string(), image));
     std::ofstream(driverFile) << driver << "\n";
     WARN("updated golden " << golden.string());
     return;
   }
-  auto expected = gfx::readPng(golden.string());
+  auto expected = engine::readPng(golden.string());
   if (!expected)
     FAIL("golden image missing: " << golden.string() << " (run scripts/update-goldens.sh to create it on purpose)");
   std::string recordedDriver;
@@ -46,14 +46,14 @@ void checkGolden(const std::string& name, const avatar::Image& image, const std:
     std::ifstream in(driverFile);
     std::getline(in, recordedDriver);
   }
-  const auto diff = gfx::compareImages(image, *expected, 5);
+  const auto diff = engine::compareImages(image, *expected, 5);
   const bool pass = diff.sameSize && diff.failingFraction() <= 0.001;
   if (!pass) {
     const fs::path outDir = fs::path(kBinaryDir) / "test-output" / "golden";
     fs::create_directories(outDir);
     const fs::path actualPath = outDir / (name + ".actual.png"), diffPath = outDir / (name + ".diff.png");
-    (void)gfx::writePng(actualPath.string(), image);
-    if (diff.sameSize) (void)gfx::writePng(diffPath.string(), diff.diff);
+    (void)engine::writePng(actualPath.string(), image);
+    if (diff.sameSize) (void)engine::writePng(diffPath.string(), diff.diff);
     FAIL("golden '" << name << "' differs: " << diff.failingPixels << " of " << diff.totalPixels
                     << " pixels beyond 5/255 (max delta " << diff.maxChannelDelta << ")"
                     << (diff.sameSize ? "" : ", size differs") << "\n  actual: " << actualPath.string()

@@ -7,7 +7,7 @@
 
 #include "avatar/avatar_asset.h"
 #include "engine/device.h"
-#include "support/vulkan_test_instance.h"
+#include "tests/support/vulkan_test_instance.h"
 
 namespace embody::test {
 
@@ -15,7 +15,7 @@ namespace embody::test {
 // (whose destructor fails the test on any validation message).
 struct GpuContext {
   TestInstance vk;
-  std::unique_ptr<gfx::Device> device;
+  std::unique_ptr<engine::Device> device;
   GpuContext();
 };
 

@@ -3,9 +3,9 @@
 #include <catch2/catch.hpp>
 
 #include "avatar/gltf/gltf_loader.h"
-#include "engine/gpu_skinning.h"
+#include "tests/support/gpu_skinning.h"
 #include "engine/renderer.h"
-#include "engine/test_avatar.h"
+#include "tests/support/test_avatar.h"
 #include "engine_test_support.h"
 #include "test_paths.h"
 
@@ -18,11 +18,11 @@ struct Compared {
 };
 
 Compared compareSkinning(test::GpuContext& ctx, const avatar::AvatarAsset& asset, const avatar::SkeletonPose& pose) {
-  auto renderer = gfx::Renderer::create(*ctx.device);
+  auto renderer = engine::Renderer::create(*ctx.device);
   REQUIRE(renderer);
   auto gpuAvatar = (*renderer)->upload(asset);
   REQUIRE(gpuAvatar);
-  auto skinner = gfx::GpuSkinner::create(*ctx.device);
+  auto skinner = test::GpuSkinner::create(*ctx.device);
   REQUIRE(skinner);
 
   std::vector<glm::mat4> globals, palette;
@@ -52,12 +52,12 @@ Compared compareSkinning(test::GpuContext& ctx, const avatar::AvatarAsset& asset
 
 TEST_CASE("GPU skinning equals CPU skinning on the bent procedural mesh", "[gpu][skinning]") {
   test::GpuContext ctx;
-  const auto asset = gfx::makeTestAvatar();
+  const auto asset = test::makeTestAvatar();
   // The mesh exercises the second influence set (JOINTS_1/WEIGHTS_1).
   size_t withFive = 0;
   for (const auto& v : asset.mesh.vertices) withFive += v.weights1.x > 1e-3f;
   CHECK(withFive > asset.mesh.vertices.size() / 4);
-  const auto c = compareSkinning(ctx, asset, gfx::bentTestPose(asset.skeleton, 0.35f));
+  const auto c = compareSkinning(ctx, asset, test::bentTestPose(asset.skeleton, 0.35f));
   CHECK(c.maxDisplacement > 0.3f);
   CHECK(c.maxPositionError < 1e-4f);
   CHECK(c.maxNormalError < 1e-4f);

@@ -8,7 +8,7 @@
 
 #include "engine/avatar_renderer.h"
 #include "engine/image_io.h"
-#include "engine/test_avatar.h"
+#include "tests/support/test_avatar.h"
 #include "engine_test_support.h"
 
 using namespace embody;
@@ -47,8 +47,8 @@ avatar::AvatarAsset quadsAsset(const std::vector<avatar::Material>& materials) {
   return a;
 }
 
-gfx::FrameOptions flatLight() {
-  gfx::FrameOptions fo;
+engine::FrameOptions flatLight() {
+  engine::FrameOptions fo;
   fo.grid = false;
   fo.lighting.lightColor = glm::vec3(0.0f);
   fo.lighting.skyColor = fo.lighting.groundColor = glm::vec3(1.0f);
@@ -60,20 +60,20 @@ gfx::FrameOptions flatLight() {
 
 TEST_CASE("readback walks the padded row pitch (width not a multiple of 64)", "[gpu][render]") {
   test::GpuContext ctx;
-  const auto asset = gfx::makeTestAvatar();
-  gfx::AvatarRendererOptions o;
+  const auto asset = test::makeTestAvatar();
+  engine::AvatarRendererOptions o;
   o.width = 100;  // 400-byte rows, read back with a 512-byte pitch
   o.height = 37;
-  auto r = gfx::AvatarRenderer::create(*ctx.device, asset, o);
+  auto r = engine::AvatarRenderer::create(*ctx.device, asset, o);
   REQUIRE(r);
   CHECK((*r)->target().rowPitchBytes() == 512);
-  gfx::FrameOptions fo;
+  engine::FrameOptions fo;
   fo.grid = false;
   fo.clearColor = glm::vec4(0.2f, 0.5f, 0.8f, 1.0f);
   // Camera looking away from the avatar: every pixel is the clear colour.
   const auto pose = avatar::SkeletonPose::rest(asset.skeleton);
-  const gfx::Camera away = gfx::orbitCamera(glm::vec3(0.0f, 1.0f, -20.0f), 5.0f, 3.14159f, 0.0f,
-                                            gfx::FovAngles::symmetric(0.8f, 100.0f / 37.0f));
+  const engine::Camera away = engine::orbitCamera(glm::vec3(0.0f, 1.0f, -20.0f), 5.0f, 3.14159f, 0.0f,
+                                            engine::FovAngles::symmetric(0.8f, 100.0f / 37.0f));
   auto img = (*r)->render(pose, away, fo);
   REQUIRE(img);
   REQUIRE(img->width == 100);
@@ -87,15 +87,15 @@ TEST_CASE("readback walks the padded row pitch (width not a multiple of 64)", "[
 
 TEST_CASE("frames are upright and first person hides the head", "[gpu][render]") {
   test::GpuContext ctx;
-  const auto asset = gfx::makeTestAvatar();
-  auto r = gfx::AvatarRenderer::create(*ctx.device, asset, {});
+  const auto asset = test::makeTestAvatar();
+  auto r = engine::AvatarRenderer::create(*ctx.device, asset, {});
   REQUIRE(r);
   const auto pose = avatar::SkeletonPose::rest(asset.skeleton);
-  const gfx::Camera cam = (*r)->orbitAround(pose, 0.0f, 0.0f);
-  gfx::FrameOptions fo;
+  const engine::Camera cam = (*r)->orbitAround(pose, 0.0f, 0.0f);
+  engine::FrameOptions fo;
   fo.grid = false;
   auto third = (*r)->render(pose, cam, fo);
-  fo.view = gfx::ViewKind::FirstPerson;
+  fo.view = engine::ViewKind::FirstPerson;
   auto first = (*r)->render(pose, cam, fo);
   REQUIRE(third);
   REQUIRE(first);
@@ -122,14 +122,14 @@ TEST_CASE("alpha modes: OPAQUE ignores alpha, MASK cuts, BLEND mixes", "[gpu][re
                                  {"mask", red, -1, avatar::AlphaMode::Mask, 0.5f, true},
                                  {"mask-kept", red, -1, avatar::AlphaMode::Mask, 0.3f, true},
                                  {"blend", red, -1, avatar::AlphaMode::Blend, 0.5f, true}});
-  gfx::AvatarRendererOptions o;
+  engine::AvatarRendererOptions o;
   o.width = 320;
   o.height = 160;
-  auto r = gfx::AvatarRenderer::create(*ctx.device, asset, o);
+  auto r = engine::AvatarRenderer::create(*ctx.device, asset, o);
   REQUIRE(r);
   const auto pose = avatar::SkeletonPose::rest(asset.skeleton);
-  const gfx::Camera cam = gfx::orbitCamera(glm::vec3(0.05f, 0.3f, 0.0f), 2.6f, 0.0f, 0.0f,
-                                           gfx::FovAngles::symmetric(glm::radians(40.0f), 2.0f));
+  const engine::Camera cam = engine::orbitCamera(glm::vec3(0.05f, 0.3f, 0.0f), 2.6f, 0.0f, 0.0f,
+                                           engine::FovAngles::symmetric(glm::radians(40.0f), 2.0f));
   auto img = (*r)->render(pose, cam, flatLight());
   REQUIRE(img);
   auto at = [&](float x) {  // pixel at the centre of the quad starting at world x
@@ -148,9 +148,9 @@ TEST_CASE("alpha modes: OPAQUE ignores alpha, MASK cuts, BLEND mixes", "[gpu][re
 
 TEST_CASE("bad avatars and poses give clear errors, not GPU faults", "[gpu][render]") {
   test::GpuContext ctx;
-  auto renderer = gfx::Renderer::create(*ctx.device);
+  auto renderer = engine::Renderer::create(*ctx.device);
   REQUIRE(renderer);
-  auto asset = gfx::makeTestAvatar();
+  auto asset = test::makeTestAvatar();
   SECTION("joint index outside the skeleton") {
     asset.mesh.vertices[10].joints1.y = 99;
     auto g = (*renderer)->upload(asset);
@@ -168,7 +168,7 @@ TEST_CASE("bad avatars and poses give clear errors, not GPU faults", "[gpu][rend
     REQUIRE_FALSE((*renderer)->upload(asset));
   }
   SECTION("NaN in the pose") {
-    auto r = gfx::AvatarRenderer::create(*ctx.device, asset, {});
+    auto r = engine::AvatarRenderer::create(*ctx.device, asset, {});
     REQUIRE(r);
     auto pose = avatar::SkeletonPose::rest(asset.skeleton);
     pose.local[3].translation.x = std::nanf("");
@@ -180,29 +180,29 @@ TEST_CASE("bad avatars and poses give clear errors, not GPU faults", "[gpu][rend
                        (*r)->orbitAround(avatar::SkeletonPose::rest(asset.skeleton)), {}));
   }
   SECTION("pose for another skeleton") {
-    auto r = gfx::AvatarRenderer::create(*ctx.device, asset, {});
+    auto r = engine::AvatarRenderer::create(*ctx.device, asset, {});
     REQUIRE(r);
     avatar::SkeletonPose pose;
     pose.local.resize(2);
-    REQUIRE_FALSE((*r)->render(pose, gfx::Camera{}, {}));
+    REQUIRE_FALSE((*r)->render(pose, engine::Camera{}, {}));
   }
 }
 
 TEST_CASE("frames in flight give the same image as a blocking frame", "[gpu][render]") {
   test::GpuContext ctx;
-  const auto asset = gfx::makeTestAvatar();
-  auto r = gfx::AvatarRenderer::create(*ctx.device, asset, {});
+  const auto asset = test::makeTestAvatar();
+  auto r = engine::AvatarRenderer::create(*ctx.device, asset, {});
   REQUIRE(r);
-  const auto pose = gfx::bentTestPose(asset.skeleton, 0.25f);
-  const gfx::Camera cam = (*r)->orbitAround(pose);
+  const auto pose = test::bentTestPose(asset.skeleton, 0.25f);
+  const engine::Camera cam = (*r)->orbitAround(pose);
   auto reference = (*r)->render(pose, cam, {});
   REQUIRE(reference);
-  gfx::FrameOptions fo;
+  engine::FrameOptions fo;
   for (int i = 0; i < 6; ++i) {
     // Growing line lists reallocate the per-frame buffers; old ones retire with their frame.
-    fo.gizmos.push_back(gfx::Gizmo{glm::translate(glm::mat4(1.0f), glm::vec3(float(i), 0.0f, -30.0f))});
-    const gfx::Camera c[1] = {cam};
-    REQUIRE((*r)->submitFrame(gfx::bentTestPose(asset.skeleton, 0.05f * float(i)), c, fo, false, false));
+    fo.gizmos.push_back(engine::Gizmo{glm::translate(glm::mat4(1.0f), glm::vec3(float(i), 0.0f, -30.0f))});
+    const engine::Camera c[1] = {cam};
+    REQUIRE((*r)->submitFrame(test::bentTestPose(asset.skeleton, 0.05f * float(i)), c, fo, false, false));
   }
   auto again = (*r)->render(pose, cam, {});
   REQUIRE(again);
@@ -212,24 +212,24 @@ TEST_CASE("frames in flight give the same image as a blocking frame", "[gpu][ren
 
 TEST_CASE("stereo by multiview equals stereo by two passes", "[gpu][render]") {
   test::GpuContext ctx;
-  const auto asset = gfx::makeTestAvatar();
-  const auto pose = gfx::bentTestPose(asset.skeleton, 0.2f);
+  const auto asset = test::makeTestAvatar();
+  const auto pose = test::bentTestPose(asset.skeleton, 0.2f);
   const glm::mat4 head = glm::inverse(glm::lookAt(glm::vec3(0.0f, 1.3f, 2.2f), glm::vec3(0.0f, 1.0f, 0.0f),
                                                   glm::vec3(0.0f, 1.0f, 0.0f)));
-  const gfx::FovAngles left{-0.9f, 0.7f, 0.8f, -0.85f}, right{-0.7f, 0.9f, 0.8f, -0.85f};
-  const auto eyes = gfx::stereoCameras(head, 0.064f, left, right);
+  const engine::FovAngles left{-0.9f, 0.7f, 0.8f, -0.85f}, right{-0.7f, 0.9f, 0.8f, -0.85f};
+  const auto eyes = engine::stereoCameras(head, 0.064f, left, right);
   // Grid off: lavapipe (Mesa 22.3) mis-clips lines crossing the near plane in the second view of a
   // multiview pass (docs/renderer.md); triangles are unaffected.
-  gfx::FrameOptions fo;
+  engine::FrameOptions fo;
   fo.grid = false;
   std::array<avatar::Image, 2> images[2];
   for (int mode = 0; mode < 2; ++mode) {
-    gfx::AvatarRendererOptions o;
+    engine::AvatarRendererOptions o;
     o.width = 160;
     o.height = 176;
     o.stereo = true;
-    o.stereoMode = mode == 0 ? gfx::StereoMode::Multiview : gfx::StereoMode::TwoPass;
-    auto r = gfx::AvatarRenderer::create(*ctx.device, asset, o);
+    o.stereoMode = mode == 0 ? engine::StereoMode::Multiview : engine::StereoMode::TwoPass;
+    auto r = engine::AvatarRenderer::create(*ctx.device, asset, o);
     REQUIRE(r);
     auto pair = (*r)->renderStereo(pose, eyes, fo);
     REQUIRE(pair);
@@ -237,12 +237,12 @@ TEST_CASE("stereo by multiview equals stereo by two passes", "[gpu][render]") {
     // One camera on a stereo renderer draws (and reads back) only the first layer.
     auto mono = (*r)->render(pose, eyes[0], fo);
     REQUIRE(mono);
-    CHECK(gfx::compareImages(*mono, images[mode][0], 5).failingFraction() <= 0.001);
+    CHECK(engine::compareImages(*mono, images[mode][0], 5).failingFraction() <= 0.001);
   }
   for (int eye = 0; eye < 2; ++eye) {
-    const auto d = gfx::compareImages(images[0][eye], images[1][eye], 5);
+    const auto d = engine::compareImages(images[0][eye], images[1][eye], 5);
     CHECK(d.failingFraction() <= 0.001);
   }
   // The eyes see different images (asymmetric frusta, 64 mm apart).
-  CHECK(gfx::compareImages(images[1][0], images[1][1], 5).failingPixels > 100);
+  CHECK(engine::compareImages(images[1][0], images[1][1], 5).failingPixels > 100);
 }

@@ -2,7 +2,7 @@
 // deliberate API misuse is caught by the messenger (so a silent messenger cannot pass tests).
 #include <catch2/catch.hpp>
 
-#include "support/vulkan_test_instance.h"
+#include "tests/support/vulkan_test_instance.h"
 
 using embody::test::TestInstance;
 

@@ -7,8 +7,8 @@
 #include <cstdlib>
 #include <new>
 
-#include "avatar/ik/sample_models.h"
-#include "avatar/ik/solver.h"
+#include "tests/support/sample_models.h"
+#include "ik/solver.h"
 
 namespace {
 std::atomic<bool> g_counting{false};
@@ -46,6 +46,7 @@ void* operator new[](std::size_t size, const std::nothrow_t& tag) noexcept { ret
 void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
 void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
 
+using namespace embody;
 using namespace embody::ik;
 
 namespace {
@@ -79,14 +80,14 @@ long allocationsDuringSolves(const Model& model, Path path) {
 }  // namespace
 
 TEST_CASE("solve allocates nothing after the first call (fast path, humanoid and coupled spine)") {
-  CHECK(allocationsDuringSolves(sampleHumanoid().value(), Path::Fast) == 0);
-  CHECK(allocationsDuringSolves(sampleSpine(true).value(), Path::Fast) == 0);
-  CHECK(allocationsDuringSolves(sampleSpine(false).value(), Path::Fast) == 0);
+  CHECK(allocationsDuringSolves(test::sampleHumanoid().value(), Path::Fast) == 0);
+  CHECK(allocationsDuringSolves(test::sampleSpine(true).value(), Path::Fast) == 0);
+  CHECK(allocationsDuringSolves(test::sampleSpine(false).value(), Path::Fast) == 0);
 }
 
 TEST_CASE("solve allocates nothing after the first call (reference path)") {
-  CHECK(allocationsDuringSolves(sampleHumanoid().value(), Path::Reference) == 0);
-  CHECK(allocationsDuringSolves(sampleSpine(true).value(), Path::Reference) == 0);
+  CHECK(allocationsDuringSolves(test::sampleHumanoid().value(), Path::Reference) == 0);
+  CHECK(allocationsDuringSolves(test::sampleSpine(true).value(), Path::Reference) == 0);
 }
 
 TEST_CASE("the counting allocator counts (sanity check of the test itself)") {

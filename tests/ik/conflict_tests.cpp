@@ -7,15 +7,16 @@
 #include <random>
 #include <sstream>
 
-#include "avatar/ik/sample_models.h"
+#include "tests/support/sample_models.h"
 #include "ik_test_util.h"
 
+using namespace embody;
 using namespace embody::ik;
 
 namespace {
 
 const Model& humanoid() {
-  static const Model m = sampleHumanoid().value();
+  static const Model m = test::sampleHumanoid().value();
   return m;
 }
 

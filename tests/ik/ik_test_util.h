@@ -5,11 +5,12 @@
 
 #include <random>
 
-#include "avatar/ik/expmap.h"
-#include "avatar/ik/model.h"
-#include "avatar/ik/solver.h"
+#include "ik/expmap.h"
+#include "ik/model.h"
+#include "ik/solver.h"
 
-namespace embody::ik::test {
+namespace embody::test {
+using namespace embody::ik;  // fixtures for the IK tests: the IK vocabulary throughout
 
 inline Eigen::Isometry3d randomRest(std::mt19937& rng, double reach = 0.3) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -93,4 +94,4 @@ inline Eigen::VectorXd randomInsideLimits(const Model& model, std::mt19937& rng,
   return q;
 }
 
-}  // namespace embody::ik::test
+}  // namespace embody::test

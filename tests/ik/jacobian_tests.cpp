@@ -4,10 +4,11 @@
 
 #include <numbers>
 
-#include "avatar/ik/expmap.h"
-#include "avatar/ik/sample_models.h"
+#include "ik/expmap.h"
+#include "tests/support/sample_models.h"
 #include "ik_test_util.h"
 
+using namespace embody;
 using namespace embody::ik;
 
 namespace {
@@ -137,12 +138,12 @@ TEST_CASE("Jacobians stay exact with exp-map joints near |v| = pi") {
 
 TEST_CASE("Jacobians of the sample humanoid and coupled spine match central differences") {
   std::mt19937 rng(2);
-  const Model humanoid = sampleHumanoid().value();
+  const Model humanoid = test::sampleHumanoid().value();
   CHECK(humanoid.dofs == 61);
   CHECK(humanoid.task_rows == 32);
   CHECK(humanoid.levels.size() == 4);
   checkJacobian(humanoid, test::randomInsideLimits(humanoid, rng, 1.0), 1e-6);
-  const Model spine = sampleSpine(true).value();
+  const Model spine = test::sampleSpine(true).value();
   CHECK(spine.dofs == 42);
   checkJacobian(spine, test::randomInsideLimits(spine, rng, 1.0), 1e-6);
 }

@@ -2,9 +2,10 @@
 // test that tries every invalid input.
 #include <catch2/catch.hpp>
 
-#include "avatar/ik/model.h"
-#include "avatar/ik/sample_models.h"
+#include "ik/model.h"
+#include "tests/support/sample_models.h"
 
+using namespace embody;
 using namespace embody::ik;
 
 namespace {
@@ -195,7 +196,7 @@ TEST_CASE("recruiting eq. 5: every coupled joint must be recruited by some task"
 }
 
 TEST_CASE("the sample models satisfy the recruiting rules") {
-  CHECK(sampleHumanoid().ok());
-  CHECK(sampleSpine(true).ok());
-  CHECK(sampleSpine(false).ok());
+  CHECK(test::sampleHumanoid().ok());
+  CHECK(test::sampleSpine(true).ok());
+  CHECK(test::sampleSpine(false).ok());
 }

@@ -4,9 +4,10 @@
 #include <Eigen/QR>
 #include <random>
 
-#include "avatar/ik/projector.h"
-#include "avatar/ik/sample_models.h"
+#include "ik/projector.h"
+#include "tests/support/sample_models.h"
 
+using namespace embody;
 using namespace embody::ik;
 
 TEST_CASE("P0 from the incremental build is symmetric, idempotent, annihilates A and equals I - A+A") {
@@ -49,7 +50,7 @@ TEST_CASE("a row dependent on earlier rows is skipped and reported, first added 
 }
 
 TEST_CASE("the model lists dependent equality rows, and the coupled spine keeps 9 free dofs") {
-  const Model spine = sampleSpine(true).value();
+  const Model spine = test::sampleSpine(true).value();
   CHECK(spine.equalities.size() == 33);
   CHECK(spine.dependent_equalities.empty());
   CHECK(spine.dofs - (static_cast<int>(spine.equalities.size()) - static_cast<int>(spine.dependent_equalities.size())) == 9);

@@ -1,4 +1,4 @@
-// The per-level kernels of the fast path (avatar/ik/small_cholesky.h) against Eigen's own
+// The per-level kernels of the fast path (ik/small_cholesky.h) against Eigen's own
 // decompositions, on the sizes the solver meets (2 to 24 rows).
 #include <catch2/catch.hpp>
 
@@ -7,8 +7,9 @@
 #include <Eigen/LU>
 #include <Eigen/QR>
 
-#include "avatar/ik/small_cholesky.h"
+#include "ik/small_cholesky.h"
 
+using namespace embody;
 using namespace embody::ik;
 
 namespace {

@@ -4,20 +4,21 @@
 
 #include <numbers>
 
-#include "avatar/ik/sample_models.h"
-#include "avatar/ik/solver_detail.h"
+#include "tests/support/sample_models.h"
+#include "ik/solver_detail.h"
 #include "ik_test_util.h"
 
+using namespace embody;
 using namespace embody::ik;
 
 namespace {
 
 const Model& humanoid() {
-  static const Model m = sampleHumanoid().value();
+  static const Model m = test::sampleHumanoid().value();
   return m;
 }
 const Model& coupledSpine() {
-  static const Model m = sampleSpine(true).value();
+  static const Model m = test::sampleSpine(true).value();
   return m;
 }
 

@@ -12,8 +12,8 @@
 #include "runtime/avatar_body_solver.h"
 #include "runtime/ik_stage.h"
 #include "test_paths.h"
-#include "xr/tracking/pose_source.h"
-#include "xr/tracking/synthetic_source.h"
+#include "tracking/pose_source.h"
+#include "tracking/synthetic_source.h"
 
 using namespace embody;
 using namespace embody::runtime;

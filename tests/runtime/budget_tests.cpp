@@ -5,7 +5,7 @@
 
 #include "fake_solver.h"
 #include "runtime/ik_stage.h"
-#include "xr/tracking/synthetic_source.h"
+#include "tracking/synthetic_source.h"
 
 using namespace embody;
 using namespace embody::runtime;

@@ -6,7 +6,7 @@
 
 #include "fake_solver.h"
 #include "runtime/ik_thread.h"
-#include "xr/tracking/synthetic_source.h"
+#include "tracking/synthetic_source.h"
 #include "runtime/task_layout.h"
 
 using namespace embody;

@@ -1,8 +1,8 @@
-// The runtime driving the real prioritized IK solver (avatar/ik's sample humanoid): targets
+// The runtime driving the real prioritized IK solver (ik's sample humanoid): targets
 // reached, warm starts, deadlines kept with an injected clock.
 #include <catch2/catch.hpp>
 
-#include "avatar/ik/sample_models.h"
+#include "tests/support/sample_models.h"
 #include "runtime/ik_stage.h"
 #include "runtime/pik_body_solver.h"
 
@@ -30,7 +30,7 @@ struct Fixture {
   tracking::PoseSample rest;  // the model's own rest targets, in tracking space
 
   Fixture() {
-    auto m = ik::sampleHumanoid();
+    auto m = test::sampleHumanoid();
     REQUIRE(m.ok());
     model = std::make_shared<const ik::Model>(std::move(*m));
     binding = PikBinding::byTaskNames(*model);

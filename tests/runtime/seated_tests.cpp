@@ -15,7 +15,7 @@
 #include "runtime/ik_stage.h"
 #include "runtime/seated_stats.h"
 #include "runtime/tracked_avatar_body.h"
-#include "xr/tracking/pose_source.h"
+#include "tracking/pose_source.h"
 
 using namespace embody;
 using tracking::TrackerId;

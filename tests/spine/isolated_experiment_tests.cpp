@@ -4,9 +4,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "avatar/spine/isolated_experiment.h"
+#include "ik/spine/isolated_experiment.h"
 
-using namespace embody::spine;
+using namespace embody::ik::spine;
 
 TEST_CASE("isolated spine: uncoupled reaches closer, coupled is smoother and never twists back") {
   ExperimentOptions o;

@@ -7,9 +7,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "avatar/spine/spine_description.h"
+#include "ik/spine/spine_description.h"
 
-using namespace embody::spine;
+using namespace embody::ik::spine;
 using nlohmann::json;
 
 TEST_CASE("the embedded full spine is the 24 H-Anim vertebral joints, caudal to cranial") {

@@ -7,13 +7,13 @@
 #include <numbers>
 #include <random>
 
-#include "avatar/ik/solver.h"
-#include "avatar/spine/spine_analysis.h"
-#include "avatar/spine/spine_description.h"
-#include "avatar/spine/spine_model.h"
+#include "ik/solver.h"
+#include "ik/spine/spine_analysis.h"
+#include "ik/spine/spine_description.h"
+#include "ik/spine/spine_model.h"
 
 using namespace embody;
-using namespace embody::spine;
+using namespace embody::ik::spine;
 
 namespace {
 

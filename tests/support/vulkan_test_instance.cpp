@@ -1,24 +1,24 @@
-#include "support/vulkan_test_instance.h"
+#include "tests/support/vulkan_test_instance.h"
 
 #include <catch2/catch.hpp>
 
 namespace embody::test {
 
-gfx::InstanceOptions TestInstance::options(std::vector<std::string> extensions) {
-  gfx::InstanceOptions o;
+engine::InstanceOptions TestInstance::options(std::vector<std::string> extensions) {
+  engine::InstanceOptions o;
   o.appName = "embody-tests";
-  o.validation = gfx::Validation::Required;
+  o.validation = engine::Validation::Required;
   o.extensions = std::move(extensions);
   return o;
 }
 
 TestInstance::TestInstance(std::vector<std::string> extensions) {
   auto o = options(std::move(extensions));
-  o.onMessage = [this](const gfx::ValidationMessage& m) {
+  o.onMessage = [this](const engine::ValidationMessage& m) {
     std::lock_guard lock(mutex_);
     messages_.push_back(m.idName + ": " + m.text);
   };
-  auto r = gfx::Instance::create(o);
+  auto r = engine::Instance::create(o);
   if (!r) FAIL("could not create a validated Vulkan instance: " << r.error());
   instance_ = std::move(r).value();
   REQUIRE(instance_.validationEnabled());
@@ -26,7 +26,7 @@ TestInstance::TestInstance(std::vector<std::string> extensions) {
 
 TestInstance::~TestInstance() {
   // Destroying the instance can itself report leaks of child objects; check after it is gone.
-  instance_ = gfx::Instance();
+  instance_ = engine::Instance();
   expectNoValidationMessages();
 }
 

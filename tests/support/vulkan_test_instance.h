@@ -19,7 +19,7 @@ class TestInstance {
   TestInstance(const TestInstance&) = delete;
   TestInstance& operator=(const TestInstance&) = delete;
 
-  gfx::Instance& instance() { return instance_; }
+  engine::Instance& instance() { return instance_; }
   VkInstance handle() const { return instance_.handle(); }
   // The lavapipe physical device (REQUIREs that there is one).
   VkPhysicalDevice lavapipe() const;
@@ -30,12 +30,12 @@ class TestInstance {
   // For the one test that proves the messenger works: forget recorded messages.
   void clearMessages();
 
-  static gfx::InstanceOptions options(std::vector<std::string> extensions = {});
+  static engine::InstanceOptions options(std::vector<std::string> extensions = {});
 
  private:
   mutable std::mutex mutex_;
   std::vector<std::string> messages_;
-  gfx::Instance instance_;
+  engine::Instance instance_;
   size_t reported_ = 0;  // messages already turned into failures
 };
 

@@ -6,8 +6,8 @@
 
 #include "avatar/bvh/bvh.h"
 #include "test_paths.h"
-#include "xr/tracking/body_dimensions.h"
-#include "xr/tracking/bvh_source.h"
+#include "tracking/body_dimensions.h"
+#include "tracking/bvh_source.h"
 
 using namespace embody;
 using namespace embody::tracking;

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <random>
 
-#include "xr/tracking/one_euro_filter.h"
+#include "tracking/one_euro_filter.h"
 
 using namespace embody::tracking;
 

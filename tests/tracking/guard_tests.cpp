@@ -3,8 +3,8 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "xr/tracking/synthetic_source.h"
-#include "xr/tracking/tracking_guard.h"
+#include "tracking/synthetic_source.h"
+#include "tracking/tracking_guard.h"
 
 using namespace embody::tracking;
 

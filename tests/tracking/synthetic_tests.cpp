@@ -2,7 +2,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "xr/tracking/synthetic_source.h"
+#include "tracking/synthetic_source.h"
 
 using namespace embody::tracking;
 

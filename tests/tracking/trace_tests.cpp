@@ -5,8 +5,8 @@
 #include <sstream>
 
 #include "test_paths.h"
-#include "xr/tracking/synthetic_source.h"
-#include "xr/tracking/trace.h"
+#include "tracking/synthetic_source.h"
+#include "tracking/trace.h"
 
 using namespace embody::tracking;
 

@@ -96,7 +96,7 @@ TEST_CASE("embody mirror opens a window, renders N frames, and its screenshot sh
   REQUIRE(r.exitCode == 0);
   CHECK(r.output.find("mirror: 24 frames shown") != std::string::npos);
   CHECK(r.output.find("validation messages: 0") != std::string::npos);
-  auto img = embody::gfx::readPng(shot);
+  auto img = embody::engine::readPng(shot);
   REQUIRE(img.ok());
   REQUIRE(img->width == 320);
   REQUIRE(img->height == 320);
@@ -126,7 +126,7 @@ TEST_CASE("embody mirror --view first shows the own body from the eyes, head hid
                       shot);
   INFO(r.output);
   REQUIRE(r.exitCode == 0);
-  auto img = embody::gfx::readPng(shot);
+  auto img = embody::engine::readPng(shot);
   REQUIRE(img.ok());
   // Looking down from the eyes: the chest fills the bottom of the view, the upper half is sky.
   CHECK(countAvatar(*img, 64, 216, 192, 256) > 128 * 40 / 2);

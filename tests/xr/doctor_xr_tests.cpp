@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 
-#include "xr/openxr/loader_info.h"
+#include "xr/loader_info.h"
 #include "xr_test_support.h"
 
 using namespace embody::test;

@@ -140,7 +140,7 @@ void requireCleanRun(const XrRun& r) {
 embody::avatar::Image capture(const XrRun& r, int index) {
   char name[32];
   std::snprintf(name, sizeof(name), "/left_%05d.png", index);
-  auto img = embody::gfx::readPng(r.capture + name);
+  auto img = embody::engine::readPng(r.capture + name);
   REQUIRE(img.ok());
   return std::move(img).value();
 }

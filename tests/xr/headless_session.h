@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "support/vulkan_test_instance.h"
+#include "tests/support/vulkan_test_instance.h"
 
 namespace embody::test {
 

@@ -3,8 +3,8 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "xr/openxr/avatar_placement.h"
-#include "xr/openxr/xr_input.h"
+#include "xr/avatar_placement.h"
+#include "xr/xr_input.h"
 
 using namespace embody::xr;
 

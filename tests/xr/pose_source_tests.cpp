@@ -4,11 +4,11 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "engine/test_avatar.h"
+#include "tests/support/test_avatar.h"
 #include "headless_session.h"
-#include "xr/openxr/xr_input.h"
-#include "xr/openxr/xr_loop.h"
-#include "xr/openxr/xr_pose_source.h"
+#include "xr/xr_input.h"
+#include "xr/xr_loop.h"
+#include "xr/xr_pose_source.h"
 #include "xr_test_support.h"
 
 using namespace embody;
@@ -42,7 +42,7 @@ TEST_CASE("the headset loop hands each frame's trackers to the body-pose hook", 
   setenv("EMBODY_XR_POSES", trace.c_str(), 1);
   setenv("EMBODY_XR_VIEW_SIZE", "64x64", 1);
   unsetenv("EMBODY_XR_FRAMES");
-  const auto avatar = gfx::makeTestAvatar();
+  const auto avatar = test::makeTestAvatar();
   xr::XrLoopOptions o;
   o.avatar = &avatar;
   o.frames = 10;

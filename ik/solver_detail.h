@@ -1,0 +1,138 @@
+#pragma once
+// The solver's workspace (private to ik and its tests): every buffer is sized once in
+// Data's constructor, so an iteration only writes into existing storage.
+#include <Eigen/Core>
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+
+#include <vector>
+
+#include "ik/model.h"
+#include "ik/solver.h"
+
+namespace embody::ik {
+
+struct Workspace {
+  explicit Workspace(const Model& model);
+
+  int n = 0;          // dofs
+  int task_count = 0;
+  int rows = 0;       // stacked task rows
+
+  Eigen::VectorXd q;
+
+  // Per-frame task state.
+  std::vector<Eigen::Vector3d> target_position;
+  std::vector<Eigen::Quaterniond> target_orientation;
+  std::vector<double> weight;
+  std::vector<char> enabled;
+  std::vector<std::vector<int>> task_dofs;  // recruited dof indices per task
+  std::vector<TaskType> task_type;
+  std::vector<JointId> task_joint;
+  std::vector<Eigen::Vector3d> task_offset;
+
+  // Forward kinematics.
+  std::vector<Eigen::Isometry3d> frames;  // world frame of each joint
+  std::vector<double> subtree_mass;       // Σ mass over the joint's subtree
+  std::vector<Eigen::Vector3d> subtree_moment;  // Σ mass * world CoM over the subtree
+  Eigen::Vector3d com = Eigen::Vector3d::Zero();
+  Eigen::Matrix3Xd dof_linear;   // translation dofs: world direction; others 0
+  Eigen::Matrix3Xd dof_angular;  // rotation dofs: world angular-velocity direction; others 0
+  std::vector<int> dof_joint;    // joint owning each dof
+
+  // Task Jacobian (rows x n; recruitment, weights and on/off applied) and errors.
+  Eigen::MatrixXd jacobian;
+  Eigen::VectorXd error;             // clamped and weighted: what the priority loop tracks
+  std::vector<TaskResidual> residual;  // unclamped
+
+  // Active set A (equalities + pinned inequalities): orthonormal rows `basis` (n x rank) from
+  // Gram-Schmidt with the lower-triangular factor `factor` (A_independent = factor * basisᵀ) and
+  // `active_rhs` = b_A - A q. Equality part precomputed once (`eq_*`).
+  Eigen::MatrixXd basis;
+  Eigen::MatrixXd factor;
+  Eigen::VectorXd active_rhs;
+  int rank = 0;
+  Eigen::MatrixXd eq_basis, eq_factor;
+  Eigen::VectorXd eq_rhs;  // the independent equality rows' right-hand sides
+  std::vector<int> eq_rows;  // independent equality row indices
+  std::vector<int> eq_begin, eq_dof;  // the same rows' non-zero terms (sparse), for b - A q
+  std::vector<double> eq_coef;
+  int eq_rank = 0;
+
+  // Null space of A. Mask mode (only single-dof rows active, no equality rows): the projector is
+  // diagonal, `mask` zeroes pinned dofs. Dense mode: `nullspace` (n x null_dim) orthonormal.
+  bool mask_mode = true;
+  Eigen::VectorXd mask;
+  Eigen::MatrixXd nullspace;
+  int null_dim = 0;
+  Eigen::MatrixXd eq_nullspace;  // equality-only null space, restored when pinned rows changed it
+  bool nullspace_dirty = false;
+  // N's columns grouped by the span of rows they are non-zero on (see nullspaceProduct).
+  struct ColumnGroup {
+    int col_begin = 0, col_end = 0, row_begin = 0, row_end = 0;
+  };
+  std::vector<ColumnGroup> null_groups;     // reserved to n
+  std::vector<ColumnGroup> eq_null_groups;  // the same for the equality rows' N (set on first use)
+  bool null_ranges_dirty = true;
+  int null_groups_cols = -1;
+
+  Eigen::VectorXd dq0, dq, tmp_n, tmp_n2, y;
+  // Oscillation guard: the task part of the previous step and the current step scale.
+  Eigen::VectorXd previous_task_step;
+  double step_scale = 1.0;
+  bool has_previous_step = false;
+
+  // Fast path scratch.
+  Eigen::MatrixXd reduced_jacobian;  // rows x null_dim (J N)
+  Eigen::MatrixXd row_space;         // null_dim x n: accumulated orthonormal task rows (W)
+  int row_space_dim = 0;
+  std::vector<Eigen::MatrixXd> level_j;      // m_k x n
+  std::vector<Eigen::MatrixXd> level_gram;   // m_k x m_k
+  std::vector<Eigen::VectorXd> level_res, level_coef, level_tmp;
+  std::vector<Eigen::MatrixXd> level_jw;     // m_k x n (J W)
+  std::vector<Eigen::MatrixXd> level_inverse;  // G⁻¹ (damping estimate)
+  // Cholesky factors (lower, small_cholesky.h) and their diagonals' reciprocals: of G, and of
+  // G shifted by -eps² (the damping test) or +λ² (the damped solve).
+  std::vector<Eigen::MatrixXd> level_factor, level_factor2;
+  std::vector<Eigen::VectorXd> level_factor_inv, level_factor2_inv;
+  std::vector<Eigen::VectorXi> level_perm;  // pivoted Cholesky's row order (rank-deficient levels)
+  std::vector<Eigen::VectorXd> level_y;
+  // Columns a level's Jacobian can be non-zero in (its tasks' recruited dofs, sorted): in mask
+  // mode the pass works on these columns only.
+  std::vector<std::vector<int>> level_support;
+  int max_level_rows = 0;
+  Eigen::MatrixXd gathered_j;  // max_level_rows x n: J̃ of one level on its support
+  struct Range {
+    int begin = 0, end = 0;  // [begin, end)
+  };
+  std::vector<int> dense_support;            // dense mode: the current level's reduced columns
+  std::vector<Range> dense_support_ranges;   // the same as ranges (both reserved to n)
+  std::vector<std::vector<Range>> level_ranges;  // each level's support as ranges
+  // W's blocks (one per level that added rows): first column, width, the row ranges it is
+  // non-zero on (each reserved to n), and whether the current level overlaps it.
+  std::vector<int> block_begin, block_size;
+  std::vector<std::vector<Range>> block_ranges;
+  std::vector<char> block_touched;
+  std::vector<char> row_mark;  // n
+  Eigen::MatrixXd level_solve; // max_level_rows²: V Σ⁻¹ (rank-deficient levels)
+  Eigen::MatrixXd level_cols;  // n x max_level_rows: Ĵᵀ
+  Eigen::VectorXd small_a, small_b, small_z;  // n each
+  Eigen::VectorXd small_rows;  // rows: J Δq0
+
+  // Reference path scratch.
+  Eigen::MatrixXd projector, projector0, eq_projector0;
+  bool projector0_dirty = false;
+  std::vector<Eigen::JacobiSVD<Eigen::MatrixXd>> level_svd;
+
+  // Inequalities in sparse form.
+  std::vector<int> ineq_begin;  // into ineq_dof / ineq_coef, size rows + 1
+  std::vector<int> ineq_dof;
+  std::vector<double> ineq_coef;
+  std::vector<char> ineq_active;
+  std::vector<char> ineq_reported;
+
+  SolveReport report;
+};
+
+}  // namespace embody::ik

@@ -1,0 +1,63 @@
+#include "xr/avatar_placement.h"
+
+#include <cmath>
+
+namespace embody::xr {
+
+float headingOf(const Pose& p) {
+  const glm::vec3 f = p.orientation * glm::vec3(0.0f, 0.0f, -1.0f);
+  if (f.x * f.x + f.z * f.z < 1e-8f) return 0.0f;  // looking straight up or down: no heading
+  return std::atan2(-f.x, -f.z);
+}
+
+AvatarPlacement::AvatarPlacement(const glm::vec3& avatarEye, const glm::vec3& avatarForward,
+                                 const PlacementOptions& o)
+    : eye_(avatarEye), forward_(avatarForward), options_(o) {
+  if (o.userEyeHeight > 0.0f && eye_.y > 1e-3f) {
+    scale_ = o.userEyeHeight / eye_.y;
+    calibrated_ = true;
+  }
+}
+
+bool AvatarPlacement::calibrate(const Pose& head) {
+  if (options_.seated || options_.userEyeHeight > 0.0f) return false;
+  const float h = head.position.y;
+  if (!std::isfinite(h) || h < 0.8f || h > 2.5f || eye_.y <= 1e-3f) return false;
+  scale_ = h / eye_.y;
+  calibrated_ = true;
+  return true;
+}
+
+void AvatarPlacement::recenter(const Pose& head) {
+  // New world = tracking moved so the head is over the origin (height kept) and turned to -Z.
+  const Pose yawOnly{{head.position.x, 0.0f, head.position.z},
+                     glm::angleAxis(headingOf(head), glm::vec3(0, 1, 0))};
+  recenter_ = yawOnly.inverse();
+}
+
+glm::mat4 AvatarPlacement::root(const Pose& head) const {
+  // Turn the avatar's forward onto the head's heading.
+  const float avatarYaw = std::atan2(-forward_.x, -forward_.z);  // heading of the avatar's rest forward
+  const glm::quat turn = glm::angleAxis(headingOf(head) - avatarYaw, glm::vec3(0, 1, 0));
+  const glm::vec3 eyeWorldOffset = turn * (eye_ * scale_);
+  glm::vec3 t{head.position.x - eyeWorldOffset.x, 0.0f, head.position.z - eyeWorldOffset.z};
+  if (options_.seated) t.y = head.position.y - eyeWorldOffset.y;
+  glm::mat4 m = glm::mat4_cast(turn) * glm::mat4(glm::mat3(scale_));
+  m[3] = glm::vec4(t, 1.0f);
+  return m;
+}
+
+void AvatarPlacement::place(const avatar::Skeleton& skeleton, const Pose& head,
+                            avatar::SkeletonPose& pose) const {
+  const glm::mat4 m = root(head);
+  const glm::quat r = glm::quat_cast(glm::mat3(m) / scale_);
+  for (size_t j = 0; j < skeleton.joints.size(); ++j) {
+    if (skeleton.joints[j].parent >= 0) continue;
+    auto& t = pose.local[j];
+    t.translation = glm::vec3(m * glm::vec4(t.translation, 1.0f));
+    t.rotation = r * t.rotation;
+    t.scale *= scale_;
+  }
+}
+
+}  // namespace embody::xr
