@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "app/args.h"
+#include "app/bvh_options.h"
 #include "app/mirror_job.h"
 
 namespace {
@@ -29,6 +30,7 @@ int runMirrorCommand(app::Argv argv) {
   args.option("user-height", "METRES", "the user's height (default: the profile's, else from the first head sample)");
   args.option("profile", "FILE", "user profile JSON (embody avatar calibrate): the user's height");
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (default: fit the clip to the user's height)");
+  app::declareBvhOptions(args);
   args.option("ik-budget-ms", "MS", "IK time budget per frame", "1");
   args.option("yaw", "DEGREES", "third-person orbit yaw (0 = from the front)", "30");
   args.option("pitch", "DEGREES", "third-person orbit pitch (positive looks down)", "10");

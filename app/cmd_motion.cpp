@@ -1,6 +1,7 @@
 // embody motion: inspect and record pose sources (synthetic motions, JSON Lines traces, BVH).
 //   embody motion list
-//   embody motion info SOURCE [--json] [--user-height M] [--bvh-scale S]
+//   embody motion info SOURCE [--json] [--user-height M] [--bvh-scale S] [--bvh-up AXIS] [--bvh-forward AXIS]
+//                     [--bone-map FILE]
 //   embody motion record --motion SOURCE --out FILE.jsonl [--frames N] [--fps F] [--three-point] [--filter]
 //                        [--lose left,right@2-3]
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <stdexcept>
 
 #include "app/args.h"
+#include "app/bvh_options.h"
 #include "runtime/task_layout.h"
 #include "tracking/one_euro_filter.h"
 #include "tracking/synthetic_source.h"
@@ -24,6 +26,8 @@ using namespace embody::tracking;
 void sourceOptions(app::Args& args) {
   args.option("user-height", "METRES", "the user's height: synthetic motions are built for it, BVH fitted to it", "1.75");
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (e.g. 0.0564 for CMU); default: fit the rest skeleton to --user-height");
+  app::declareBvhOptions(args);
+  args.option("bone-map", "FILE", "the same as --bvh-bone-map (motion commands have no avatar)");
   args.flag("three-point", "keep only the head and hands (an HMD with two controllers)");
   args.option("lose", "TRACKERS@FROM-TO", "make trackers invalid in a time window, e.g. left,right@2.0-3.0");
 }
@@ -62,6 +66,11 @@ SourceOptions readSourceOptions(const app::Args& args) {
     if (!(o.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");
   }
   if (args.has("three-point")) o.trackers = TrackerMask::threePoint();
+  app::BvhOverrides bvh = app::readBvhOptions(args);
+  if (bvh.boneMapFile.empty()) bvh.boneMapFile = args.get("bone-map");
+  auto body = app::bvhBodyOptions(bvh);
+  if (!body) throw std::runtime_error(body.error());
+  o.bvh = std::move(*body);
   return o;
 }
 
@@ -92,6 +101,9 @@ int info(app::Argv argv) {
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
+  } catch (const std::runtime_error& e) {  // an unreadable bone map file
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
   }
   int code = 0;
   auto src = openSource(args, args.get("SOURCE"), opts, "embody motion info", code);
@@ -210,6 +222,9 @@ int record(app::Argv argv) {
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "error: %s\n\n%s", e.what(), args.usage().c_str());
     return 2;
+  } catch (const std::runtime_error& e) {  // an unreadable bone map file
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
   }
   int code = 0;
   auto src = openSource(args, args.get("motion"), opts, "embody motion record", code);

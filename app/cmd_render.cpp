@@ -10,6 +10,7 @@
 
 #include "app/avatar_arg.h"
 #include "app/args.h"
+#include "app/bvh_options.h"
 #include "app/render_job.h"
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
@@ -50,6 +51,7 @@ int runRender(app::Argv argv) {
   args.option("user-height", "METRES", "the user's height (default: the profile's, else from the first head sample)");
   args.option("profile", "FILE", "user profile JSON (embody avatar calibrate): the user's height");
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (default: fit the clip to the user's height)");
+  app::declareBvhOptions(args);
   args.option("ik-budget-ms", "MS", "IK time budget per frame", "1");
   args.option("record", "FILE.jsonl", "also record the motion's samples as a JSON Lines trace");
   args.flag("uncoupled-spine", "independent spine sites (one ball joint each) instead of the coupled spine (the default)");

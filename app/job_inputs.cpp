@@ -18,6 +18,9 @@ Result<JobInputs> openJobInputs(const RenderJob& job) {
   in.asset = std::move(loaded).value();
   in.sourceOptions.userHeight = in.userHeight > 0.0f ? in.userHeight : 1.75f;
   in.sourceOptions.bvhScale = job.bvhScale;
+  auto bvh = bvhBodyOptions(job.bvh);
+  if (!bvh) return Error{bvh.error()};
+  in.sourceOptions.bvh = std::move(*bvh);
   if (job.threePoint) in.sourceOptions.trackers = tracking::TrackerMask::threePoint();
   auto opened = tracking::openPoseSource(job.motion, in.sourceOptions);
   if (!opened) return Error{opened.error()};

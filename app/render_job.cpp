@@ -247,6 +247,7 @@ void readSharedJobOptions(const app::Args& args, RenderJob& job) {
   if (args.has("user-height")) job.userHeight = float(args.number("user-height"));
   if (args.has("bvh-scale")) job.bvhScale = args.number("bvh-scale");
   if (args.has("bvh-scale") && !(job.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");
+  job.bvh = readBvhOptions(args);
   job.fps = args.number("fps");
   job.budgetMs = args.number("ik-budget-ms");
 }

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "app/args.h"
+#include "app/bvh_options.h"
 
 namespace embody::app {
 
@@ -20,6 +21,7 @@ struct RenderJob {
   std::string record;              // --record FILE.jsonl ("" none)
   float userHeight = 0.0f;         // 0: the profile's, else from the first head sample
   double bvhScale = 0.0;
+  BvhOverrides bvh;                // --bvh-up, --bvh-forward, --bvh-bone-map
   bool threePoint = false;         // keep only head and hands
   bool seated = false;             // seated mode (runtime::SeatOptions): the lower body sits on a seat
   int frames = 0;                  // 0: the motion's duration (at most 20 s)
