@@ -66,6 +66,9 @@ Result<HumanoidMap> mapBvhJoints(const BvhClip& clip, const Skeleton& skeleton, 
         bestCount = c;
       }
     }
+    // End Sites carry no rotation: a bone the topology put on one (the head's top) is its parent.
+    for (int& j : best.bones)
+      if (j >= 0 && clip.joints[static_cast<size_t>(j)].endSite) j = clip.joints[static_cast<size_t>(j)].parent;
     if (bestCount > byNames) {
       best.notes.push_back("names mapped " + std::to_string(byNames) + " of the 6 body joints; mapped by topology");
       map = std::move(best);

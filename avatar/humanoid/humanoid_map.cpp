@@ -337,6 +337,8 @@ HumanoidMap mapByNames(const Skeleton& skeleton) {
   std::map<std::string, int> byName;  // full names first, then names without leading words
   for (size_t j = 0; j < skeleton.joints.size(); ++j)
     byName.emplace(normalizeName(skeleton.joints[j].name), static_cast<int>(j));
+  const bool hanim = byName.count("humanoidroot") || byName.count("sacroiliac") ||
+                     byName.count("skullbase") || byName.count("vl5");
   for (size_t j = 0; j < skeleton.joints.size(); ++j)
     for (auto& suffix : nameSuffixes(skeleton.joints[j].name)) byName.emplace(std::move(suffix), static_cast<int>(j));
   std::vector<bool> taken(skeleton.joints.size(), false);
@@ -351,8 +353,6 @@ HumanoidMap mapByNames(const Skeleton& skeleton) {
       }
     }
   };
-  const bool hanim = byName.count("humanoidroot") || byName.count("sacroiliac") ||
-                     byName.count("skullbase") || byName.count("vl5");
   if (hanim) {
     for (const auto& [b, aliases] : hanimTable()) take(b, aliases);
   } else {
