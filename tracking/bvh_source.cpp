@@ -143,6 +143,24 @@ void placeOnFloor(Trace& trace, double floorY, const BvhTrackerOptions& options)
   }
 }
 
+// The eyes at most at eye height (kEyeHeightRatio of the standing height) in 99% of the frames:
+// the floor is the clip's lowest point and the head's reference is the first motion frame, both
+// of which can lift the eye point above what a body of that height reaches standing. The excess
+// comes off the eye offset, along the head's up.
+void capEyeHeight(Trace& trace, double performer) {
+  if (!trace.trackers.has(TrackerId::Head) || trace.samples.empty()) return;
+  std::vector<float> y;
+  for (const auto& s : trace.samples) y.push_back(s[TrackerId::Head].position.y);
+  const size_t k = (y.size() - 1) * 99 / 100;
+  std::nth_element(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(k), y.end());
+  const float excess = y[k] - static_cast<float>(kEyeHeightRatio * performer);
+  if (excess <= 0.0f) return;
+  for (auto& s : trace.samples) {
+    TrackerPose& h = s[TrackerId::Head];
+    h.position -= h.orientation * glm::vec3(0.0f, excess, 0.0f);
+  }
+}
+
 }  // namespace
 
 std::array<int, kTrackerCount> bvhTrackerJoints(const avatar::HumanoidMap& humanoid) {
@@ -171,6 +189,7 @@ Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, 
   Trace trace = sampleFrames(clip, m, ref, floorY);
   trace.userHeight = options.userHeight;
   placeOnFloor(trace, floorY, options);
+  capEyeHeight(trace, m.heightUnits * m.scale);
   for (const auto& w : clip.warnings) m.notes.push_back(w);
   trace.notes = m.notes;
   if (mappingOut) *mappingOut = std::move(m);
