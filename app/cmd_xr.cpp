@@ -6,6 +6,8 @@
 
 #include "app/avatar_arg.h"
 #include "app/args.h"
+#include "app/job_options.h"
+#include "avatar/body/calibration.h"
 #include "runtime/frame_stats.h"
 #include "runtime/seated_stats.h"
 #include "runtime/tracked_avatar_body.h"
@@ -22,16 +24,18 @@ int runXr(app::Argv argv) {
       "Puts you in the avatar through the active OpenXR runtime (a headset, or the headless runtime "
       "selected by XR_RUNTIME_JSON). The avatar's body is solved from the HMD and the controllers "
       "(three-point IK: head and hands tracked, hips and feet inferred, the feet step); gizmos mark the controllers.");
-  args.option("avatar", "FILE|default",
-              "a .gltf/.glb/.vrm file, or 'default' (the built-in humanoid avatar)", "default");
+  // The options shared with render/mirror/demo (app/job_options.h): avatar, bone map, spine, user
+  // height, profile, IK budget.
+  constexpr unsigned kShared = app::kAvatarOptions | app::kBodyOptions | app::kBudgetOptions;
+  app::addJobOptions(args, kShared);
   args.option("frames", "N", "end the session after N submitted frames (0: until the runtime ends it)", "0");
-  args.option("height", "METRES", "your standing eye height (skips the calibration from the HMD height)");
+  args.option("height", "METRES", "your standing eye height (skips the calibration from the HMD height; or give "
+              "--user-height / --profile)");
   args.option("stats", "FILE", "write a JSON report of the run (states, frames, tracking, validation)");
   args.option("body", "ik|rest",
               "ik: the body follows head and hands (AvatarBodySolver); rest: the rest pose placed under the head",
               "ik");
   args.option("record", "FILE.jsonl", "record the head and wrist trackers as a trace (replay with embody render --motion)");
-  args.option("ik-budget-ms", "MS", "IK time budget per frame", "1");
   args.flag("seated",
             "seated mode: the avatar sits on a seat placed under your head at the first frame (again on recenter), "
             "feet on the floor; the spine and arms follow your head and hands");
@@ -46,7 +50,9 @@ int runXr(app::Argv argv) {
   if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
 
   xr::XrLoopOptions lo;
+  app::JobOptions shared;
   try {
+    app::readJobOptions(args, kShared, shared);
     const int frames = args.integer("frames");
     if (frames < 0) throw std::invalid_argument("--frames must be 0 or more");
     lo.frames = static_cast<uint64_t>(frames);
@@ -54,11 +60,19 @@ int runXr(app::Argv argv) {
       lo.placement.userEyeHeight = static_cast<float>(args.number("height"));
       if (!(lo.placement.userEyeHeight > 0.5f && lo.placement.userEyeHeight < 2.5f))
         throw std::invalid_argument("--height must be between 0.5 and 2.5 metres");
+      if (args.has("user-height") || args.has("profile"))
+        throw std::invalid_argument("--height (eye height) excludes --user-height and --profile");
     }
   } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 2;
+    return app::usageError(e.what());
   }
+  if (shared.userHeight == 0.0f && !shared.profile.empty()) {  // a bad file is a runtime error (1)
+    auto profile = avatar::loadProfile(shared.profile);
+    if (!profile) return std::fprintf(stderr, "error: profile %s: %s\n", shared.profile.c_str(), profile.error().c_str()), 1;
+    shared.userHeight = float(profile->userHeight);
+  }
+  // The standing eye height the placement and the solver take (avatar::kEyeHeightRatio).
+  if (shared.userHeight > 0.0f) lo.placement.userEyeHeight = shared.userHeight * float(avatar::kEyeHeightRatio);
   lo.placement.seated = args.has("seated");
   runtime::SeatOptions seat;
   seat.enabled = lo.placement.seated;
@@ -66,37 +80,21 @@ int runXr(app::Argv argv) {
     try {
       seat.seatHeight = static_cast<float>(args.number("seat-height"));
     } catch (const std::invalid_argument& e) {
-      std::fprintf(stderr, "error: %s\n", e.what());
-      return 2;
+      return app::usageError(e.what());
     }
-    if (!seat.enabled || !(seat.seatHeight >= 0.2f && seat.seatHeight <= 1.2f)) {
-      std::fprintf(stderr, "error: --seat-height needs --seated and must be between 0.2 and 1.2 metres\n");
-      return 2;
-    }
+    if (!seat.enabled || !(seat.seatHeight >= 0.2f && seat.seatHeight <= 1.2f))
+      return app::usageError("--seat-height needs --seated and must be between 0.2 and 1.2 metres");
   }
   lo.recenterAtStart = args.has("recenter");
   lo.vulkanValidation = args.has("validate");
   lo.verbose = args.has("verbose");
   lo.mirror = args.has("mirror");
   const std::string bodyMode = args.get("body");
-  if (bodyMode != "ik" && bodyMode != "rest") {
-    std::fprintf(stderr, "error: --body must be ik or rest\n");
-    return 2;
-  }
-  double budgetMs = 1.0;
-  try {
-    budgetMs = args.number("ik-budget-ms");
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 2;
-  }
-  if (!(budgetMs > 0.0 && budgetMs <= 100.0)) {
-    std::fprintf(stderr, "error: --ik-budget-ms must be > 0 and <= 100\n");
-    return 2;
-  }
+  if (bodyMode != "ik" && bodyMode != "rest") return app::usageError("--body must be ik or rest");
+  const double budgetMs = shared.budgetMs;
 
-  const std::string avatarArg = args.get("avatar");
-  auto loaded = app::loadAvatarArg(avatarArg);
+  const std::string avatarArg = shared.avatar;
+  auto loaded = app::loadAvatarArg(avatarArg, shared.boneMap);
   if (!loaded) {
     std::fprintf(stderr, "error: %s\n", loaded.error().c_str());
     return 1;
@@ -121,10 +119,12 @@ int runXr(app::Argv argv) {
     runtime::TrackedBodyOptions bo;
     bo.body.trackers = tracking::TrackerMask::threePoint();
     bo.body.seat = seat;
+    bo.body.spine = shared.spine;
+    bo.body.coupledSpine = shared.coupledSpine;
     // The solver takes a body height (0: from the first head sample, standing); seated, the
     // solver assumes 1.75 m unless --height gives the standing eye height.
     const float eye = lo.placement.userEyeHeight;
-    bo.body.userHeight = eye > 0.0f ? eye / 0.936f : 0.0f;
+    bo.body.userHeight = eye > 0.0f ? eye / float(avatar::kEyeHeightRatio) : 0.0f;
     bo.stage.budgetSeconds = budgetMs * 1e-3;
     auto created = runtime::TrackedAvatarBody::create(asset, bo);
     if (!created) {

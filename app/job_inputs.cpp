@@ -25,9 +25,9 @@ Result<JobInputs> openJobInputs(const RenderJob& job) {
   return in;
 }
 
-runtime::AvatarBodyOptions bodyOptionsFor(const RenderJob& job, avatar::SpineMode spine, const JobInputs& in) {
+runtime::AvatarBodyOptions bodyOptionsFor(const RenderJob& job, const JobInputs& in) {
   runtime::AvatarBodyOptions bo;
-  bo.spine = spine;
+  bo.spine = job.spine;
   bo.coupledSpine = job.coupledSpine;
   bo.trackers = in.source->trackers();
   const bool trace = job.motion.size() > 6 && job.motion.substr(job.motion.size() - 6) == ".jsonl";

@@ -7,11 +7,13 @@
 #include <tuple>
 
 namespace embody::avatar {
+bool plausibleBodyHeight(double metres) {
+  return std::isfinite(metres) && metres >= kMinBodyHeight && metres <= kMaxBodyHeight;
+}
+
 namespace {
 
-bool plausible(double metres) {
-  return std::isfinite(metres) && metres >= 0.5 && metres <= 2.6;
-}
+bool plausible(double metres) { return plausibleBodyHeight(metres); }
 
 }  // namespace
 

@@ -11,11 +11,14 @@
 #include <string>
 
 #include "avatar/avatar_asset.h"
+#include "avatar/body/anthropometry.h"  // kEyeHeightRatio
 #include "core/result.h"
 
 namespace embody::avatar {
 
-constexpr double kEyeHeightRatio = 0.933;
+// The body heights (and arm spans) calibration, profiles and every CLI option accept, in metres.
+constexpr double kMinBodyHeight = 0.5, kMaxBodyHeight = 2.6;
+bool plausibleBodyHeight(double metres);  // finite and within [kMinBodyHeight, kMaxBodyHeight]
 
 struct CalibrationInput {
   std::optional<double> userHeight;  // metres, total height

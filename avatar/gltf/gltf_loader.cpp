@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -105,6 +106,12 @@ Result<GlbChunks> splitContainer(const std::vector<uint8_t>& bytes) {
     out.json.assign(reinterpret_cast<const char*>(&bytes[20]), jsonLength);
     while (!out.json.empty() && (out.json.back() == ' ' || out.json.back() == '\0')) out.json.pop_back();
   } else {
+    // Text glTF is a JSON object: anything else (random bytes, an image, a zip) gets one readable
+    // line instead of the JSON parser's message about some byte.
+    size_t first = 0;
+    while (first < bytes.size() && std::isspace(bytes[first])) ++first;
+    if (first == bytes.size() || bytes[first] != '{')
+      return fail("not a glTF file: neither a GLB container (no 'glTF' magic) nor glTF JSON text");
     out.json.assign(bytes.begin(), bytes.end());
   }
   return out;
