@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "avatar/body/anthropometry.h"
+#include "avatar/glm_eigen.h"
 #include "avatar/humanoid/humanoid_map.h"
 
 namespace embody::runtime {
@@ -13,9 +15,8 @@ using tracking::TrackerStatus;
 
 namespace {
 
-Eigen::Vector3d toEigen(const glm::vec3& v) { return {v.x, v.y, v.z}; }
-glm::vec3 toGlm(const Eigen::Vector3d& v) { return {float(v.x()), float(v.y()), float(v.z())}; }
-Eigen::Quaterniond toEigen(const glm::quat& q) { return Eigen::Quaterniond(q.w, q.x, q.y, q.z); }
+using avatar::toEigen;
+using avatar::toGlm;
 
 // The model `body` was built with, plus `tasks` (the builder's validation runs again).
 Result<ik::Model> withTasks(const ik::Model& model, const std::vector<ik::TaskDesc>& tasks) {
@@ -107,7 +108,8 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
     avatarHeight_ = hi - lo;
     for (auto id : tracking::kAllTrackers)
       restHeight_[size_t(tracking::index(id))] = up_.dot(pos(joint_[size_t(tracking::index(id))])) - floor_;
-    // The eyes: at the anthropometric eye height (0.936 of stature), ahead of the head's pivot.
+    // The eyes: at the anthropometric eye height (avatar::kEyeHeightRatio of stature), ahead of
+    // the head's pivot.
     const auto dims = tracking::BodyDimensions::fromHeight(float(avatarHeight_));
     avatarEyeHeight_ = dims.eyeHeight;
     const Eigen::Vector3d eye = head + up_ * (floor_ + avatarEyeHeight_ - up_.dot(head)) + forward_ * dims.eyeForward;
@@ -437,7 +439,7 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
     const bool live = targets.status[headIndex] == TrackerStatus::Tracked && head.valid && eye > 0.4f && eye < 2.4f;
     // Seated, the head's height says nothing about the user's stature: 1.75 m unless given.
     const bool standing = live && !layout_.seated;
-    calibrate(standing ? eye / 0.936f : 1.75f);
+    calibrate(standing ? eye / float(avatar::kEyeHeightRatio) : 1.75f);
     if (standing) calibratedFromHead_ = true;
   }
   setTargets(targets);

@@ -4,13 +4,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 
+#include "avatar/glm_eigen.h"
 #include "ik/spine/spine_model.h"
 
 namespace embody::avatar {
 namespace {
 
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
+constexpr double kDeg = std::numbers::pi / 180.0;
 
 // Per intervertebral joint, bottom (vl5 = L5-S1) to top (skullbase = Occ-C1): flexion+extension,
 // lateral bending to one side, axial rotation to one side, degrees. White & Panjabi (1990) as
@@ -38,10 +40,6 @@ double levelMassPercent(int level) {
   if (level <= 16) return kUpperTrunk / 6.0;
   if (level <= 23) return 0.15 * kHeadNeck / 7.0;
   return 0.85 * kHeadNeck;
-}
-
-Eigen::Vector3d toEigen(const glm::vec3& v) {
-  return {v.x, v.y, v.z};
 }
 
 // +Y along the bone, +X = Y x forward (falls back to up x Y when the bone points forward).
@@ -553,8 +551,7 @@ void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& 
       const Eigen::Isometry3d& frame = data.jointFrame(ikJoint);
       const Eigen::Quaterniond delta = Eigen::Quaterniond(frame.rotation()) *
                                        body.ikRestRotation[static_cast<size_t>(ikJoint)].conjugate();
-      const glm::quat d(static_cast<float>(delta.w()), static_cast<float>(delta.x()),
-                        static_cast<float>(delta.y()), static_cast<float>(delta.z()));
+      const glm::quat d = toGlm(delta);
       const glm::quat wanted = glm::normalize(d * body.avatarRestGlobalRotation[a]);
       const glm::vec3 c0(parent[0]), c1(parent[1]), c2(parent[2]);
       const glm::quat parentRot = glm::normalize(
@@ -563,7 +560,7 @@ void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& 
       if (ikJoint == body.hips) {
         const Eigen::Vector3d p = frame.translation() / body.scale;
         local.translation =
-            glm::vec3(glm::inverse(parent) * glm::vec4(float(p.x()), float(p.y()), float(p.z()), 1.0f));
+            glm::vec3(glm::inverse(parent) * glm::vec4(toGlm(p), 1.0f));
       }
     }
     pose.local[a] = local;

@@ -11,6 +11,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <string>
 
 #include "engine/image_io.h"
@@ -117,7 +118,7 @@ void requireNoValidation(const XrRun& r) {
 }
 
 // The IK budget of the 120-frame runs: generous, as in the runtime's walk tests (see the first
-// test); instrumented builds run the IK several times slower. At most 100 ms, the most
+// test); instrumented builds run the IK several times slower. At most 100 ms, a tenth of what
 // `--ik-budget-ms` accepts.
 std::string ikBudgetMs(double factor = 1.0) {
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
@@ -241,7 +242,7 @@ std::string writeSeatedTrace() {
   };
   const glm::quat handQ = glm::angleAxis(glm::radians(20.0f), glm::vec3(1, 0, 0));
   for (int i = 0; i <= 600; ++i) {
-    const double t = 0.1 * i, phase = t * 3.14159265358979323846;  // 2 s period
+    const double t = 0.1 * i, phase = t * std::numbers::pi;  // 2 s period
     const float lean = 0.5f * float(1.0 - std::cos(phase));
     const glm::vec3 head(0.15f * float(std::sin(phase)), 1.2f - 0.03f * lean, -0.15f * lean);
     nlohmann::json j = {{"t", t},
