@@ -116,7 +116,14 @@ class AvatarBodySolver final : public BodySolver {
 
  private:
   AvatarBodySolver(const avatar::AvatarAsset& avatar) : avatar_(avatar) {}
+  // create()'s steps: the body model and the frames, the tracker joints, the rest geometry, the
+  // layout's tasks.
   Status build(const AvatarBodyOptions& options);
+  Status bindJoints(ik::JointId& leftElbow);
+  void measureRest(ik::JointId leftElbow, bool legs);
+  void measureHeight(const Eigen::Vector3d& head, const Eigen::Vector3d& leftFoot, const Eigen::Vector3d& rightFoot);
+  void trackerFrames();
+  void addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskDesc>& tasks);
   void calibrate(float userHeight);
   void setTargets(const tracking::GuardedSample& targets);
   void setSeatedTargets(const tracking::GuardedSample& targets);
