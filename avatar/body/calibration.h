@@ -9,6 +9,7 @@
 // the exact pivot match with the render skeleton).
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "avatar/avatar_asset.h"
 #include "core/result.h"
@@ -44,5 +45,7 @@ Result<BodyProfile> calibrate(const AvatarAsset& avatar, const CalibrationInput&
 
 Status saveProfile(const BodyProfile& profile, const std::string& path);
 Result<BodyProfile> loadProfile(const std::string& path);  // validates every number
+// The same from the file's text; `path` only names it in errors.
+Result<BodyProfile> parseProfile(std::string_view text, const std::string& path);
 
 }  // namespace embody::avatar
