@@ -3,12 +3,14 @@
 // every one of them: no NaN, the equality (coupling) rows met to 1e-9, the inequalities (joint
 // limits, coupling ranges) violated by at most the solver's tolerance, and iterations to converge.
 //
-//   embody_random_ik [--problems N] [--threads T] [--max-iterations I] [--seed S] [--json FILE]
+//   embody_random_ik [--problems N] [--threads T] [--max-iterations I] [--seed S] [--walk-step RAD]
+//                    [--json FILE]
 //
-// A problem: a random configuration inside the limits (the hips within 0.3 m and 0.5 rad of
-// neutral), its task targets by forward kinematics (head pose, hands, feet, centre of mass, as
-// the runtime sets them), solved warm-started from the previous problem's solution the way the
-// runtime solves consecutive frames. docs/performance.md has the figures.
+// A problem: a random configuration, its task targets by forward kinematics (head pose, hands,
+// feet, centre of mass, as the runtime sets them), solved warm-started from the previous
+// problem's solution. Per model, half the problems are uniform inside the limits (the hips within
+// 0.3 m and 0.5 rad of neutral: far apart, a stress test), half a random walk of --walk-step per
+// dof (consecutive tracking frames). docs/performance.md has the figures.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -43,21 +45,33 @@ struct Figures {
   }
 };
 
-Eigen::VectorXd randomConfiguration(const ik::Model& m, std::mt19937_64& rng) {
+// step = 0: uniform inside the limits (the hips within 0.3 m / 0.5 rad of neutral). step > 0: a
+// random walk from `previous`, each dof moving by at most `step` (radians; hips metres / 2), kept
+// inside the same box: consecutive tracking frames.
+Eigen::VectorXd randomConfiguration(const ik::Model& m, std::mt19937_64& rng, const Eigen::VectorXd& previous,
+                                    double step) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   Eigen::VectorXd q = m.neutral;
   for (const auto& j : m.joints) {
     for (int c = 0; c < j.dof_count; ++c) {
       const int i = j.first_dof + c;
+      double lo, hi;
       if (j.desc.type == ik::JointType::Free) {
-        q[i] += (c < 3 ? 0.3 : 0.5) * (2.0 * unit(rng) - 1.0);
-        continue;
+        const double r = c < 3 ? 0.3 : 0.5;
+        lo = q[i] - r;
+        hi = q[i] + r;
+      } else {
+        lo = c < static_cast<int>(j.desc.lower.size()) ? j.desc.lower[c] : -ik::kUnbounded;
+        hi = c < static_cast<int>(j.desc.upper.size()) ? j.desc.upper[c] : ik::kUnbounded;
+        lo = std::isfinite(lo) ? lo : q[i] - 1.0;
+        hi = std::isfinite(hi) ? hi : q[i] + 1.0;
       }
-      double lo = c < static_cast<int>(j.desc.lower.size()) ? j.desc.lower[c] : -ik::kUnbounded;
-      double hi = c < static_cast<int>(j.desc.upper.size()) ? j.desc.upper[c] : ik::kUnbounded;
-      lo = std::isfinite(lo) ? lo : q[i] - 1.0;
-      hi = std::isfinite(hi) ? hi : q[i] + 1.0;
-      q[i] = lo + (hi - lo) * unit(rng);
+      if (step > 0.0) {
+        const double s = j.desc.type == ik::JointType::Free && c < 3 ? 0.5 * step : step;
+        q[i] = std::clamp(previous[i] + s * (2.0 * unit(rng) - 1.0), lo, hi);
+      } else {
+        q[i] = lo + (hi - lo) * unit(rng);
+      }
     }
   }
   return q;
@@ -104,7 +118,7 @@ double inequalityViolation(const ik::Model& m, const Eigen::VectorXd& q) {
   return worst;
 }
 
-Figures solveRandom(const ik::Model& m, long problems, uint64_t seed, int maxIterations) {
+Figures solveRandom(const ik::Model& m, long problems, uint64_t seed, int maxIterations, double step) {
   std::mt19937_64 rng(seed);
   ik::Data data(m), scratch(m);
   (void)data.setEnabled(m.findTask("hips"), false);
@@ -112,8 +126,10 @@ Figures solveRandom(const ik::Model& m, long problems, uint64_t seed, int maxIte
   o.max_iterations = maxIterations;
   Figures f;
   f.iterations.reserve(static_cast<size_t>(problems));
+  Eigen::VectorXd previous = m.neutral;
   for (long p = 0; p < problems; ++p) {
-    setTargetsFrom(m, scratch, randomConfiguration(m, rng), data);
+    previous = randomConfiguration(m, rng, previous, step);
+    setTargetsFrom(m, scratch, previous, data);
     const ik::SolveReport& r = ik::solve(m, data, o);
     const Eigen::VectorXd& q = data.q();
     ++f.problems;
@@ -133,14 +149,14 @@ Figures solveRandom(const ik::Model& m, long problems, uint64_t seed, int maxIte
 }
 
 nlohmann::json run(const std::string& name, const ik::Model& m, long problems, int threads, uint64_t seed,
-                   int maxIterations) {
+                   int maxIterations, double step) {
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<Figures> parts(static_cast<size_t>(threads));
   std::vector<std::thread> pool;
   for (int t = 0; t < threads; ++t)
     pool.emplace_back([&, t] {
       const long share = problems / threads + (t < problems % threads ? 1 : 0);
-      parts[static_cast<size_t>(t)] = solveRandom(m, share, seed + 7919u * static_cast<uint64_t>(t), maxIterations);
+      parts[static_cast<size_t>(t)] = solveRandom(m, share, seed + 7919u * static_cast<uint64_t>(t), maxIterations, step);
     });
   for (auto& th : pool) th.join();
   Figures all;
@@ -151,6 +167,7 @@ nlohmann::json run(const std::string& name, const ik::Model& m, long problems, i
   };
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return {{"model", name},
+          {"problems_kind", step > 0.0 ? "walk, step " + std::to_string(step) + " rad" : std::string("uniform")},
           {"dofs", m.dofs},
           {"equality_rows", m.equality_matrix.rows()},
           {"inequality_rows", m.inequalities.size()},
@@ -174,6 +191,7 @@ int main(int argc, char** argv) {
   int threads = std::max(1u, std::thread::hardware_concurrency());
   int maxIterations = 40;  // the runtime's AvatarBodyOptions::maxIterations
   uint64_t seed = 1;
+  double walkStep = 0.05;  // radians per dof per problem: about a 72 Hz frame of brisk motion
   std::string jsonPath;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -182,10 +200,11 @@ int main(int argc, char** argv) {
     else if (a == "--threads" && hasValue) threads = std::max(1, std::stoi(argv[++i]));
     else if (a == "--max-iterations" && hasValue) maxIterations = std::max(1, std::stoi(argv[++i]));
     else if (a == "--seed" && hasValue) seed = std::stoull(argv[++i]);
+    else if (a == "--walk-step" && hasValue) walkStep = std::stod(argv[++i]);
     else if (a == "--json" && hasValue) jsonPath = argv[++i];
     else {
       std::fprintf(stderr, "usage: embody_random_ik [--problems N] [--threads T] [--max-iterations I] [--seed S] "
-                           "[--json FILE]\n");
+                           "[--walk-step RAD] [--json FILE]\n");
       return 2;
     }
   }
@@ -197,11 +216,13 @@ int main(int argc, char** argv) {
     bo.coupledSpine = coupled;
     auto body = avatar::buildBodyModel(asset, bo);
     if (!body) return std::fprintf(stderr, "embody_random_ik: error: %s\n", body.error().c_str()), 1;
-    const auto j = run(coupled ? "mannequin, coupled spine" : "mannequin, uncoupled spine", body->model, problems,
-                       threads, seed, maxIterations);
-    std::printf("%s\n", j.dump(2).c_str());
-    ok = ok && j["nan_solutions"] == 0 && j["equality_residual_max"].get<double>() <= 1e-9;
-    out.push_back(j);
+    for (double step : {0.0, walkStep}) {
+      const auto j = run(coupled ? "mannequin, coupled spine" : "mannequin, uncoupled spine", body->model,
+                         problems / 2, threads, seed, maxIterations, step);
+      std::printf("%s\n", j.dump(2).c_str());
+      ok = ok && j["nan_solutions"] == 0 && j["equality_residual_max"].get<double>() <= 1e-9;
+      out.push_back(j);
+    }
   }
   if (!jsonPath.empty()) std::ofstream(jsonPath) << out.dump(2) << "\n";
   return ok ? 0 : 1;
