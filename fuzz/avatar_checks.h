@@ -34,8 +34,12 @@ inline void checkAvatar(const avatar::AvatarAsset& a) {
   }
   for (const auto& p : m.primitives)
     EMBODY_FUZZ_CHECK(p.material < static_cast<int>(a.materials.size()));
-  for (const auto& mat : a.materials)
+  for (const auto& mat : a.materials) {
     EMBODY_FUZZ_CHECK(mat.baseColorImage < static_cast<int>(a.images.size()));
+    EMBODY_FUZZ_CHECK(mat.emissiveImage < static_cast<int>(a.images.size()));
+    EMBODY_FUZZ_CHECK(std::isfinite(mat.baseColorFactor.r + mat.baseColorFactor.g + mat.baseColorFactor.b +
+                                    mat.baseColorFactor.a + mat.emissiveStrength + mat.alphaCutoff));
+  }
   for (const auto& img : a.images)
     EMBODY_FUZZ_CHECK(img.rgba.size() == static_cast<size_t>(img.width) * static_cast<size_t>(img.height) * 4);
   for (int j : a.humanoid.bones) EMBODY_FUZZ_CHECK(j < static_cast<int>(joints));
