@@ -18,6 +18,7 @@ struct RenderJob {
   std::string motion = "synthetic:figure8";
   std::string profile;             // --profile FILE (avatar/body/calibration.h: saveProfile)
   std::string record;              // --record FILE.jsonl ("" none)
+  std::string exportPath;          // --export FILE.bvh|.glb: the solved motion, every frame ("" none)
   float userHeight = 0.0f;         // 0: the profile's, else from the first head sample
   double bvhScale = 0.0;
   bool threePoint = false;         // keep only head and hands
@@ -28,6 +29,7 @@ struct RenderJob {
   std::string view = "third";      // third | first | stereo
   float yaw = 0.5f, pitch = 0.15f; // third-person orbit (radians)
   double budgetMs = 1.0;
+  int ikIterations = 0;            // --ik-iterations: > 0 a fixed count per frame (deterministic), 0 the budget
   std::string device = "auto";
   bool validate = false, msaa = false, skeleton = false, gizmos = false, grid = true;
   bool writeFrames = true;
