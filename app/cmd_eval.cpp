@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "app/args.h"
+#include "app/eval_sheet.h"
 #include "eval/clip_eval.h"
 #include "eval/report.h"
 #include "tracking/bvh_avatar.h"
@@ -33,6 +34,8 @@ struct EvalJob {
   double bvhScale = 0.0;
   fs::path out;
   bool plots = true;
+  bool sheet = true;
+  std::string device = "auto";
 };
 
 // One table row per (clip, tracker set): MPJPE of each method, or why the clip was not scored.
@@ -53,6 +56,7 @@ bool evaluateOne(const tracking::BvhAvatar& avatar, const EvalJob& job, eval::Tr
   row.trackers = eval::trackerSetName(set);
   eval::EvalOptions o = job.options;
   o.trackers = set;
+  o.keepPoses = job.sheet ? 12 : 0;
   const auto started = std::chrono::steady_clock::now();
   auto solved = tracking::SolvedMotionBvh::forBvhAvatar(avatar);
   auto e = eval::evaluateClip(avatar, o, &solved);
@@ -68,6 +72,9 @@ bool evaluateOne(const tracking::BvhAvatar& avatar, const EvalJob& job, eval::Tr
   ro.plots = job.plots;
   auto notes = eval::writeReport(*e, ro, dir);
   if (!notes) return row.error = notes.error(), false;
+  if (job.sheet)
+    if (auto s = app::writeEvalSheet(avatar, *e, dir / "contact_sheet.png", job.device); !s)
+      notes->push_back("contact sheet not drawn: " + s.error());
   row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   for (size_t k = 0; k < e->runs.size(); ++k) {
     const auto& m = e->runs[k].metrics;
@@ -83,7 +90,8 @@ bool evaluateOne(const tracking::BvhAvatar& avatar, const EvalJob& job, eval::Tr
                 e->frames, e->fps, row.trackers.c_str(), o.ikIterations, e->skeleton.groups[eval::kAll].size());
     std::printf("%s", eval::methodTable(*e).c_str());
     for (const auto& n : *notes) std::printf("note: %s\n", n.c_str());
-    std::printf("wrote metrics.json, solved.bvh, frames.csv, joints.csv, errors.png, joints.png to %s (%.1f s)\n",
+    std::printf("wrote metrics.json, solved.bvh, frames.csv, joints.csv, errors.png, joints.png, contact_sheet.png to %s "
+                "(%.1f s)\n",
                 dir.c_str(), row.seconds);
   }
   return true;
@@ -163,6 +171,8 @@ int runEval(app::Argv argv) {
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (default: fit the clip to 1.75 m)");
   args.option("out", "DIR", "output folder", "out/eval");
   args.flag("no-plots", "do not run gnuplot (the .gp scripts are still written)");
+  args.flag("no-sheet", "no contact sheet (it needs a Vulkan device: the solution solid, the clip as an orange ghost skeleton)");
+  args.option("device", "SELECTOR", "Vulkan device for the contact sheet: auto, an index, 'lavapipe', or part of its name", "auto");
   if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
 
   EvalJob job;
@@ -176,6 +186,17 @@ int runEval(app::Argv argv) {
     if (args.has("bvh-scale") && !(job.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");
   } catch (const std::invalid_argument& e) {
     return fail(e.what(), 2);
+  }
+  const std::string sets = args.get("trackers");
+  const bool given = std::find(argv.begin(), argv.end(), "--trackers") != argv.end() ||
+                     std::any_of(argv.begin(), argv.end(), [](const std::string& a) { return a.rfind("--trackers=", 0) == 0; });
+  std::error_code dirError;
+  if (fs::is_directory(args.get("motion"), dirError) && !given) {
+    job.sets = {eval::TrackerSet::Three, eval::TrackerSet::Four, eval::TrackerSet::Six, eval::TrackerSet::Full};
+  } else {
+    eval::TrackerSet set;
+    if (!eval::parseTrackerSet(sets, set)) return fail("--trackers must be 3, 4, 6 or full (got '" + sets + "')", 2);
+    job.sets = {set};
   }
   const fs::path motion = args.get("motion");
   std::error_code ec;
@@ -192,18 +213,10 @@ int runEval(app::Argv argv) {
     if (!fs::exists(motion, ec)) return fail(motion.string() + ": no such file or folder", 1);
     job.clips.push_back(motion);
   }
-  const std::string sets = args.get("trackers");
-  const bool given = std::find(argv.begin(), argv.end(), "--trackers") != argv.end() ||
-                     std::any_of(argv.begin(), argv.end(), [](const std::string& a) { return a.rfind("--trackers=", 0) == 0; });
-  if (job.folder && !given) {
-    job.sets = {eval::TrackerSet::Three, eval::TrackerSet::Four, eval::TrackerSet::Six, eval::TrackerSet::Full};
-  } else {
-    eval::TrackerSet set;
-    if (!eval::parseTrackerSet(sets, set)) return fail("--trackers must be 3, 4, 6 or full (got '" + sets + "')", 2);
-    job.sets = {set};
-  }
   job.out = args.get("out");
   job.plots = !args.has("no-plots");
+  job.sheet = !args.has("no-sheet");
+  job.device = args.get("device");
   fs::create_directories(job.out, ec);
   if (ec) return fail("cannot create " + job.out.string() + ": " + ec.message(), 1);
   return runJob(job);

@@ -37,6 +37,30 @@ int fail(const std::string& message, int code = 1) {
   return code;
 }
 
+// Two images side by side.
+avatar::Image sideBySide(const avatar::Image& a, const avatar::Image& b) {
+  avatar::Image out;
+  out.width = a.width + b.width;
+  out.height = std::max(a.height, b.height);
+  out.rgba.assign(size_t(out.width) * size_t(out.height) * 4, 0);
+  for (int y = 0; y < out.height; ++y) {
+    if (y < a.height) std::copy_n(&a.rgba[size_t(y) * size_t(a.width) * 4], size_t(a.width) * 4, &out.rgba[size_t(y) * size_t(out.width) * 4]);
+    if (y < b.height)
+      std::copy_n(&b.rgba[size_t(y) * size_t(b.width) * 4], size_t(b.width) * 4,
+                  &out.rgba[(size_t(y) * size_t(out.width) + size_t(a.width)) * 4]);
+  }
+  return out;
+}
+
+void progressBar(int done, int total, double elapsed) {
+  const int width = 30, filled = total > 0 ? done * width / total : width;
+  std::printf("\r[%s%s] %d/%d frames  %.1f s", std::string(size_t(filled), '#').c_str(),
+              std::string(size_t(width - filled), ' ').c_str(), done, total, elapsed);
+  std::fflush(stdout);
+}
+
+}  // namespace
+
 // Up to `count` frames evenly through the run, tiled into one image at most ~1200 px wide.
 avatar::Image contactSheet(const std::vector<avatar::Image>& thumbs) {
   avatar::Image sheet;
@@ -75,30 +99,6 @@ avatar::Image shrink(const avatar::Image& img, int factor) {
       }
   return out;
 }
-
-// Two images side by side.
-avatar::Image sideBySide(const avatar::Image& a, const avatar::Image& b) {
-  avatar::Image out;
-  out.width = a.width + b.width;
-  out.height = std::max(a.height, b.height);
-  out.rgba.assign(size_t(out.width) * size_t(out.height) * 4, 0);
-  for (int y = 0; y < out.height; ++y) {
-    if (y < a.height) std::copy_n(&a.rgba[size_t(y) * size_t(a.width) * 4], size_t(a.width) * 4, &out.rgba[size_t(y) * size_t(out.width) * 4]);
-    if (y < b.height)
-      std::copy_n(&b.rgba[size_t(y) * size_t(b.width) * 4], size_t(b.width) * 4,
-                  &out.rgba[(size_t(y) * size_t(out.width) + size_t(a.width)) * 4]);
-  }
-  return out;
-}
-
-void progressBar(int done, int total, double elapsed) {
-  const int width = 30, filled = total > 0 ? done * width / total : width;
-  std::printf("\r[%s%s] %d/%d frames  %.1f s", std::string(size_t(filled), '#').c_str(),
-              std::string(size_t(width - filled), ' ').c_str(), done, total, elapsed);
-  std::fflush(stdout);
-}
-
-}  // namespace
 
 int runRenderJob(const RenderJob& job) {
   if (job.view != "third" && job.view != "first" && job.view != "stereo") return fail("--view must be first, third or stereo", 2);

@@ -5,8 +5,10 @@
 // stats.json into the output folder.
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "app/args.h"
+#include "avatar/avatar_asset.h"
 
 namespace embody::app {
 
@@ -36,6 +38,11 @@ struct RenderJob {
   bool progress = true;            // a progress bar when stdout is a terminal
   std::filesystem::path out;
 };
+
+// Up to 12 thumbnails tiled four to a row (the contact sheet of render and eval), and a
+// box-filtered downscale by an integer factor.
+avatar::Image contactSheet(const std::vector<avatar::Image>& thumbs);
+avatar::Image shrink(const avatar::Image& img, int factor);
 
 // Runs the job; prints errors as "error: ..." and returns the process exit code (0, 1 runtime
 // error, 2 bad option values).

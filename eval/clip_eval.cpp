@@ -48,7 +48,7 @@ std::unique_ptr<tracking::PoseSource> sourceFor(const tracking::BvhAvatar& avata
 }
 
 Result<JointTrack> runtimeTrack(const tracking::BvhAvatar& avatar, const EvalOptions& o, bool coupled, double fps,
-                                const JointTrack& truth, tracking::SolvedMotionBvh* bvh) {
+                                const JointTrack& truth, tracking::SolvedMotionBvh* bvh, MethodRun& run) {
   const int frames = truth.frames();
   runtime::AvatarBodyOptions bo;
   bo.coupledSpine = coupled;
@@ -87,6 +87,8 @@ Result<JointTrack> runtimeTrack(const tracking::BvhAvatar& avatar, const EvalOpt
     stage.process(source->sample(double(f) / fps), frame);
     appendPose(avatar.asset.skeleton, frame.pose, globals, track);
     if (bvh) bvh->add(frame.pose);
+    const int keep = coupled ? o.keepPoses : 0;
+    if (keep > 0 && (f * keep) / frames != ((f + 1) * keep) / frames) run.kept.emplace_back(f, frame.pose);
   }
   return track;
 }
@@ -316,7 +318,7 @@ Result<ClipEval> evaluateClip(const tracking::BvhAvatar& avatar, const EvalOptio
     if (m == Method::Naive) {
       run.solved = naiveTrack(avatar, e.fps, e.frames);
     } else {
-      auto t = runtimeTrack(avatar, o, m == Method::Coupled, e.fps, e.truth, m == Method::Coupled ? solvedBvh : nullptr);
+      auto t = runtimeTrack(avatar, o, m == Method::Coupled, e.fps, e.truth, m == Method::Coupled ? solvedBvh : nullptr, run);
       if (!t) return Error{t.error()};
       run.solved = std::move(t).value();
     }

@@ -37,6 +37,7 @@ struct EvalOptions {
   TrackerSet trackers = TrackerSet::Three;
   double fps = 0.0;      // 0: the clip's own rate
   int ikIterations = 10; // per frame (deterministic)
+  int keepPoses = 0;     // > 0: keep this many of the coupled run's poses, evenly through the clip (contact sheet)
 };
 
 struct MethodRun {
@@ -44,6 +45,7 @@ struct MethodRun {
   JointTrack solved;
   Metrics metrics;
   double seconds = 0.0;  // wall time of the run (not part of the score)
+  std::vector<std::pair<int, avatar::SkeletonPose>> kept;  // (frame, pose), EvalOptions::keepPoses
 };
 
 struct ClipEval {
