@@ -205,20 +205,31 @@ ScoredSkeleton scoredSkeleton(const tracking::BvhAvatar& avatar) {
   auto below = [&](int ancestor, int j) { return ancestor >= 0 && sk.isAncestor(ancestor, j); };
   const int hips = joint(HumanBone::hips), head = joint(HumanBone::head);
   s.pelvis = hips;
-  // The spine chain: hips up to the head.
+  std::vector<int> spine;  // hips up to the head
   for (int j = head; j >= 0; j = sk.joints[size_t(j)].parent) {
-    s.spine.insert(s.spine.begin(), j);
+    spine.insert(spine.begin(), j);
     if (j == hips) break;
   }
   std::vector<glm::mat4> g;
   avatar::computeGlobals(sk, avatar::SkeletonPose::rest(sk), g);
   auto restPos = [&](int j) { return glm::dvec3(g[size_t(j)][3]); };
-  s.spineAxis.assign(s.spine.size(), glm::dvec3(0, 1, 0));
-  for (size_t k = 1; k < s.spine.size(); ++k) {
-    const glm::dvec3 d = restPos(s.spine[k]) - restPos(s.spine[k - 1]);
-    if (glm::length(d) > 1e-6) s.spineAxis[k] = glm::normalize(d);
+  // Regions: the trunk up to the neck bone, the neck up to the head (one region without a neck).
+  const int neck = joint(HumanBone::neck);
+  const auto split = std::find(spine.begin(), spine.end(), neck);
+  std::vector<std::vector<int>> chains;
+  if (split == spine.end()) chains = {spine};
+  else chains = {std::vector<int>(spine.begin(), split + 1), std::vector<int>(split, spine.end())};
+  for (auto& chain : chains) {
+    ScoredSkeleton::SpineRegion r;
+    r.axis.assign(chain.size(), glm::dvec3(0, 1, 0));
+    for (size_t k = 1; k < chain.size(); ++k) {
+      const glm::dvec3 d = restPos(chain[k]) - restPos(chain[k - 1]);
+      if (glm::length(d) > 1e-6) r.axis[k] = glm::normalize(d);
+    }
+    r.chain = std::move(chain);
+    if (r.chain.size() > 2) s.spineRegions.push_back(std::move(r));
   }
-  const int spineRoot = s.spine.size() > 1 ? s.spine[1] : -1;  // the first joint above the hips
+  const int spineRoot = spine.size() > 1 ? spine[1] : -1;  // the first joint above the hips
   const std::array<HumanBone, 2> hands{HumanBone::leftHand, HumanBone::rightHand};
   for (size_t j = 0; j < sk.joints.size(); ++j) {
     if (avatar.clip.joints[j].endSite) continue;

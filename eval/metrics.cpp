@@ -49,11 +49,11 @@ bool reversed(const JointTrack& s, const JointTrack& c, int f, const std::array<
   return sa > kBendDegrees && ca > kBendDegrees && glm::dot(sn, cn) < 0.0;
 }
 
-bool torsionSignChange(const JointTrack& t, int f, const ScoredSkeleton& sk) {
+bool torsionSignChange(const JointTrack& t, int f, const ScoredSkeleton::SpineRegion& region) {
   int sign = 0;
-  for (size_t k = 1; k < sk.spine.size(); ++k) {
-    const glm::dquat local = glm::conjugate(t.q(f, sk.spine[k - 1])) * t.q(f, sk.spine[k]);
-    const glm::dvec3 axis = sk.spineAxis[k];
+  for (size_t k = 1; k < region.chain.size(); ++k) {
+    const glm::dquat local = glm::conjugate(t.q(f, region.chain[k - 1])) * t.q(f, region.chain[k]);
+    const glm::dvec3 axis = region.axis[k];
     const double twist = glm::degrees(2.0 * std::atan2(glm::dot(glm::dvec3(local.x, local.y, local.z), axis), local.w));
     const double wrapped = std::remainder(twist, 360.0);
     if (std::abs(wrapped) < kTwistDegrees) continue;
@@ -112,10 +112,13 @@ Metrics score(const JointTrack& solved, const JointTrack& clip, const ScoredSkel
     for (int j : sk.groups[kAll]) rotation += angleDegrees(solved.q(f, j), clip.q(f, j)), ++rotationCount;
     if (reversed(solved, clip, f, sk.legs[0]) || reversed(solved, clip, f, sk.legs[1])) ++m.kneeReverseFrames;
     if (reversed(solved, clip, f, sk.arms[0]) || reversed(solved, clip, f, sk.arms[1])) ++m.elbowReverseFrames;
-    if (sk.spine.size() > 2) {
-      m.torsionSignChangeFrames += torsionSignChange(solved, f, sk);
-      m.clipTorsionSignChangeFrames += torsionSignChange(clip, f, sk);
+    bool solvedChange = false, clipChange = false;
+    for (const auto& region : sk.spineRegions) {
+      solvedChange = solvedChange || torsionSignChange(solved, f, region);
+      clipChange = clipChange || torsionSignChange(clip, f, region);
     }
+    m.torsionSignChangeFrames += solvedChange;
+    m.clipTorsionSignChangeFrames += clipChange;
     if (sk.pelvis >= 0 && sk.standingPelvisHeight > 0.0) {
       const double half = 0.5 * sk.standingPelvisHeight;
       if (solved.p(f, sk.pelvis).y < half && clip.p(f, sk.pelvis).y >= half) ++m.collapsedFrames;

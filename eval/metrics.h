@@ -14,8 +14,9 @@
 // - Reverse bends: frames where a solved knee or elbow, bent by more than 15°, bends the other
 //   way round than the clip's (bend normals (hip→knee)×(knee→ankle) opposed, the clip bent by
 //   more than 15° too): the clip's bend is the anatomical one.
-// - Spine torsion sign changes: per frame, sign changes of the twist (about each bone's axis,
-//   |twist| > 1°) along the spine chain, hips to head; reported as frames with any.
+// - Spine torsion sign changes: frames where the twist (about each bone's axis, |twist| > 1°)
+//   changes sign along the chain inside one spine region (trunk: hips to the neck; neck: neck to
+//   the head); a head turning against the trunk is no sign change.
 // - Collapsed: frames where the solved pelvis is below half its standing height while the clip's
 //   is not.
 #include <array>
@@ -47,8 +48,13 @@ struct ScoredSkeleton {
   std::array<std::array<int, 3>, 2> legs{{{-1, -1, -1}, {-1, -1, -1}}};  // hip, knee, ankle (0 = left)
   std::array<std::array<int, 3>, 2> arms{{{-1, -1, -1}, {-1, -1, -1}}};  // shoulder, elbow, wrist
   std::array<std::vector<int>, 2> soles;  // per foot: the ankle and every joint below it (toes, end sites)
-  std::vector<int> spine;                 // pelvis ... head, in chain order
-  std::vector<glm::dvec3> spineAxis;      // per spine joint k > 0: the rest direction spine[k-1] -> spine[k]
+  // Spine regions (trunk: hips up to the neck; neck: neck up to the head), each a chain of joints
+  // from the region's base, with per joint k > 0 the rest direction chain[k-1] -> chain[k].
+  struct SpineRegion {
+    std::vector<int> chain;
+    std::vector<glm::dvec3> axis;
+  };
+  std::vector<SpineRegion> spineRegions;
 };
 
 struct GroupError {

@@ -133,3 +133,25 @@ TEST_CASE("eval metrics: p95 is the nearest-rank 95th percentile", "[eval]") {
   CHECK(percentile95({}) == 0.0);
   CHECK(percentile95({3.0}) == 3.0);
 }
+
+TEST_CASE("eval metrics: spine torsion changing sign inside a region, not between regions", "[eval]") {
+  // Four joints up a vertical chain; joint 1 twisted +10 deg about the chain, joint 2 back to -5
+  // in the world (local -15): a sign change when 0..3 is one region; none when the regions are
+  // 0..1 and 1..3 (the +10 and the -15 fall in different regions).
+  JointTrack t;
+  t.joints = 4;
+  const glm::dvec3 up(0, 1, 0);
+  const glm::dquat q1 = glm::angleAxis(glm::radians(10.0), up), q2 = glm::angleAxis(glm::radians(-5.0), up);
+  t.position = {{0, 0, 0}, {0, 1, 0}, {0, 2, 0}, {0, 3, 0}};
+  t.rotation = {glm::dquat(1, 0, 0, 0), q1, q2, q2};
+  ScoredSkeleton one;
+  one.groups[kAll] = {0, 1, 2, 3};
+  one.spineRegions = {{{0, 1, 2, 3}, {up, up, up, up}}};
+  CHECK(score(t, t, one, 30.0).torsionSignChangeFrames == 1);
+  ScoredSkeleton two = one;
+  two.spineRegions = {{{0, 1}, {up, up}}, {{1, 2, 3}, {up, up, up}}};
+  CHECK(score(t, t, two, 30.0).torsionSignChangeFrames == 0);
+  JointTrack straight = t;
+  straight.rotation = {glm::dquat(1, 0, 0, 0), q1, q1 * q1, q1 * q1};  // the same way all along
+  CHECK(score(straight, straight, one, 30.0).torsionSignChangeFrames == 0);
+}
