@@ -189,8 +189,14 @@ Status XrSessionRunner::pollEvents() {
       case XR_TYPE_EVENT_DATA_INTERACTION_PROFILE_CHANGED:
         profileChanged_ = true;
         break;
+      case XR_TYPE_EVENT_DATA_REFERENCE_SPACE_CHANGE_PENDING: {
+        const auto& e = reinterpret_cast<const XrEventDataReferenceSpaceChangePending&>(ev);
+        const XrReferenceSpaceType world = usingStage_ ? XR_REFERENCE_SPACE_TYPE_STAGE : XR_REFERENCE_SPACE_TYPE_LOCAL;
+        if (e.session == session_ && e.referenceSpaceType == world) worldSpaceChange_ = std::max<XrTime>(e.changeTime, 1);
+        break;
+      }
       default:
-        break;  // reference space changes, events lost: nothing to do
+        break;  // events lost, other extensions' events: nothing to do
     }
   }
 }
@@ -204,6 +210,8 @@ void XrSessionRunner::requestExit() {
     finished_ = true;  // never started (still IDLE): nothing to end
   }
 }
+
+XrTime XrSessionRunner::takeWorldSpaceChange() { return std::exchange(worldSpaceChange_, 0); }
 
 bool XrSessionRunner::takeInteractionProfileChanged() {
   return std::exchange(profileChanged_, false);
