@@ -110,7 +110,10 @@ unset multiplot
 # The inter-region band slack (a value the paper does not give): the coupled run per slack.
 set terminal pngcairo size 900,520 font 'Sans,11'
 set output 'fig_band_slack.png'
-unset size
+set size noratio
+set size 1,1
+unset key
+set key top right box
 set autoscale
 set xtics autofreq
 set ytics autofreq
