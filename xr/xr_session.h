@@ -99,6 +99,7 @@ class XrSessionRunner {
   Status init();
   Status createSwapchain(uint32_t eye, bool depth, int64_t format, EyeSwapchain& out);
   void setState(XrSessionState s);
+  void noteLoss(XrResult r);  // XR_ERROR_SESSION_LOST / _INSTANCE_LOST: the session is over
 
   XrSystem& system_;
   XrSession session_ = XR_NULL_HANDLE;
