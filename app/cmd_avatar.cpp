@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "app/args.h"
+#include "app/avatar_arg.h"
 #include "app/job_options.h"
 #include "avatar/avatar_loader.h"
 #include "avatar/body/body_model.h"
@@ -187,6 +188,8 @@ int runInfo(app::Argv argv) {
       }
       if (auto s = prepareAvatar(asset.value(), text.value()); !s.ok()) asset = Error{s.error()};
     }
+  } else if (app::isBvhPath(args.get("FILE"))) {
+    asset = app::loadAvatarArg(args.get("FILE"), args.get("bone-map"));  // the clip's skeleton
   } else {
     AvatarLoadOptions options;
     options.boneMapFile = args.get("bone-map");
@@ -256,9 +259,7 @@ int runCalibrate(app::Argv argv) {
   if (args.get("FILE") == "default") {
     asset = buildDefaultAvatar();
   } else {
-    AvatarLoadOptions options;
-    options.boneMapFile = args.get("bone-map");
-    asset = loadAvatarFile(args.get("FILE"), options);
+    asset = app::loadAvatarArg(args.get("FILE"), args.get("bone-map"));
   }
   if (!asset.ok()) {
     std::fprintf(stderr, "error: %s\n", asset.error().c_str());

@@ -38,7 +38,7 @@ int runDemo(app::Argv argv) {
                  "The main job on the embedded defaults: the default avatar follows a built-in motion through the IK "
                  "runtime; frames, contact_sheet.png and stats.json go to --out. Opens the mirror window too when a "
                  "display is available.");
-  app::addJobOptions(args, app::kAllJobOptions);  // default avatar, synthetic:figure8, 480x480, 90 Hz, 1 ms
+  app::addJobOptions(args, app::kAllJobOptions | app::kIterationOptions);  // default avatar, synthetic:figure8, 480x480, 90 Hz, 1 ms
   args.option("out", "DIR", "output folder", "out/demo");
   args.option("frames", "N", "frames to render", "270");
   args.option("device", "SELECTOR", "Vulkan device: auto, an index, 'lavapipe', or part of its name", "auto");
@@ -47,7 +47,7 @@ int runDemo(app::Argv argv) {
 
   app::RenderJob job;
   try {
-    app::readJobOptions(args, app::kAllJobOptions, job);
+    app::readJobOptions(args, app::kAllJobOptions | app::kIterationOptions, job);
     job.frames = args.integer("frames");
     if (job.frames < 1) throw std::invalid_argument("--frames must be at least 1");
   } catch (const std::invalid_argument& e) {

@@ -20,7 +20,8 @@ std::string metres(double m) {
 void addJobOptions(Args& args, unsigned groups, const JobOptionDefaults& defaults) {
   auto orNone = [](const std::string& v) { return v.empty() ? std::nullopt : std::optional<std::string>(v); };
   if (groups & kAvatarOptions) {
-    args.option("avatar", "FILE|default", "a .gltf/.glb/.vrm file, or 'default': the built-in procedural avatar (when absent)");
+    args.option("avatar", "FILE|default", "a .gltf/.glb/.vrm file, a .bvh clip (its own skeleton with a capsule per bone), or 'default': the "
+                "built-in procedural avatar (when absent)");
     args.option("bone-map", "FILE", "JSON object VRM-1.0-bone-name -> node name; its entries win over every other mapping");
   }
   if (groups & kMotionOptions) {
@@ -41,6 +42,9 @@ void addJobOptions(Args& args, unsigned groups, const JobOptionDefaults& default
   if (groups & kFrameOptions)
     args.option("size", "WxH", "frame size, 16x16 .. 8192x8192", orNone(defaults.size));
   if (groups & kBudgetOptions) args.option("ik-budget-ms", "MS", "IK time budget per frame (> 0, at most 1000)", "1");
+  if (groups & kIterationOptions)
+    args.option("ik-iterations", "N", "a fixed IK iteration count per frame (1 .. 1000) instead of the time budget: the "
+                "same command gives the same output bytes (offline, reproducible runs)");
 }
 
 void parseSize(const std::string& text, int& width, int& height) {
@@ -99,6 +103,11 @@ void readJobOptions(const Args& args, unsigned groups, JobOptions& out) {
     out.budgetMs = args.number("ik-budget-ms");
     if (!(out.budgetMs > 0.0 && out.budgetMs <= kMaxBudgetMs))
       throw std::invalid_argument("--ik-budget-ms must be > 0 and at most 1000");
+  }
+  if ((groups & kIterationOptions) && args.has("ik-iterations")) {
+    out.ikIterations = args.integer("ik-iterations");
+    if (!(out.ikIterations >= 1 && out.ikIterations <= kMaxIkIterations))
+      throw std::invalid_argument("--ik-iterations must be 1 .. 1000");
   }
 }
 

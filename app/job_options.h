@@ -23,6 +23,7 @@ enum JobOptionGroup : unsigned {
   kFrameOptions = 1u << 3,   // --size
   kBudgetOptions = 1u << 4,  // --ik-budget-ms
   kAllJobOptions = 0x1Fu,
+  kIterationOptions = 1u << 5,  // --ik-iterations (offline, reproducible runs: render, demo)
 };
 
 // The values of the shared options (the defaults are the CLI's).
@@ -39,12 +40,14 @@ struct JobOptions {
   bool threePoint = false;         // keep only head and hands
   int width = 480, height = 480;
   double budgetMs = 1.0;
+  int ikIterations = 0;            // --ik-iterations: > 0 a fixed count per frame (deterministic), 0 the budget
 };
 
 // The limits every command applies.
 constexpr double kMinFps = 1.0, kMaxFps = 1000.0;
 constexpr int kMinSide = 16, kMaxSide = 8192;
 constexpr double kMaxBudgetMs = 1000.0;
+constexpr int kMaxIkIterations = 1000;
 
 // Per-command defaults of the shared options that have one ("" : no default, the option is
 // optional and the command decides).

@@ -7,11 +7,14 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <stdexcept>
 #include <glm/gtc/constants.hpp>
 #include <nlohmann/json.hpp>
 
+#include "app/avatar_arg.h"
 #include "app/job_inputs.h"
+#include "avatar/gltf/glb_writer.h"
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
 #include "engine/image_io.h"
@@ -19,14 +22,15 @@
 #include "runtime/avatar_body_solver.h"
 #include "runtime/ik_thread.h"
 #include "runtime/seated_stats.h"
+#include "tracking/bvh_export.h"
 #include "tracking/pose_source.h"
 #include "tracking/trace.h"
 
 namespace embody::app {
 
 namespace {
-
 using Clock = std::chrono::steady_clock;
+}  // namespace
 
 // Up to `count` frames evenly through the run, tiled into one image at most ~1200 px wide.
 avatar::Image contactSheet(const std::vector<avatar::Image>& thumbs) {
@@ -66,6 +70,8 @@ avatar::Image shrink(const avatar::Image& img, int factor) {
       }
   return out;
 }
+
+namespace {
 
 // Two images side by side.
 avatar::Image sideBySide(const avatar::Image& a, const avatar::Image& b) {
@@ -140,6 +146,44 @@ void writeStats(const RenderJob& job, const std::string& motion, float userHeigh
   std::ofstream(job.out / "stats.json") << j.dump(2) << "\n";
 }
 
+bool isGlbPath(const std::string& path) { return path.size() > 4 && path.substr(path.size() - 4) == ".glb"; }
+
+// --export FILE.bvh|FILE.glb: the body actually shown, every frame. BVH on the avatar's hierarchy
+// (for a BVH avatar the clip's own hierarchy, names, offsets, channels), glTF as an animation.
+struct MotionExport {
+  std::optional<tracking::SolvedMotionBvh> bvh;
+  std::optional<avatar::GlbAnimation> glb;
+
+  void open(const RenderJob& job, const JobInputs& in, int frames) {
+    if (isGlbPath(job.exportPath)) {
+      glb.emplace();
+      glb->frameTime = 1.0 / job.fps;
+      glb->frames.reserve(size_t(frames));
+    } else if (isBvhPath(job.exportPath)) {
+      bvh = in.bvhAvatar ? tracking::SolvedMotionBvh::forBvhAvatar(*in.bvhAvatar)
+                         : tracking::SolvedMotionBvh::forAvatar(in.asset, 1.0 / job.fps);
+      bvh->reserve(size_t(frames));
+      if (std::abs(bvh->clip().frameTime * job.fps - 1.0) > 1e-6) {
+        if (in.bvhAvatar)
+          std::printf("export: frames at %.6g Hz (--fps), not the clip's %.6g Hz: pass --fps %.6g to keep its frame time\n",
+                      job.fps, 1.0 / bvh->clip().frameTime, 1.0 / bvh->clip().frameTime);
+        bvh->setFrameTime(1.0 / job.fps);
+      }
+    }
+  }
+  void add(const avatar::SkeletonPose& pose) {
+    if (bvh) bvh->add(pose);
+    if (glb) glb->frames.push_back(pose);
+  }
+  Status write(const std::string& path, const avatar::AvatarAsset& asset) const {
+    if (bvh)
+      if (auto s = bvh->write(path); !s) return s;
+    if (glb)
+      if (auto s = avatar::writeGlbFile(asset, path, &*glb); !s) return Error{"--export " + path + ": " + s.error()};
+    return {};
+  }
+};
+
 // The frame loop: sample -> IK thread (budgeted, lockstep: each frame waits for its sample's
 // solve, so runs are repeatable) -> triple buffer -> skin + render -> PNG. Returns "" or the error.
 struct FrameLoop {
@@ -149,6 +193,7 @@ struct FrameLoop {
   engine::AvatarRenderer& renderer;
   tracking::TraceWriter& recorder;
   runtime::IkThread& ik;
+  MotionExport& exported;
   int frames = 0;
   runtime::StatsRecorder stats;
   runtime::SeatedStats seated = runtime::SeatedStats();
@@ -172,6 +217,7 @@ struct FrameLoop {
       ik.acquire();
       const runtime::SolvedFrame& solved = ik.frame();
       runtime::FrameStats fs = solved.stats;
+      exported.add(solved.pose);
       // The IK thread is idle until the next submit (waitForFrames synchronised with its solve).
       if (job.seated) seated.add(solver);
       const auto t0 = Clock::now();
@@ -196,6 +242,8 @@ struct FrameLoop {
 int runRenderJob(const RenderJob& job) {
   if (job.view != "third" && job.view != "first" && job.view != "stereo") return usageError("--view must be first, third or stereo");
   if (job.frames < 0 || job.frames > 100000) return usageError("--frames must be 0 .. 100000");
+  if (!job.exportPath.empty() && !isBvhPath(job.exportPath) && !isGlbPath(job.exportPath))
+    return usageError("--export writes FILE.bvh or FILE.glb: " + job.exportPath);
 
   // The avatar and the motion first: bad files are the likely errors and need no GPU to report.
   auto inputs = openJobInputs(job);
@@ -207,6 +255,9 @@ int runRenderJob(const RenderJob& job) {
 
   auto solver = runtime::AvatarBodySolver::create(asset, bodyOptionsFor(job, *inputs));
   if (!solver) return runtimeError("avatar " + job.avatar + ": " + solver.error());
+
+  MotionExport exported;
+  exported.open(job, *inputs, frames);
 
   tracking::TraceWriter recorder;
   if (!job.record.empty())
@@ -233,16 +284,21 @@ int runRenderJob(const RenderJob& job) {
 
   runtime::IkStageConfig cfg;
   cfg.budgetSeconds = job.budgetMs * 1e-3;
+  cfg.fixedIterations = job.ikIterations;
   cfg.guard.userHeight = inputs->sourceOptions.userHeight;
   runtime::IkThread ik(**solver, runtime::steadyClock(), cfg, avatar::SkeletonPose::rest(asset.skeleton));
   ik.start();
-  FrameLoop loop{job, source, **solver, **created, recorder, ik, frames};
+  FrameLoop loop{job, source, **solver, **created, recorder, ik, exported, frames};
   const std::string error = loop.run();
   ik.stop();
   if (!error.empty()) return runtimeError(error);
   if (!job.record.empty())
     if (auto s = recorder.close(); !s) return runtimeError(s.error());
 
+  if (!job.exportPath.empty()) {
+    if (auto s = exported.write(job.exportPath, asset); !s) return runtimeError(s.error());
+    std::printf("exported the solved motion (%d frames) to %s\n", frames, job.exportPath.c_str());
+  }
   if (auto s = engine::writePng((job.out / "contact_sheet.png").string(), contactSheet(loop.thumbs)); !s) return runtimeError(s.error());
   const runtime::StatsSummary sum = loop.stats.summary();
   writeStats(job, source.name(), inputs->userHeight, sum, **solver, ik.samplesSkipped(), loop.seated);

@@ -14,6 +14,7 @@ namespace embody::app {
 // The shared options (avatar, body, motion, size, budget: app/job_options.h) and the rest.
 struct RenderJob : JobOptions {
   std::string record;              // --record FILE.jsonl ("" none)
+  std::string exportPath;          // --export FILE.bvh|.glb: the solved motion, every frame ("" none)
   bool seated = false;             // seated mode (runtime::SeatOptions): the lower body sits on a seat
   int frames = 0;                  // 0: the motion's duration (at most 20 s)
   std::string view = "third";      // third | first | stereo
@@ -24,6 +25,11 @@ struct RenderJob : JobOptions {
   bool progress = true;            // a progress bar when stdout is a terminal
   std::filesystem::path out;
 };
+
+// Up to 12 thumbnails tiled four to a row (the contact sheet of render and eval), and a
+// box-filtered downscale by an integer factor.
+avatar::Image contactSheet(const std::vector<avatar::Image>& thumbs);
+avatar::Image shrink(const avatar::Image& img, int factor);
 
 // Runs the job; prints errors as "error: ..." and returns the process exit code (0, 1 runtime
 // error, 2 bad option values).

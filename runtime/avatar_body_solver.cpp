@@ -63,16 +63,18 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
   const bool legs = hipJoint_[0] >= 0 && hipJoint_[1] >= 0 && kneeJoint_[0] >= 0 && kneeJoint_[1] >= 0;
   if (options.seat.enabled && !legs) return Error{"seated mode: the avatar's upper and lower legs are not mapped"};
   measureRest(leftElbow, legs);
+  if (options.sameBody.enabled) useSameBody(options.sameBody);  // before the tasks take the eye offset
   layout_ = options.seat.enabled ? seatedTaskLayoutFor(options.trackers) : taskLayoutFor(options.trackers);
   std::vector<ik::TaskDesc> tasks;
   for (const TaskSpec& spec : layout_.tasks) addLayoutTask(spec, tasks);
+  if (options.jointMarkers) addJointMarkerTasks(tasks);
   auto model = withTasks(body_.model, tasks);
   if (!model) return Error{"body model with tracker tasks: " + model.error()};
   body_.model = std::move(model).value();
   data_ = std::make_unique<ik::Data>(body_.model);
   restQ_ = Eigen::VectorXd::Zero(body_.model.dofs);
   lastGoodQ_ = restQ_;
-  if (options.userHeight > 0.0f) calibrate(options.userHeight);
+  if (options.userHeight > 0.0f && !options.sameBody.enabled) calibrate(options.userHeight);
   return Status::success();
 }
 
@@ -249,6 +251,48 @@ void AvatarBodySolver::calibrate(float userHeight) {
   scale_ = avatarEyeHeight_ / double(dims.eyeHeight);
 }
 
+// --trackers full (embody eval): a pose marker on every mapped avatar joint, one level below the
+// layout's lowest.
+void AvatarBodySolver::addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks) {
+  int lowest = 1;
+  for (const TaskSpec& spec : layout_.tasks) lowest = std::max(lowest, spec.priority);
+  for (size_t a = 0; a < avatar_.skeleton.joints.size(); ++a) {
+    const int j = body_.ikJointOfAvatar[a];
+    if (j < 0 || body_.avatarJoint[size_t(j)] != int(a)) continue;
+    ik::TaskDesc t;
+    t.name = "marker_" + avatar_.skeleton.joints[a].name;
+    t.type = ik::TaskType::Pose;
+    t.joint = j;
+    t.position_tolerance = 5e-4;
+    t.rotation_tolerance = 0.01;
+    t.level = lowest;  // layout priority lowest + 1 = solver level lowest
+    t.weight = 1.0f;
+    tasks.push_back(std::move(t));
+    markerTask_.emplace_back(int(a), ik::TaskId(tasks.size() - 1));
+  }
+}
+
+void AvatarBodySolver::useSameBody(const AvatarBodyOptions::SameBody& same) {
+  scale_ = 1.0;
+  floor_ = 0.0;
+  fromTracking_ = Eigen::Quaterniond::Identity();
+  const size_t head = size_t(tracking::index(TrackerId::Head));
+  eyeInHead_ = restRotation_[head].conjugate() * same.eyeOffset;
+  for (size_t i = 0; i < tracking::kTrackerCount; ++i)
+    jointFromTracker_[i] = same.reference[i].normalized().conjugate() * restRotation_[i];
+}
+
+void AvatarBodySolver::setMarkers(const std::vector<glm::dvec3>& positions, const std::vector<glm::dquat>& rotations) {
+  for (const auto& [a, task] : markerTask_) {
+    if (size_t(a) >= positions.size() || size_t(a) >= rotations.size()) continue;
+    const glm::dvec3& p = positions[size_t(a)];
+    const glm::dquat& r = rotations[size_t(a)];
+    const int j = body_.ikJointOfAvatar[size_t(a)];
+    const Eigen::Quaterniond world = Eigen::Quaterniond(r.w, r.x, r.y, r.z).normalized() * body_.ikRestRotation[size_t(j)];
+    setPose(task, -1, Eigen::Vector3d(p.x, p.y, p.z), world, 1.0);
+  }
+}
+
 Eigen::Vector3d AvatarBodySolver::toAvatar(const glm::vec3& p) const {
   return fromTracking_ * (scale_ * toEigen(p)) + up_ * floor_;
 }
@@ -294,7 +338,7 @@ void AvatarBodySolver::setPose(ik::TaskId position, ik::TaskId orientation, cons
 void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
   ik::Data& d = *data_;
   const size_t headIndex = size_t(tracking::index(TrackerId::Head));
-  if (!heightsCalibrated_ && targets.status[headIndex] == TrackerStatus::Tracked) {
+  if (!heightsCalibrated_ && !options_.sameBody.enabled && targets.status[headIndex] == TrackerStatus::Tracked) {
     heightsCalibrated_ = true;
     const auto& lf = targets.pose[TrackerId::LeftFoot];
     const auto& rf = targets.pose[TrackerId::RightFoot];
@@ -467,14 +511,17 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   // so it gets the library's default cap and four times the iterations (the budget still rules).
   const bool cold = !solvedOnce_;
   o.max_level_step = cold ? std::max(options_.maxLevelStep, ik::SolveOptions{}.max_level_step) : options_.maxLevelStep;
-  const int maxIterations = cold ? 4 * options_.maxIterations : options_.maxIterations;
+  // Deterministic mode: the fixed count (four times it on a cold start, as the cap), no clock.
+  const bool fixed = request.fixedIterations > 0;
+  const int cap = fixed ? request.fixedIterations : options_.maxIterations;
+  const int maxIterations = cold ? 4 * cap : cap;
   o.clock = &clock;
   int iterations = 0;
   bool converged = false, broken = false;
   while (iterations < maxIterations) {
     const TimePoint start = clock.now();
-    if (start + fromSeconds(predictedIteration_ + predictedFinish_) > request.deadline && iterations > 0) break;
-    if (start + fromSeconds(predictedFinish_) >= request.deadline) break;
+    if (!fixed && start + fromSeconds(predictedIteration_ + predictedFinish_) > request.deadline && iterations > 0) break;
+    if (!fixed && start + fromSeconds(predictedFinish_) >= request.deadline) break;
     const ik::SolveReport& report = ik::solve(body_.model, *data_, o);
     const double cost = toSeconds(clock.now() - start);
     predictedIteration_ = std::max(cost, 0.9 * predictedIteration_);

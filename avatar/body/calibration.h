@@ -9,6 +9,7 @@
 // the exact pivot match with the render skeleton).
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "avatar/avatar_asset.h"
 #include "avatar/body/anthropometry.h"  // kEyeHeightRatio
@@ -47,5 +48,7 @@ Result<BodyProfile> calibrate(const AvatarAsset& avatar, const CalibrationInput&
 
 Status saveProfile(const BodyProfile& profile, const std::string& path);
 Result<BodyProfile> loadProfile(const std::string& path);  // validates every number
+// The same from the file's text; `path` only names it in errors.
+Result<BodyProfile> parseProfile(std::string_view text, const std::string& path);
 
 }  // namespace embody::avatar
