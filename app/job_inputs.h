@@ -3,11 +3,13 @@
 // the user's height (--user-height, else the --profile's), the avatar, the pose source, and the
 // body solver's options. Files first: bad files are the likely errors and need no device.
 #include <memory>
+#include <optional>
 
 #include "app/render_job.h"
 #include "avatar/avatar_asset.h"
 #include "core/result.h"
 #include "runtime/avatar_body_solver.h"
+#include "tracking/bvh_avatar.h"
 #include "tracking/pose_source.h"
 
 namespace embody::app {
@@ -17,6 +19,8 @@ struct JobInputs {
   avatar::AvatarAsset asset;
   tracking::SourceOptions sourceOptions;  // sourceOptions.userHeight: what the motion is fitted to
   std::unique_ptr<tracking::PoseSource> source;
+  // --avatar CLIP.bvh: the clip behind the avatar (its hierarchy for --export), else empty.
+  std::optional<tracking::BvhAvatar> bvhAvatar;
 };
 
 // Errors (exit code 1) name the file that failed.
@@ -25,6 +29,6 @@ Result<JobInputs> openJobInputs(const RenderJob& job);
 // The body solver's options for the job. Synthetic motions and BVH clips are built for (fitted
 // to) sourceOptions.userHeight; a recorded trace's user is unknown unless given: the solver
 // calibrates from its first head sample.
-runtime::AvatarBodyOptions bodyOptionsFor(const RenderJob& job, avatar::SpineMode spine, const JobInputs& in);
+runtime::AvatarBodyOptions bodyOptionsFor(const RenderJob& job, const JobInputs& in);
 
 }  // namespace embody::app

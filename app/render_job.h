@@ -7,29 +7,18 @@
 #include <string>
 
 #include "app/args.h"
-#include "app/bvh_options.h"
+#include "app/job_options.h"
 
 namespace embody::app {
 
-struct RenderJob {
-  std::string avatar = "default";  // FILE or "default"
-  std::string boneMap;             // --bone-map FILE ("" none)
-  std::string spine = "auto";      // auto | full | simplified
-  bool coupledSpine = true;        // ik/spine's coupled joints; --uncoupled-spine: one ball per site
-  std::string motion = "synthetic:figure8";
-  std::string profile;             // --profile FILE (avatar/body/calibration.h: saveProfile)
+// The shared options (avatar, body, motion, size, budget: app/job_options.h) and the rest.
+struct RenderJob : JobOptions {
   std::string record;              // --record FILE.jsonl ("" none)
-  float userHeight = 0.0f;         // 0: the profile's, else from the first head sample
-  double bvhScale = 0.0;
-  BvhOverrides bvh;                // --bvh-up, --bvh-forward, --bvh-bone-map
-  bool threePoint = false;         // keep only head and hands
+  std::string exportPath;          // --export FILE.bvh|.glb: the solved motion, every frame ("" none)
   bool seated = false;             // seated mode (runtime::SeatOptions): the lower body sits on a seat
   int frames = 0;                  // 0: the motion's duration (at most 20 s)
-  double fps = 90.0;
-  int width = 480, height = 480;
   std::string view = "third";      // third | first | stereo
   float yaw = 0.5f, pitch = 0.15f; // third-person orbit (radians)
-  double budgetMs = 1.0;
   std::string device = "auto";
   bool validate = false, msaa = false, skeleton = false, gizmos = false, grid = true;
   bool writeFrames = true;
@@ -37,13 +26,13 @@ struct RenderJob {
   std::filesystem::path out;
 };
 
+// Up to 12 thumbnails tiled four to a row (the contact sheet of render and eval), and a
+// box-filtered downscale by an integer factor.
+avatar::Image contactSheet(const std::vector<avatar::Image>& thumbs);
+avatar::Image shrink(const avatar::Image& img, int factor);
+
 // Runs the job; prints errors as "error: ..." and returns the process exit code (0, 1 runtime
 // error, 2 bad option values).
 int runRenderJob(const RenderJob& job);
-
-// Reads the options `embody render --motion` and `embody mirror` share (avatar, motion, spine,
-// bone map, profile, user height, BVH scale, fps, IK budget) into `job`; throws
-// std::invalid_argument with a message naming the option on a bad value.
-void readSharedJobOptions(const app::Args& args, RenderJob& job);
 
 }  // namespace embody::app

@@ -66,6 +66,20 @@ struct AvatarBodyOptions {
   // the first tracked head (again after resetWarmStart), the spine and arms follow the head and
   // hands. A seated head says nothing about the user's stature: give userHeight (else 1.75 m).
   SeatOptions seat;
+  // The tracked person IS this avatar (embody eval: the avatar is the clip's own skeleton, built
+  // in tracking space, tracking/bvh_avatar.h): tracking space is avatar space (scale 1, floor at
+  // y = 0, no turn), no height or stride calibration, and the trackers' rest references are the
+  // source's (tracking::BvhMapping), so a perfect solve puts every joint where the clip's is.
+  // Joint markers (embody eval --trackers full, the paper's §5.2.3): a pose task (position and
+  // orientation) on every avatar joint an IK joint pivots at, one level below the tracker layout;
+  // targets from setMarkers() before each solve. They do not come from a tracking source: no
+  // filter, no loss guard.
+  bool jointMarkers = false;
+  struct SameBody {
+    bool enabled = false;
+    Eigen::Vector3d eyeOffset = Eigen::Vector3d::Zero();  // from the head joint, rest pose, tracking axes
+    std::array<Eigen::Quaterniond, tracking::kTrackerCount> reference{};  // tracker orientation at rest
+  } sameBody;
 };
 
 // The solved lower body and trunk, measured (avatar space; angles in radians).
@@ -113,11 +127,25 @@ class AvatarBodySolver final : public BodySolver {
   const SeatedPose* seat() const { return seatPlaced_ ? &seat_ : nullptr; }
   const SeatedLegs& seatedLegs() const { return legs_; }
   LowerBodyPosture posture() const;
+  // Marker targets (jointMarkers) per avatar skeleton joint, avatar space: world positions and
+  // world rotations relative to the joint's rest (identity at rest). Joints without a marker are
+  // ignored; call before each solve.
+  void setMarkers(const std::vector<glm::dvec3>& positions, const std::vector<glm::dquat>& rotations);
+  size_t markerCount() const { return markerTask_.size(); }
 
  private:
   AvatarBodySolver(const avatar::AvatarAsset& avatar) : avatar_(avatar) {}
+  // create()'s steps: the body model and the frames, the tracker joints, the rest geometry, the
+  // layout's tasks.
   Status build(const AvatarBodyOptions& options);
+  Status bindJoints(ik::JointId& leftElbow);
+  void measureRest(ik::JointId leftElbow, bool legs);
+  void measureHeight(const Eigen::Vector3d& head, const Eigen::Vector3d& leftFoot, const Eigen::Vector3d& rightFoot);
+  void trackerFrames();
+  void addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskDesc>& tasks);
+  void addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks);
   void calibrate(float userHeight);
+  void useSameBody(const AvatarBodyOptions::SameBody& same);
   void setTargets(const tracking::GuardedSample& targets);
   void setSeatedTargets(const tracking::GuardedSample& targets);
   // Enables (weight > 0, times the task's own) or disables a position/orientation/pose task pair.
@@ -141,6 +169,7 @@ class AvatarBodySolver final : public BodySolver {
   std::array<Eigen::Quaterniond, tracking::kTrackerCount> jointFromTracker_{};
   std::array<Eigen::Quaterniond, tracking::kTrackerCount> restRotation_{};
   ik::TaskId balanceTask_ = -1, hipsPosTask_ = -1, hipsRotTask_ = -1;
+  std::vector<std::pair<int, ik::TaskId>> markerTask_;  // avatar joint, its pose task
   ik::JointId leftShoulder_ = -1, rightShoulder_ = -1;
   // Seated mode: tasks per side (0 = left), the legs' rest geometry and the placed seat.
   std::array<ik::TaskId, 2> seatHipTask_{-1, -1}, seatKneeTask_{-1, -1};

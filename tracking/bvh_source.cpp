@@ -128,7 +128,7 @@ Trace sampleFrames(const BvhClip& clip, const BvhMapping& m, const References& r
 }
 
 // The lowest point on the floor, the first frame's hips over the origin.
-void placeOnFloor(Trace& trace, double floorY, const BvhTrackerOptions& options) {
+glm::vec3 placeOnFloor(Trace& trace, double floorY, const BvhTrackerOptions& options) {
   glm::vec3 shift(0.0f);
   if (options.alignGround) shift.y = -static_cast<float>(floorY);
   if (options.recentre && trace.trackers.has(TrackerId::Hips)) {
@@ -141,23 +141,45 @@ void placeOnFloor(Trace& trace, double floorY, const BvhTrackerOptions& options)
       if (trace.trackers.has(id)) s[id].position += shift;
     sanitize(s);
   }
+  return shift;
 }
 
 // The eyes at most at eye height (kEyeHeightRatio of the standing height) in 99% of the frames:
 // the floor is the clip's lowest point and the head's reference is the first motion frame, both
 // of which can lift the eye point above what a body of that height reaches standing. The excess
 // comes off the eye offset, along the head's up.
-void capEyeHeight(Trace& trace, double performer) {
-  if (!trace.trackers.has(TrackerId::Head) || trace.samples.empty()) return;
+float capEyeHeight(Trace& trace, double performer) {
+  if (!trace.trackers.has(TrackerId::Head) || trace.samples.empty()) return 0.0f;
   std::vector<float> y;
   for (const auto& s : trace.samples) y.push_back(s[TrackerId::Head].position.y);
   const size_t k = (y.size() - 1) * 99 / 100;
   std::nth_element(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(k), y.end());
   const float excess = y[k] - static_cast<float>(kEyeHeightRatio * performer);
-  if (excess <= 0.0f) return;
+  if (excess <= 0.0f) return 0.0f;
   for (auto& s : trace.samples) {
     TrackerPose& h = s[TrackerId::Head];
     h.position -= h.orientation * glm::vec3(0.0f, excess, 0.0f);
+  }
+  return excess;
+}
+
+// The references at the clip's rest pose (every channel zero), for code that sets the clip's own
+// skeleton beside the trace (tracking/bvh_avatar.h, embody eval): at the rest pose a tracker reads
+// restTurn * ref.orientation and the eyes sit restTurn * eyeOffset from the head joint, where
+// restTurn is the joint's turn from the reference frame to the rest pose (tracking axes).
+void restReferences(const BvhClip& clip, const References& ref, float eyeDrop, BvhMapping& m) {
+  const glm::dquat qToXr = glm::quat_cast(m.body.toXr);
+  std::vector<BvhGlobal> rest;
+  avatar::bvhGlobals(clip, {}, rest);
+  for (auto id : kAllTrackers) {
+    const size_t i = static_cast<size_t>(index(id));
+    const int j = m.joint[i];
+    if (j < 0) continue;
+    const auto ju = static_cast<size_t>(j);
+    const glm::dquat restTurn = qToXr * rest[ju].rotation * glm::inverse(ref.pose[ju].rotation) * glm::inverse(qToXr);
+    m.reference[i] = restTurn * ref.orientation[i];
+    if (id == TrackerId::Head)  // capEyeHeight lowered the eyes along the head's up
+      m.eyeOffset = restTurn * (ref.eyeOffset - ref.orientation[i] * glm::dvec3(0.0, double(eyeDrop), 0.0));
   }
 }
 
@@ -188,8 +210,11 @@ Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, 
   double floorY = 0.0;
   Trace trace = sampleFrames(clip, m, ref, floorY);
   trace.userHeight = options.userHeight;
-  placeOnFloor(trace, floorY, options);
-  capEyeHeight(trace, m.heightUnits * m.scale);
+  const glm::vec3 shift = placeOnFloor(trace, floorY, options);
+  m.toXr = m.body.toXr;
+  m.shift = glm::dvec3(shift);
+  m.firstFrame = m.body.firstFrame;
+  restReferences(clip, ref, capEyeHeight(trace, m.heightUnits * m.scale), m);
   for (const auto& w : clip.warnings) m.notes.push_back(w);
   trace.notes = m.notes;
   if (mappingOut) *mappingOut = std::move(m);
