@@ -78,7 +78,12 @@ struct AvatarBodyOptions {
   struct SameBody {
     bool enabled = false;
     Eigen::Vector3d eyeOffset = Eigen::Vector3d::Zero();  // from the head joint, rest pose, tracking axes
-    std::array<Eigen::Quaterniond, tracking::kTrackerCount> reference{};  // tracker orientation at rest
+    // Eigen's quaternion default constructor leaves it uninitialised: start from identity.
+    std::array<Eigen::Quaterniond, tracking::kTrackerCount> reference = [] {
+      std::array<Eigen::Quaterniond, tracking::kTrackerCount> r;
+      r.fill(Eigen::Quaterniond::Identity());
+      return r;
+    }();  // tracker orientation at rest
   } sameBody;
 };
 

@@ -393,7 +393,7 @@ TEST_CASE("embody xr solves the body on the IK thread within 1 ms and late-latch
   CHECK(ik["wait_max_ms"].get<double>() <= 1.0 + 20.0);
   CHECK(r.stats["ik"]["budget_ms"] == 1.0);
   // Deadline misses are the scheduler's on a loaded CI machine (a preempted solve); on an idle
-  // machine there are none (docs/xr.md). A few percent at most.
+  // machine there are none (docs/xr.md).
   CHECK(r.stats["ik"]["deadline_misses"].get<int>() <= 10);  // a broken thread misses all 60; a busy machine a few
   CHECK(r.stats["render"]["p50_ms"].get<double>() > 0.0);  // it was always 0 before
   CHECK(ik["body_age_frames"].get<int>() >= 59);
