@@ -36,9 +36,10 @@ for clip in "${clips[@]}"; do
   for avatar in default "$mixamo" "$clip"; do
     case $avatar in default) label=default ;; "$mixamo") label=mixamo ;; *) label=own ;; esac
     dir="$out/$name/$label"
+    mkdir -p "$out/$name"
     if ! "$embody" render --avatar "$avatar" --motion "$clip" --fps "$fps" --ik-iterations "$iterations" \
         --size 160x160 --out "$dir" >"$dir.log" 2>&1; then
-      echo "| $name | $label | error: $(grep -m1 error: "$dir.log") | | | |"
+      echo "| $name | $label | $(grep -m1 error: "$dir.log" || tail -1 "$dir.log") | | | |"
       continue
     fi
     s="$dir/stats.json"
