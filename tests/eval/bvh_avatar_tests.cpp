@@ -194,6 +194,54 @@ TEST_CASE("BVH writer: a parsed clip written and parsed again is the same clip",
   CHECK(b->values == a.values);
 }
 
+TEST_CASE("BVH writer: joints kept out of hierarchy order (an avatar's skeleton) are written as a reader reads them",
+          "[eval][bvh]") {
+  // An avatar's skeleton may list both hips before either knee (breadth first); the file lists
+  // each chain depth first, and its MOTION columns must follow the file's order. Before this was
+  // fixed, `render --export` of the default avatar gave the left arm the spine's angles.
+  const avatar::BvhClip a = clip();
+  std::vector<size_t> order;  // breadth first: every root, then their children, ...
+  for (size_t j = 0; j < a.joints.size(); ++j)
+    if (a.joints[j].parent < 0) order.push_back(j);
+  for (size_t k = 0; k < order.size(); ++k)
+    for (size_t c = 0; c < a.joints.size(); ++c)
+      if (a.joints[c].parent == int(order[k])) order.push_back(c);
+  REQUIRE(order.size() == a.joints.size());
+  std::vector<int> newIndex(a.joints.size());
+  for (size_t k = 0; k < order.size(); ++k) newIndex[order[k]] = int(k);
+  avatar::BvhClip b = a;
+  b.values.clear();
+  int channel = 0;
+  for (size_t k = 0; k < order.size(); ++k) {
+    b.joints[k] = a.joints[order[k]];
+    b.joints[k].parent = b.joints[k].parent < 0 ? -1 : newIndex[size_t(b.joints[k].parent)];
+    b.joints[k].firstChannel = channel;
+    channel += int(b.joints[k].channels.size());
+  }
+  bool reordered = false;
+  for (size_t k = 0; k < order.size(); ++k) reordered = reordered || order[k] != k;
+  REQUIRE(reordered);
+  for (size_t f = 0; f < a.frameCount; ++f)
+    for (size_t k = 0; k < order.size(); ++k)
+      for (size_t c = 0; c < a.joints[order[k]].channels.size(); ++c)
+        b.values.push_back(a.frame(f)[size_t(a.joints[order[k]].firstChannel) + c]);
+
+  auto read = avatar::parseBvh(avatar::formatBvh(b), "reordered.bvh");
+  REQUIRE(read);
+  std::vector<avatar::BvhGlobal> want, got;
+  for (size_t f = 0; f < a.frameCount; ++f) {
+    avatar::bvhGlobals(a, a.frame(f), want);
+    avatar::bvhGlobals(*read, read->frame(f), got);
+    for (size_t j = 0; j < a.joints.size(); ++j) {
+      if (a.joints[j].endSite) continue;
+      const int r = read->find(a.joints[j].name);
+      REQUIRE(r >= 0);
+      INFO(a.joints[j].name << " frame " << f);
+      CHECK(glm::distance(got[size_t(r)].position, want[j].position) < 1e-3);
+    }
+  }
+}
+
 TEST_CASE("BVH writer: Euler angles in every channel order compose back to the rotation", "[eval][bvh]") {
   using C = avatar::BvhChannel;
   const C orders[6][3] = {{C::Xrotation, C::Yrotation, C::Zrotation}, {C::Xrotation, C::Zrotation, C::Yrotation},
