@@ -224,7 +224,9 @@ int runRenderJob(const RenderJob& job) {
                {"coupled_spine", job.coupledSpine},
                {"dofs", body.body().model.dofs},
                {"three_point", body.threePoint()},
-               {"steps", body.feet().steps()}};
+               {"steps", body.feet().steps()},
+               {"collapsed_frames", body.collapseGuard().collapsedFrames()},
+               {"recoveries", body.collapseGuard().recoveries()}};
   j["ik"]["samples_skipped"] = ik.samplesSkipped();
   if (job.seated) seated.toJson(j);
   std::ofstream(job.out / "stats.json") << j.dump(2) << "\n";

@@ -26,8 +26,12 @@
 
 #include "avatar/avatar_asset.h"
 #include "avatar/body/body_model.h"
+#include "runtime/body_seed.h"
 #include "runtime/body_solver.h"
+#include "runtime/collapse_guard.h"
 #include "runtime/foot_planner.h"
+#include "runtime/pole_tasks.h"
+#include "runtime/pose_blend.h"
 #include "runtime/seated_pose.h"
 #include "runtime/task_layout.h"
 
@@ -66,6 +70,12 @@ struct AvatarBodyOptions {
   // the first tracked head (again after resetWarmStart), the spine and arms follow the head and
   // hands. A seated head says nothing about the user's stature: give userHeight (else 1.75 m).
   SeatOptions seat;
+  // Standing: a body found in a heap (collapse_guard.h) is re-seeded standing under the head
+  // (body_seed.h) and the published pose fades to the new solution over `recoveryBlendSeconds`.
+  CollapseGuardConfig collapse;
+  double recoveryBlendSeconds = 0.2;
+  // Knee and elbow direction tasks at the lowest level (pole_tasks.h).
+  bool limbPoles = true;
 };
 
 // The solved lower body and trunk, measured (avatar space; angles in radians).
@@ -113,6 +123,16 @@ class AvatarBodySolver final : public BodySolver {
   const SeatedPose* seat() const { return seatPlaced_ ? &seat_ : nullptr; }
   const SeatedLegs& seatedLegs() const { return legs_; }
   LowerBodyPosture posture() const;
+  const CollapseGuard& collapseGuard() const { return guard_; }
+  // The measures the collapse guard judges, for the current configuration.
+  BodySignals bodySignals(double time, const SolveResult& result) const;
+  // Continues from `q` (tests, tools): e.g. a body laid on the floor, to check that it stands up.
+  Status seedConfiguration(const Eigen::VectorXd& q);
+  // Knee (0 left, 1 right) and elbow (2 left, 3 right) flexion in radians, 0 = straight; positive
+  // is the anatomical direction.
+  double hingeAngle(int limb) const;
+  // Where a solved foot (0 left, 1 right) points: its rest forward turned as the foot is.
+  Eigen::Vector3d footForward(int side) const;
 
  private:
   AvatarBodySolver(const avatar::AvatarAsset& avatar) : avatar_(avatar) {}
@@ -120,6 +140,11 @@ class AvatarBodySolver final : public BodySolver {
   void calibrate(float userHeight);
   void setTargets(const tracking::GuardedSample& targets);
   void setSeatedTargets(const tracking::GuardedSample& targets);
+  // Standing start: the root under the head, facing the head's and hands' heading (body_seed.h).
+  void seedStanding(const tracking::GuardedSample& targets);
+  void setPoleTargets();
+  // After a solve: asks the collapse guard; on a collapse re-seeds and starts the fade.
+  void guardAgainstCollapse(const tracking::GuardedSample& targets, const SolveResult& result, avatar::SkeletonPose& pose);
   // Enables (weight > 0, times the task's own) or disables a position/orientation/pose task pair.
   void setPose(ik::TaskId position, ik::TaskId orientation, const Eigen::Vector3d& p, const Eigen::Quaterniond& q, double weight);
 
@@ -142,6 +167,16 @@ class AvatarBodySolver final : public BodySolver {
   std::array<Eigen::Quaterniond, tracking::kTrackerCount> restRotation_{};
   ik::TaskId balanceTask_ = -1, hipsPosTask_ = -1, hipsRotTask_ = -1;
   ik::JointId leftShoulder_ = -1, rightShoulder_ = -1;
+  // Limb direction: knees (0 left, 1 right) then elbows (2, 3): the task, the chain's root,
+  // middle and end joints and the hinge joint, and the rest segment lengths.
+  std::array<ik::TaskId, 4> poleTask_{-1, -1, -1, -1};
+  std::array<ik::JointId, 4> limbRoot_{-1, -1, -1, -1}, limbMiddle_{-1, -1, -1, -1}, limbEnd_{-1, -1, -1, -1},
+      limbHinge_{-1, -1, -1, -1};
+  std::array<LimbGeometry, 4> limb_{};
+  CollapseGuard guard_;
+  PoseFade fade_;
+  bool reseeded_ = false;  // the next solve starts cold (after a re-seed)
+  bool broken_ = false;    // the last solve produced a non-finite or invalid configuration  // the next solve starts cold (a re-seed after a collapse)
   // Seated mode: tasks per side (0 = left), the legs' rest geometry and the placed seat.
   std::array<ik::TaskId, 2> seatHipTask_{-1, -1}, seatKneeTask_{-1, -1};
   ik::TaskId seatPelvisTask_ = -1;

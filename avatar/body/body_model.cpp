@@ -23,6 +23,8 @@ constexpr std::array<std::array<double, 3>, kVertebralJointCount> kLevelRangeDeg
     {25, 5, 5},                                                                              // Occ-C1
 }};
 constexpr double kFlexionShare = 0.6;
+// Knees and elbows bend at least this much (radians, ~1.7 degrees): see the elbow's limits.
+constexpr double kMinHingeBend = 0.03;
 
 // de Leva (1996), male, percent of body mass; trunk split into lower (pelvis), middle and upper.
 constexpr double kHeadNeck = 6.94, kUpperTrunk = 15.96, kMiddleTrunk = 16.33, kLowerTrunk = 11.17;
@@ -441,7 +443,10 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
         if (axis.norm() < 1e-6) axis = rot.col(0);
         d.type = ik::JointType::Revolute;
         d.axis = rot.transpose() * axis.normalized();
-        limits(d, {-0.2}, {2.6});
+        // Never straight and never backwards: a hinge at exactly 0 is the straight-limb
+        // singularity (shortening the limb has no first-order effect there, and a local solver
+        // stalls), and below 0 it bends against its anatomical direction.
+        limits(d, {kMinHingeBend}, {2.6});
         d.mass = kForearm * massScale;
         d.com = Eigen::Vector3d(0, kForearmCom * len, 0);
         add(j, d, rot);
@@ -476,7 +481,7 @@ Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptio
         if (axis.norm() < 1e-6) axis = rot.col(0);
         d.type = ik::JointType::Revolute;
         d.axis = rot.transpose() * axis.normalized();
-        limits(d, {-0.1}, {2.4});
+        limits(d, {kMinHingeBend}, {2.4});  // as the elbow: never straight, never backwards
         d.mass = kShank * massScale;
         d.com = Eigen::Vector3d(0, kShankCom * len, 0);
         add(j, d, rot);
