@@ -6,7 +6,14 @@ namespace embody::runtime {
 
 IkThread::IkThread(BodySolver& solver, const Clock& clock, const IkStageConfig& config,
                    const avatar::SkeletonPose& initialPose)
-    : stage_(solver, clock, config) {
+    : stage_(std::in_place, solver, clock, config) {
+  process_ = [this](const tracking::PoseSample& sample, SolvedFrame& out) { stage_->process(sample, out); };
+  SolvedFrame f;
+  f.pose = initialPose;
+  for (auto& s : output_.slots()) s = f;
+}
+
+IkThread::IkThread(Process process, const avatar::SkeletonPose& initialPose) : process_(std::move(process)) {
   SolvedFrame f;
   f.pose = initialPose;
   for (auto& s : output_.slots()) s = f;
@@ -46,14 +53,31 @@ void IkThread::run() {
       // sample (solving it for the previous count, whose own sample it overwrote). That earlier
       // sample was skipped: count it, or framesSolved() + samplesSkipped() falls one short of
       // the samples submitted (a waiter for all of them hung under load).
-      skipped_.fetch_add(1, std::memory_order_relaxed);
+      {
+        std::lock_guard lock(doneMutex_);
+        skipped_.fetch_add(1, std::memory_order_relaxed);
+      }
+      done_.notify_all();
       continue;
     }
-    stage_.process(input_.front(), output_.back());
+    process_(input_.front(), output_.back());
     output_.publish();
-    solved_.fetch_add(1, std::memory_order_acq_rel);
+    {
+      std::lock_guard lock(doneMutex_);  // a joiner between its check and its wait sees this
+      solved_.fetch_add(1, std::memory_order_acq_rel);
+    }
     solved_.notify_all();
+    done_.notify_all();
   }
+}
+
+bool IkThread::waitUntilCaughtUp(std::chrono::steady_clock::time_point deadline) {
+  const uint32_t target = samplesSubmitted();
+  std::unique_lock lock(doneMutex_);
+  return done_.wait_until(lock, deadline, [&] {
+    // Skipped samples count as handled: their newer sample is the one being solved.
+    return framesSolved() + samplesSkipped() >= target || !running_.load(std::memory_order_acquire);
+  }) && framesSolved() + samplesSkipped() >= target;
 }
 
 bool IkThread::waitForFrames(uint32_t count, double timeoutSeconds) const {

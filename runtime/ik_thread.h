@@ -5,6 +5,10 @@
 // acquire() never block, so the render thread never waits on the solver. Samples arriving faster
 // than they are solved are skipped (counted in samplesSkipped()), never queued.
 #include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
+#include <optional>
 #include <thread>
 
 #include "runtime/ik_stage.h"
@@ -16,6 +20,10 @@ class IkThread {
  public:
   // `initialPose` sizes every slot (and is what acquire() returns before the first solve).
   IkThread(BodySolver& solver, const Clock& clock, const IkStageConfig& config, const avatar::SkeletonPose& initialPose);
+  // Any per-sample work in place of IkStage (e.g. runtime::TrackedAvatarBody::solveInto, which also
+  // places the body in the tracking space). Runs on the IK thread only.
+  using Process = std::function<void(const tracking::PoseSample& sample, SolvedFrame& out)>;
+  IkThread(Process process, const avatar::SkeletonPose& initialPose);
   ~IkThread();
   IkThread(const IkThread&) = delete;
   IkThread& operator=(const IkThread&) = delete;
@@ -36,11 +44,16 @@ class IkThread {
   // Blocks the caller (a test, an offline driver; not the render loop) until at least `count`
   // frames are solved or `timeoutSeconds` of wall time pass; true when reached.
   bool waitForFrames(uint32_t count, double timeoutSeconds) const;
+  // The render loop's join: blocks until every sample submitted so far is solved or skipped, or
+  // until `deadline` (steady clock), whichever comes first; never past the deadline. True when
+  // caught up. Then acquire() takes the newest frame either way.
+  bool waitUntilCaughtUp(std::chrono::steady_clock::time_point deadline);
 
  private:
   void run();
 
-  IkStage stage_;
+  std::optional<IkStage> stage_;
+  Process process_;
   TripleBuffer<tracking::PoseSample> input_;
   TripleBuffer<SolvedFrame> output_;
   std::atomic<uint32_t> submitted_{0};
@@ -48,6 +61,8 @@ class IkThread {
   std::atomic<uint32_t> skipped_{0};
   std::atomic<bool> running_{false};
   std::thread thread_;
+  std::mutex doneMutex_;  // only for the join's timed wait (done_); the hand-offs stay lock-free
+  std::condition_variable done_;
 };
 
 }  // namespace embody::runtime

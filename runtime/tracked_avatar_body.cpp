@@ -68,4 +68,13 @@ bool TrackedAvatarBody::solve(const tracking::PoseSample& sample, avatar::Skelet
   return true;
 }
 
+void TrackedAvatarBody::solveInto(const tracking::PoseSample& sample, SolvedFrame& out) {
+  if (!solve(sample, out.pose)) {
+    out.stats = FrameStats{};  // sequence 0: no body yet
+    return;
+  }
+  out.stats = frame_.stats;
+  out.targets = frame_.targets;
+}
+
 }  // namespace embody::runtime

@@ -2,7 +2,8 @@
 // The avatar's body solved from trackers and placed back in the tracking space: what a headset
 // (first person) needs, where the avatar's hands must be where the user's are. Synchronous (one
 // IkStage call per frame: filter -> tracking-loss guard -> budgeted AvatarBodySolver), so the
-// pose rendered this frame is solved from this frame's predicted trackers.
+// pose rendered this frame is solved from this frame's predicted trackers; or, through
+// solveInto, the step a runtime::IkThread runs on its own thread (embody xr).
 //
 //   auto body = TrackedAvatarBody::create(avatar, options);
 //   each frame: body->solve(sample, pose);   // pose: model space = the tracking space
@@ -35,6 +36,10 @@ class TrackedAvatarBody {
   // left alone, until the first valid head sample (it calibrates the solver when no user height
   // was given). Afterwards a lost head is the tracking-loss guard's business.
   bool solve(const tracking::PoseSample& sample, avatar::SkeletonPose& pose);
+  // The same as one runtime::IkThread step: `out` gets the placed pose, the targets and the
+  // statistics of this solve; before the first valid head out.stats.sequence is 0 (no body yet)
+  // and out.pose is left alone. For IkThread(Process): everything it touches stays on that thread.
+  void solveInto(const tracking::PoseSample& sample, SolvedFrame& out);
   // Forgets the warm start and the seat (after a recenter or recalibration): the next valid head
   // places the seat again.
   void reset();

@@ -3,6 +3,8 @@
 // platform types must be visible before openxr_platform.h.
 #include <vulkan/vulkan.h>
 #define XR_USE_GRAPHICS_API_VULKAN
+#define XR_USE_TIMESPEC
+#include <ctime>
 #include <openxr/openxr.h>
 #include <openxr/openxr_platform.h>
 

@@ -169,6 +169,50 @@ void XrInput::refreshProfile() {
     profile_ = st.interactionProfile == XR_NULL_PATH ? "" : system_.pathString(st.interactionProfile);
 }
 
+void XrInput::locateHand(int h, XrTime time) {
+  HandState& hs = hands_[h];
+  hs.grip = hs.aim = hs.wrist = TrackedPose{};
+  hs.wristFromHandTracking = hs.jointsValid = false;
+  if (hs.active) {
+    XrSpaceLocation loc{XR_TYPE_SPACE_LOCATION};
+    if (XR_SUCCEEDED(xrLocateSpace(gripSpaces_[h], session_.worldSpace(), time, &loc)))
+      hs.grip = fromSpaceLocation(loc);
+    loc = {XR_TYPE_SPACE_LOCATION};
+    if (XR_SUCCEEDED(xrLocateSpace(aimSpaces_[h], session_.worldSpace(), time, &loc)))
+      hs.aim = fromSpaceLocation(loc);
+    if (hs.grip.valid) {
+      hs.wrist = hs.grip;
+      hs.wrist.pose = hs.grip.pose * gripToWrist(profile_, h == 0);
+    }
+  }
+  if (trackers_[h] && locateJoints_) {
+    std::array<XrHandJointLocationEXT, kHandJointCount> joints{};
+    XrHandJointLocationsEXT locs{XR_TYPE_HAND_JOINT_LOCATIONS_EXT};
+    locs.jointCount = kHandJointCount;
+    locs.jointLocations = joints.data();
+    XrHandJointsLocateInfoEXT li{XR_TYPE_HAND_JOINTS_LOCATE_INFO_EXT};
+    li.baseSpace = session_.worldSpace();
+    li.time = time;
+    if (XR_SUCCEEDED(locateJoints_(trackers_[h], &li, &locs)) && locs.isActive) {
+      hs.jointsValid = true;
+      for (int j = 0; j < kHandJointCount; ++j) {
+        XrSpaceLocation l{XR_TYPE_SPACE_LOCATION};
+        l.locationFlags = joints[j].locationFlags;
+        l.pose = joints[j].pose;
+        hs.joints[j] = fromSpaceLocation(l);
+      }
+      if (hs.joints[XR_HAND_JOINT_WRIST_EXT].valid) {
+        hs.wrist = hs.joints[XR_HAND_JOINT_WRIST_EXT];
+        hs.wristFromHandTracking = true;
+      }
+    }
+  }
+}
+
+void XrInput::relocateWrists(XrTime time) {
+  for (int h = 0; h < 2; ++h) locateHand(h, time);  // action states stay those of update()
+}
+
 Status XrInput::update(XrTime time) {
   if (session_.takeInteractionProfileChanged() || profile_.empty()) refreshProfile();
   XrActiveActionSet active{set_, XR_NULL_PATH};
@@ -197,40 +241,7 @@ Status XrInput::update(XrTime time) {
     if (XR_SUCCEEDED(xrGetActionStateFloat(session_.handle(), &gi, &fs)) && fs.isActive &&
         std::isfinite(fs.currentState))
       hs.trigger = fs.currentState;
-    if (hs.active) {
-      XrSpaceLocation loc{XR_TYPE_SPACE_LOCATION};
-      if (XR_SUCCEEDED(xrLocateSpace(gripSpaces_[h], session_.worldSpace(), time, &loc)))
-        hs.grip = fromSpaceLocation(loc);
-      loc = {XR_TYPE_SPACE_LOCATION};
-      if (XR_SUCCEEDED(xrLocateSpace(aimSpaces_[h], session_.worldSpace(), time, &loc)))
-        hs.aim = fromSpaceLocation(loc);
-      if (hs.grip.valid) {
-        hs.wrist = hs.grip;
-        hs.wrist.pose = hs.grip.pose * gripToWrist(profile_, h == 0);
-      }
-    }
-    if (trackers_[h] && locateJoints_) {
-      std::array<XrHandJointLocationEXT, kHandJointCount> joints{};
-      XrHandJointLocationsEXT locs{XR_TYPE_HAND_JOINT_LOCATIONS_EXT};
-      locs.jointCount = kHandJointCount;
-      locs.jointLocations = joints.data();
-      XrHandJointsLocateInfoEXT li{XR_TYPE_HAND_JOINTS_LOCATE_INFO_EXT};
-      li.baseSpace = session_.worldSpace();
-      li.time = time;
-      if (XR_SUCCEEDED(locateJoints_(trackers_[h], &li, &locs)) && locs.isActive) {
-        hs.jointsValid = true;
-        for (int j = 0; j < kHandJointCount; ++j) {
-          XrSpaceLocation l{XR_TYPE_SPACE_LOCATION};
-          l.locationFlags = joints[j].locationFlags;
-          l.pose = joints[j].pose;
-          hs.joints[j] = fromSpaceLocation(l);
-        }
-        if (hs.joints[XR_HAND_JOINT_WRIST_EXT].valid) {
-          hs.wrist = hs.joints[XR_HAND_JOINT_WRIST_EXT];
-          hs.wristFromHandTracking = true;
-        }
-      }
-    }
+    locateHand(h, time);
   }
   return {};
 }

@@ -48,6 +48,9 @@ class XrInput {
 
   // xrSyncActions and locate everything at `time` (the predicted display time) in the world space.
   Status update(XrTime time);
+  // The late latch: locates the grips (and tracked hands) again at `time`, without a new
+  // xrSyncActions, just before skinning; the runtime answers with its newest prediction.
+  void relocateWrists(XrTime time);
   const HandState& hand(int i) const { return hands_[i]; }            // 0 left, 1 right
   const std::string& interactionProfile() const { return profile_; }  // "" until one is bound
   bool recenterPressed() const { return recenterPressed_; }           // rising edge this update
@@ -57,6 +60,7 @@ class XrInput {
   XrInput(XrSystem& s, XrSessionRunner& r) : system_(s), session_(r) {}
   Status init();
   void refreshProfile();
+  void locateHand(int hand, XrTime time);  // grip, aim, wrist and joints of hands_[hand]
 
   XrSystem& system_;
   XrSessionRunner& session_;

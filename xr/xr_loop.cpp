@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <thread>
 
 #include "avatar/hand/finger_retarget.h"
@@ -10,6 +11,8 @@
 #include "engine/desktop_window.h"
 #include "engine/device.h"
 #include "engine/overlay.h"
+#include "runtime/ik_thread.h"
+#include "xr/hand_late_latch.h"
 #include "xr/xr_input.h"
 #include "xr/xr_pose_source.h"
 #include "xr/xr_session.h"
@@ -18,6 +21,8 @@
 namespace embody::xr {
 
 namespace {
+
+using SteadyClock = std::chrono::steady_clock;
 
 engine::FovAngles fovOf(const XrFovf& f) {
   return {f.angleLeft, f.angleRight, f.angleUp, f.angleDown};
@@ -66,305 +71,532 @@ void recordFingers(const avatar::FingerRig& rig, const avatar::FingerRetargetOut
   rep.curlLastDeg = curl;
 }
 
+engine::TargetImage swapchainTarget(const EyeSwapchain& sc, uint32_t index, VkImageLayout finalLayout) {
+  return {sc.images[index].image, sc.images[index].view, sc.format, sc.extent, 0, 1, VK_IMAGE_LAYOUT_UNDEFINED,
+          finalLayout};
+}
+
+double msBetween(XrTime later, XrTime earlier) { return double(later - earlier) * 1e-6; }
+
 constexpr float kNear = 0.05f, kFar = 100.0f;
 constexpr glm::vec4 kHandColors[2] = {{0.1f, 0.9f, 1.0f, 1.0f}, {1.0f, 0.3f, 0.9f, 1.0f}};
+constexpr tracking::TrackerId kHandIds[2] = {tracking::TrackerId::LeftHand, tracking::TrackerId::RightHand};
 
-}  // namespace
+// What one frame carries from phase to phase.
+struct FrameWork {
+  FrameTiming timing;
+  Views views;
+  Pose head;  // world (recentered)
+  XrTime locatedAt = 0;  // the runtime's clock when the trackers were located (0: unknown)
+  XrTime bodyLocatedAt = 0;   // ... when the trackers of the body shown were located
+  XrTime handsLatchedAt = 0;  // ... when the late latch located the controllers
+  SteadyClock::time_point submittedAt{};
+  bool bodySubmitted = false;
+  std::array<uint32_t, 2> color{}, depth{};
+  bool imagesAcquired = false;
+  SteadyClock::time_point renderStart{};
+};
 
-XrLoopReport runXrLoop(const XrLoopOptions& o) {
-  XrLoopReport rep;
-  auto fail = [&](const std::string& e) {
-    rep.error = e;
-    return rep;
-  };
-  if (!o.avatar) return fail("runXrLoop: no avatar");
+// The headset loop: the objects of one session and one function per frame phase.
+class HeadsetLoop {
+ public:
+  HeadsetLoop(const XrLoopOptions& o, XrLoopReport& rep) : o_(o), rep_(rep) {}
+  Status setup();
+  void run();
+  void finish();
+
+ private:
+  Status setupDevice();
+  Status setupSession();
+  void setupBody();
+  bool pollSession();  // false: leave the loop
+  Status frame();
+  Status locate(FrameWork& f);
+  void recenterAndCalibrate(FrameWork& f, const Pose& headTracking);
+  void countTracking(const FrameWork& f);
+  void publishTrackers(FrameWork& f);
+  void submitBody(FrameWork& f);
+  Status acquireImages(FrameWork& f);
+  void releaseImages(FrameWork& f);
+  bool joinBody(FrameWork& f);  // true: a solved body is posed
+  void lateLatchHands(FrameWork& f);
+  void driveFingers(const FrameWork& f);
+  Status render(FrameWork& f);
+  Status drawEyes(const FrameWork& f, engine::SceneFrame& scene);
+  Status drawMirror(const FrameWork& f, engine::SceneFrame& scene, engine::SubmitSync& sync);
+  void appendHandGizmos();
+  void recordFrame(const FrameWork& f);
+  void recordAges(const FrameWork& f);
+
+  const XrLoopOptions& o_;
+  XrLoopReport& rep_;
+  std::unique_ptr<XrSystem> sys_;
+  std::unique_ptr<engine::Device> device_;
+  std::unique_ptr<engine::DesktopWindow> mirror_;
+  std::unique_ptr<engine::AvatarRenderer> renderer_;
+  std::unique_ptr<XrSessionRunner> run_;
+  std::unique_ptr<XrInput> in_;
+  std::unique_ptr<AvatarPlacement> placement_;
+  std::unique_ptr<runtime::IkThread> ik_;
+  std::atomic<bool> resetBody_{false};
+  avatar::SkeletonPose rest_, pose_;
+  // Fingers: driven when the runtime tracks hands and the avatar has finger bones.
+  avatar::FingerRig fingerRig_;
+  bool driveFingers_ = false;
+  avatar::FingerRetargetState fingerState_;
+  avatar::FingerRetargetOutput fingerOut_;
+  std::array<avatar::TrackedHandJoints, 2> trackedHands_;
+  XrTime lastFingerTime_ = 0;
+  XrPoseSource trackers_;  // this frame's head and wrists as a tracking sample
+  XrTime firstDisplayTime_ = 0;
+  std::array<std::pair<double, XrTime>, 8> locateTimes_{};  // sample time -> when it was located
+  std::vector<glm::mat4> globals_;
+  std::optional<runtime::FrameStats> shownStats_;  // a newly solved body this frame shows
+  std::vector<engine::LineVertex> lines_, overlay_;
+  bool recentered_ = false;
+  XrTime pendingSpaceChange_ = 0;
+  size_t statesSeen_ = 0;
+  double renderSeconds_ = 0.0;
+  uint64_t rendererFrames_ = 0;
+  std::string error_;
+};
+
+Status HeadsetLoop::setup() {
+  if (!o_.avatar) return Error{"runXrLoop: no avatar"};
+  if (auto s = setupDevice(); !s) return s;
+  if (auto s = setupSession(); !s) return s;
+  setupBody();
+  return {};
+}
+
+Status HeadsetLoop::setupDevice() {
   XrSystemOptions so;
-  so.vulkanValidation = o.vulkanValidation;
-  if (o.mirror) {
+  so.vulkanValidation = o_.vulkanValidation;
+  if (o_.mirror) {
     auto exts = engine::DesktopWindow::requiredInstanceExtensions();
-    if (!exts) return fail(exts.error());
+    if (!exts) return Error{exts.error()};
     so.vulkanInstanceExtensions = *exts;
     so.vulkanDeviceExtensions = {VK_KHR_SWAPCHAIN_EXTENSION_NAME};
   }
   auto system = XrSystem::create(so);
-  if (!system) return fail(system.error());
-  XrSystem& sys = **system;
-  rep.runtime = sys.runtimeName();
-  rep.system = sys.systemName();
-
-  engine::AdoptedDevice ad{sys.vkInstance(), sys.vkPhysicalDevice(), sys.vkDevice(), sys.queueFamily(), 0};
+  if (!system) return Error{system.error()};
+  sys_ = std::move(system).value();
+  rep_.runtime = sys_->runtimeName();
+  rep_.system = sys_->systemName();
+  engine::AdoptedDevice ad{sys_->vkInstance(), sys_->vkPhysicalDevice(), sys_->vkDevice(), sys_->queueFamily(), 0};
   auto device = engine::Device::adopt(ad);
-  if (!device) return fail(device.error());
-  std::unique_ptr<engine::DesktopWindow> mirror;
-  if (o.mirror) {
-    const auto& v = sys.views()[0];
-    auto m = engine::DesktopWindow::create(**device, v.recommendedImageRectWidth, v.recommendedImageRectHeight,
-                                        "embody xr (mirror)", engine::DesktopWindow::Keys{});
-    if (!m) return fail(m.error());
-    mirror = std::move(m).value();
+  if (!device) return Error{device.error()};
+  device_ = std::move(device).value();
+  if (o_.mirror) {
+    const auto& v = sys_->views()[0];
+    auto m = engine::DesktopWindow::create(*device_, v.recommendedImageRectWidth, v.recommendedImageRectHeight,
+                                           "embody xr (mirror)", engine::DesktopWindow::Keys{});
+    if (!m) return Error{m.error()};
+    mirror_ = std::move(m).value();
   }
   engine::AvatarRendererOptions ro;
   ro.width = ro.height = 16;  // its own offscreen target is unused: the eyes render into swapchains
-  auto avatarRenderer = engine::AvatarRenderer::create(**device, *o.avatar, ro);
-  if (!avatarRenderer) return fail(avatarRenderer.error());
-  engine::AvatarRenderer& ar = **avatarRenderer;
+  auto avatarRenderer = engine::AvatarRenderer::create(*device_, *o_.avatar, ro);
+  if (!avatarRenderer) return Error{avatarRenderer.error()};
+  renderer_ = std::move(avatarRenderer).value();
+  return {};
+}
 
-  auto session = XrSessionRunner::create(sys);
-  if (!session) return fail(session.error());
-  XrSessionRunner& run = **session;
-  rep.usedStage = run.usingStage();
-  rep.depthSubmitted = run.submitsDepth();
-  auto input = XrInput::create(sys, run);
-  if (!input) return fail(input.error());
-  XrInput& in = **input;
-  rep.handTracking = in.handTracking();
+Status HeadsetLoop::setupSession() {
+  auto session = XrSessionRunner::create(*sys_);
+  if (!session) return Error{session.error()};
+  run_ = std::move(session).value();
+  rep_.usedStage = run_->usingStage();
+  rep_.depthSubmitted = run_->submitsDepth();
+  auto input = XrInput::create(*sys_, *run_);
+  if (!input) return Error{input.error()};
+  in_ = std::move(input).value();
+  rep_.handTracking = in_->handTracking();
+  return {};
+}
 
-  const auto rest = avatar::SkeletonPose::rest(o.avatar->skeleton);
-  const glm::vec3 avatarEye(ar.eyePose(rest)[3]);
-  AvatarPlacement placement(avatarEye, ar.anchors().forward, o.placement);
-  avatar::SkeletonPose pose = rest;
-  // Fingers: driven when the runtime tracks hands and the avatar has finger bones.
-  const avatar::FingerRig fingerRig = avatar::buildFingerRig(o.avatar->skeleton, o.avatar->humanoid);
-  const bool driveFingers = o.fingers && in.handTracking() && fingerRig.mappedBones() > 0;
-  rep.fingers.drivenBones = fingerRig.mappedBones();
-  avatar::FingerRetargetState fingerState;
-  avatar::FingerRetargetOutput fingerOut;
-  std::array<avatar::TrackedHandJoints, 2> trackedHands;
-  XrTime lastFingerTime = 0;
-  XrPoseSource trackers;  // this frame's head and wrists as a tracking sample
-  XrTime firstDisplayTime = 0;
-  std::vector<engine::LineVertex> lines, overlay;
-  bool recentered = false;
+void HeadsetLoop::setupBody() {
+  rest_ = avatar::SkeletonPose::rest(o_.avatar->skeleton);
+  pose_ = rest_;
+  const glm::vec3 avatarEye(renderer_->eyePose(rest_)[3]);
+  placement_ = std::make_unique<AvatarPlacement>(avatarEye, renderer_->anchors().forward, o_.placement);
+  fingerRig_ = avatar::buildFingerRig(o_.avatar->skeleton, o_.avatar->humanoid);
+  driveFingers_ = o_.fingers && in_->handTracking() && fingerRig_.mappedBones() > 0;
+  rep_.fingers.drivenBones = fingerRig_.mappedBones();
+  if (!o_.solveBody) return;
+  // The IK thread: recenters reach the body on that thread, before its next solve.
+  auto process = [this](const tracking::PoseSample& sample, runtime::SolvedFrame& out) {
+    if (resetBody_.exchange(false) && o_.onRecenter) o_.onRecenter();
+    o_.solveBody(sample, out);
+  };
+  ik_ = std::make_unique<runtime::IkThread>(process, rest_);
+  ik_->start();
+}
 
-  size_t statesSeen = 0;
-  double renderSeconds = 0.0;
-  std::string error;
-  uint64_t rendererFrames = 0;
-  while (!run.finished()) {
-    if (mirror) {
-      mirror->pollEvents();
-      if (mirror->closeRequested()) run.requestExit();
-    }
-    if (auto s = run.pollEvents(); !s) {
-      error = s.error();
-      break;
-    }
-    for (; statesSeen < run.stateHistory().size(); ++statesSeen) {
-      const XrSessionState st = run.stateHistory()[statesSeen];
-      rep.states.push_back(sessionStateName(st));
-      rep.reachedFocused = rep.reachedFocused || st == XR_SESSION_STATE_FOCUSED;
-      if (o.verbose) std::printf("session state: %s\n", sessionStateName(st));
-    }
-    if (run.finished()) break;
-    if (!run.running()) {  // IDLE before READY, or between STOPPING and EXITING
+void HeadsetLoop::run() {
+  while (!run_->finished()) {
+    if (!pollSession()) break;
+    if (!run_->running()) {  // IDLE before READY, or between STOPPING and EXITING
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
       continue;
     }
-    auto timing = run.waitFrame();
-    if (!timing) {
-      error = timing.error();
+    if (auto s = frame(); !s) {
+      error_ = s.error();
       break;
     }
-    ++rep.framesWaited;
-    const auto t0 = std::chrono::steady_clock::now();
-    if (auto s = run.beginFrame(); !s) {
-      error = s.error();
-      break;
-    }
-    const XrTime t = timing->predictedDisplayTime;  // poses predicted for when the frame is shown
-    if (auto s = in.update(t); !s) {
-      error = s.error();
-      break;
-    }
-    Views views = run.locateViews(t);
-    const Pose headTracking = headFromViews(views);
-    // The recenter button (or R in the mirror) also recalibrates the height: the user stands
-    // up straight and presses it. C in the mirror recalibrates only.
-    const bool buttonRecenter = in.recenterPressed() || (mirror && mirror->takeRecenterRequest());
-    const bool recalibrate = buttonRecenter || (mirror && mirror->takeCalibrateRequest());
-    if (views.valid && ((o.recenterAtStart && !recentered) || buttonRecenter)) {
-      placement.recenter(headTracking);
-      recentered = true;
-      if (o.onRecenter) o.onRecenter();
-    }
-    if (views.valid)
-      for (auto& e : views.eyes) e.pose = placement.toWorld(e.pose);
-    const Pose head = headFromViews(views);
-    if (views.tracked) {
-      ++rep.headTrackedFrames;
-      if (!placement.calibrated() || recalibrate) placement.calibrate(head);
-    }
-    for (int h = 0; h < 2; ++h) {
-      if (in.hand(h).grip.valid)
-        ++rep.handValidFrames[h];
-      else if (run.focused())
-        ++rep.handLostFrames[h];
-    }
-    rep.interactionProfile = in.interactionProfile();
-    if (!firstDisplayTime) firstDisplayTime = t;
-    // Wrists to the world, and from OpenXR's hand-joint axes to the trackers' grip axes.
-    auto wrist = [&](int h) {
-      TrackedPose p = in.hand(h).wrist;
-      if (p.valid) p.pose = placement.toWorld(p.pose);
-      p.pose.orientation = trackerHandOrientation(p.pose.orientation, h == 0);
-      return p;
-    };
-    trackers.publish(double(t - firstDisplayTime) * 1e-9, TrackedPose{head, views.valid, views.tracked}, wrist(0),
-                     wrist(1));
-
-    bool rendered = false;
-    if (timing->shouldRender && views.valid) {
-      pose = rest;
-      if (o.bodyPose && o.bodyPose(trackers.sample(0.0), pose)) {
-        ++rep.bodyPoseFrames;
-      } else {
-        pose = rest;
-        placement.place(o.avatar->skeleton, head, pose);
-      }
-      if (driveFingers) {  // after the body: the fingers ride on the solved hands
-        for (int h = 0; h < 2; ++h) toTrackedHand(in.hand(h), trackedHands[static_cast<size_t>(h)]);
-        avatar::FingerRetargetJob job;
-        job.skeleton = &o.avatar->skeleton;
-        job.rig = &fingerRig;
-        job.hands = {&trackedHands[0], &trackedHands[1]};
-        job.deltaTime =
-            lastFingerTime ? std::clamp(float(double(t - lastFingerTime) * 1e-9), 0.0f, 0.1f) : 0.0f;
-        job.state = &fingerState;
-        job.pose = &pose;
-        job.output = &fingerOut;
-        lastFingerTime = t;
-        if (job.Validate() && job.Run()) recordFingers(fingerRig, fingerOut, rep.fingers);
-      }
-      if (auto s = ar.computePose(pose); !s) {
-        error = s.error();
-        break;
-      }
-      lines.clear();
-      overlay.clear();
-      for (int h = 0; h < 2; ++h) {
-        const HandState& hs = in.hand(h);
-        if (!hs.grip.valid) continue;  // tracking lost: no gizmo rather than a stale one
-        engine::Gizmo g;
-        g.pose = placement.toWorld(hs.grip.pose).matrix();
-        g.color = kHandColors[h];
-        g.size = 0.05f;
-        engine::appendGizmo(overlay, g);
-      }
-      std::array<uint32_t, 2> color{}, depth{};
-      for (uint32_t e = 0; e < 2; ++e) {
-        auto c = run.acquire(run.color()[e].handle);
-        if (!c) {
-          error = c.error();
-          break;
-        }
-        color[e] = *c;
-        if (run.submitsDepth()) {
-          auto d = run.acquire(run.depth()[e].handle);
-          if (!d) {
-            error = d.error();
-            break;
-          }
-          depth[e] = *d;
-        }
-      }
-      if (!error.empty()) break;
-      engine::Renderer& r = ar.renderer();
-      engine::SceneFrame scene;
-      scene.avatar = &ar.gpuAvatar();
-      scene.palette = ar.palette();
-      scene.firstPerson = true;  // the user's own head is hidden
-      scene.lines = lines;
-      scene.overlayLines = overlay;  // hand gizmos stay visible through the avatar's hands
-      Status st = r.beginFrame();
-      if (st) st = r.setScene(scene);
-      for (uint32_t e = 0; e < 2 && st; ++e) {
-        const auto& sc = run.color()[e];
-        engine::PassTarget target;
-        target.color = {sc.images[color[e]].image,
-                        sc.images[color[e]].view,
-                        sc.format,
-                        sc.extent,
-                        0,
-                        1,
-                        VK_IMAGE_LAYOUT_UNDEFINED,
-                        VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
-        if (run.submitsDepth()) {
-          const auto& dc = run.depth()[e];
-          target.depth =
-              engine::TargetImage{dc.images[depth[e]].image,
-                               dc.images[depth[e]].view,
-                               dc.format,
-                               dc.extent,
-                               0,
-                               1,
-                               VK_IMAGE_LAYOUT_UNDEFINED,
-                               VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};  // OpenXR's release layout
-        }
-        const engine::Camera cam =
-            engine::cameraFromPose(views.eyes[e].pose.matrix(), fovOf(views.eyes[e].fov), kNear, kFar);
-        st = r.drawPass(std::span<const engine::Camera>(&cam, 1), target);
-      }
-      ++rendererFrames;
-      engine::SubmitSync sync;
-      if (st && mirror) {
-        // The left eye again (its pose, the window's aspect), or the avatar from outside.
-        const float vfov = views.eyes[0].fov.angleUp - views.eyes[0].fov.angleDown;
-        const engine::Camera cam =
-            mirror->thirdPerson()
-                ? ar.orbitAround(pose, 0.6f, 0.2f)
-                : engine::cameraFromPose(views.eyes[0].pose.matrix(),
-                                      engine::FovAngles::symmetric(vfov, mirror->aspect()), kNear, kFar);
-        if (mirror->thirdPerson()) {  // the whole avatar from outside: the third-person draw list
-          scene.firstPerson = false;
-          st = r.setScene(scene);
-        }
-        auto shown = st ? mirror->draw(r, rendererFrames, cam, sync) : Result<bool>(false);
-        if (!shown)
-          st = Status(Error{shown.error()});
-        else if (*shown)
-          ++rep.mirrorFrames;
-      }
-      if (st) st = r.endFrame(sync);  // submitted before the images are released, as OpenXR requires
-      if (st && mirror) st = mirror->present((*device)->queue());
-      for (uint32_t e = 0; e < 2; ++e) {
-        (void)run.release(run.color()[e].handle);
-        if (run.submitsDepth()) (void)run.release(run.depth()[e].handle);
-      }
-      if (!st) {
-        error = st.error();
-        break;
-      }
-      rendered = true;
-    }
-    if (auto s = run.endFrame(*timing, rendered ? &views : nullptr, kNear, kFar); !s) {
-      error = s.error();
-      break;
-    }
-    if (rendered)
-      renderSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (o.frames > 0 && run.framesSubmitted() >= o.frames) run.requestExit();
+    if (o_.frames > 0 && run_->framesSubmitted() >= o_.frames) run_->requestExit();
   }
-  for (; statesSeen < run.stateHistory().size(); ++statesSeen)
-    rep.states.push_back(sessionStateName(run.stateHistory()[statesSeen]));
-  rep.framesSubmitted = run.framesSubmitted();
-  rep.sessionLost = run.lost();
-  rep.endedCleanly = !rep.states.empty() && rep.states.back() == std::string("EXITING") && error.empty();
-  rep.calibrated = placement.calibrated();
-  rep.calibratedScale = placement.scale();
-  rep.meanFrameMs = rep.framesSubmitted ? 1000.0 * renderSeconds / double(rep.framesSubmitted) : 0.0;
+}
+
+bool HeadsetLoop::pollSession() {
+  if (mirror_) {
+    mirror_->pollEvents();
+    if (mirror_->closeRequested()) run_->requestExit();
+  }
+  if (o_.stopRequested && o_.stopRequested->load()) {
+    rep_.stoppedBySignal = true;
+    run_->requestExit();  // xrRequestExitSession: the runtime walks the session down to STOPPING
+  }
+  if (auto s = run_->pollEvents(); !s) {
+    error_ = s.error();
+    return false;
+  }
+  if (const XrTime change = run_->takeWorldSpaceChange()) pendingSpaceChange_ = change;
+  for (; statesSeen_ < run_->stateHistory().size(); ++statesSeen_) {
+    const XrSessionState st = run_->stateHistory()[statesSeen_];
+    rep_.states.push_back(sessionStateName(st));
+    rep_.reachedFocused = rep_.reachedFocused || st == XR_SESSION_STATE_FOCUSED;
+    if (o_.verbose) std::printf("session state: %s\n", sessionStateName(st));
+  }
+  return !run_->finished();
+}
+
+// One frame, phase by phase. The body is solved on the IK thread between submitBody and joinBody
+// while this thread acquires the swapchain images and starts the renderer's frame.
+Status HeadsetLoop::frame() {
+  FrameWork f;
+  auto timing = run_->waitFrame();
+  if (!timing) return Error{timing.error()};
+  f.timing = *timing;
+  ++rep_.framesWaited;
+  const auto t0 = SteadyClock::now();
+  if (auto s = run_->beginFrame(); !s) return s;
+  if (auto s = locate(f); !s) return s;
+  const bool draw = f.timing.shouldRender && f.views.valid;
+  if (draw) {
+    submitBody(f);
+    if (auto s = acquireImages(f); !s) return s;
+    if (auto s = render(f); !s) {
+      releaseImages(f);
+      return s;
+    }
+  }
+  if (auto s = run_->endFrame(f.timing, draw ? &f.views : nullptr, kNear, kFar); !s) return s;
+  if (draw) recordAges(f);
+  if (draw) renderSeconds_ += std::chrono::duration<double>(SteadyClock::now() - t0).count();
+  return {};
+}
+
+// Input and views at the predicted display time (that is the pose prediction), recentering,
+// calibration, and the frame's tracker sample.
+Status HeadsetLoop::locate(FrameWork& f) {
+  const XrTime t = f.timing.predictedDisplayTime;
+  if (auto s = in_->update(t); !s) return s;
+  f.views = run_->locateViews(t);
+  f.locatedAt = sys_->now();
+  const Pose headTracking = headFromViews(f.views);
+  recenterAndCalibrate(f, headTracking);
+  countTracking(f);
+  rep_.interactionProfile = in_->interactionProfile();
+  if (!firstDisplayTime_) firstDisplayTime_ = t;
+  publishTrackers(f);
+  return {};
+}
+
+void HeadsetLoop::recenterAndCalibrate(FrameWork& f, const Pose& headTracking) {
+  // The recenter button (or R in the mirror) also recalibrates the height: the user stands up
+  // straight and presses it. C in the mirror recalibrates only. The runtime's own recenter
+  // (REFERENCE_SPACE_CHANGE_PENDING on the world space) applies from its change time on.
+  const bool buttonRecenter = in_->recenterPressed() || (mirror_ && mirror_->takeRecenterRequest());
+  const bool recalibrate = buttonRecenter || (mirror_ && mirror_->takeCalibrateRequest());
+  const bool runtimeRecenter = pendingSpaceChange_ && f.timing.predictedDisplayTime >= pendingSpaceChange_;
+  if (f.views.valid && ((o_.recenterAtStart && !recentered_) || buttonRecenter || runtimeRecenter)) {
+    placement_->recenter(headTracking);
+    recentered_ = true;
+    ++rep_.recenters;
+    if (runtimeRecenter) ++rep_.runtimeRecenters, pendingSpaceChange_ = 0;
+    resetBody_ = true;
+  }
+  if (f.views.valid)
+    for (auto& e : f.views.eyes) e.pose = placement_->toWorld(e.pose);
+  f.head = headFromViews(f.views);
+  // Valid is enough: Monado's simulated HMD and 3-dof headsets report a valid, untracked position.
+  if (f.views.valid && (!placement_->calibrated() || recalibrate)) placement_->calibrate(f.head);
+}
+
+void HeadsetLoop::countTracking(const FrameWork& f) {
+  rep_.headValidFrames += f.views.valid ? 1 : 0;
+  rep_.headTrackedFrames += f.views.tracked ? 1 : 0;
+  for (int h = 0; h < 2; ++h) {
+    const TrackedPose& grip = in_->hand(h).grip;
+    if (grip.valid)
+      ++rep_.handValidFrames[h];
+    else if (run_->focused())
+      ++rep_.handLostFrames[h];
+    rep_.handTrackedFrames[h] += grip.valid && grip.tracked ? 1 : 0;
+  }
+}
+
+// Wrists to the world, and from OpenXR's hand-joint axes to the trackers' grip axes.
+TrackedPose trackerWrist(const HandState& hand, const AvatarPlacement& placement, int h) {
+  TrackedPose p = hand.wrist;
+  if (p.valid) p.pose = placement.toWorld(p.pose);
+  p.pose.orientation = trackerHandOrientation(p.pose.orientation, h == 0);
+  return p;
+}
+
+void HeadsetLoop::publishTrackers(FrameWork& f) {
+  const double time = double(f.timing.predictedDisplayTime - firstDisplayTime_) * 1e-9;
+  trackers_.publish(time, TrackedPose{f.head, f.views.valid, f.views.tracked},
+                    trackerWrist(in_->hand(0), *placement_, 0), trackerWrist(in_->hand(1), *placement_, 1));
+  locateTimes_[trackers_.published() % locateTimes_.size()] = {time, f.locatedAt};
+}
+
+void HeadsetLoop::submitBody(FrameWork& f) {
+  if (!ik_) return;
+  f.submittedAt = SteadyClock::now();
+  ik_->submit(trackers_.sample(0.0));
+  f.bodySubmitted = true;
+  ++rep_.ik.submitted;
+}
+
+// Both eyes' colour (and depth) images: acquired while the IK thread solves.
+Status HeadsetLoop::acquireImages(FrameWork& f) {
+  for (uint32_t e = 0; e < 2; ++e) {
+    auto c = run_->acquire(run_->color()[e].handle);
+    if (!c) return Error{c.error()};
+    f.color[e] = *c;
+    if (run_->submitsDepth()) {
+      auto d = run_->acquire(run_->depth()[e].handle);
+      if (!d) return Error{d.error()};
+      f.depth[e] = *d;
+    }
+  }
+  f.imagesAcquired = true;
+  return {};
+}
+
+void HeadsetLoop::releaseImages(FrameWork& f) {
+  if (!f.imagesAcquired) return;
+  for (uint32_t e = 0; e < 2; ++e) {
+    (void)run_->release(run_->color()[e].handle);
+    if (run_->submitsDepth()) (void)run_->release(run_->depth()[e].handle);
+  }
+  f.imagesAcquired = false;
+}
+
+// The join: the newest solved body, waiting at most until submit + the budget.
+bool HeadsetLoop::joinBody(FrameWork& f) {
+  if (!f.bodySubmitted) return false;
+  const auto deadline = f.submittedAt + std::chrono::duration_cast<SteadyClock::duration>(
+                                            std::chrono::duration<double>(o_.ikBudgetSeconds));
+  const auto waitStart = SteadyClock::now();
+  const bool caughtUp = ik_->waitUntilCaughtUp(deadline);
+  rep_.ik.waitMs.push_back(std::chrono::duration<double, std::milli>(SteadyClock::now() - waitStart).count());
+  ++rep_.ik.joins;
+  rep_.ik.lateJoins += caughtUp ? 0 : 1;
+  const bool fresh = ik_->acquire();
+  const runtime::SolvedFrame& body = ik_->frame();
+  if (body.stats.sequence == 0) return false;  // no body yet (before the first valid head)
+  pose_ = body.pose;
+  for (const auto& [time, at] : locateTimes_)
+    if (time == body.stats.sampleTime) f.bodyLocatedAt = at;
+  if (fresh) shownStats_ = body.stats;  // recorded with its render time once drawn (recordFrame)
+  return true;
+}
+
+// Just before skinning: the controllers again, and the solved hands moved rigidly onto them.
+void HeadsetLoop::lateLatchHands(FrameWork& f) {
+  const XrTime t = f.timing.predictedDisplayTime;
+  in_->relocateWrists(t);
+  const XrTime latchedAt = sys_->now();
+  const runtime::SolvedFrame& body = ik_->frame();
+  std::array<HandLatch, 2> latch;
+  for (int h = 0; h < 2; ++h) {
+    const TrackedPose newest = trackerWrist(in_->hand(h), *placement_, h);
+    const auto& target = body.targets.pose[kHandIds[h]];
+    latch[size_t(h)].joint = o_.avatar->humanoid.joint(h == 0 ? avatar::HumanBone::leftHand : avatar::HumanBone::rightHand);
+    latch[size_t(h)].solvedFor = {target.position, target.orientation};
+    latch[size_t(h)].newest = newest.pose;
+    latch[size_t(h)].apply =
+        o_.lateLatch && newest.valid && target.valid && body.targets[kHandIds[h]] == tracking::TrackerStatus::Tracked;
+  }
+  LatchResult out;
+  latchHands(o_.avatar->skeleton, latch, pose_, globals_, out);
+  for (size_t h = 0; h < 2; ++h) {
+    if (!out.applied[h]) continue;
+    ++rep_.lateLatch.frames;
+    rep_.lateLatch.maxErrorM = std::max(rep_.lateLatch.maxErrorM, out.error[h]);
+    rep_.lateLatch.correctionMm.push_back(double(out.correction[h]) * 1e3);
+    f.handsLatchedAt = latchedAt;
+  }
+}
+
+void HeadsetLoop::driveFingers(const FrameWork& f) {
+  if (!driveFingers_) return;  // after the body: the fingers ride on the solved hands
+  const XrTime t = f.timing.predictedDisplayTime;
+  for (int h = 0; h < 2; ++h) toTrackedHand(in_->hand(h), trackedHands_[static_cast<size_t>(h)]);
+  avatar::FingerRetargetJob job;
+  job.skeleton = &o_.avatar->skeleton;
+  job.rig = &fingerRig_;
+  job.hands = {&trackedHands_[0], &trackedHands_[1]};
+  job.deltaTime = lastFingerTime_ ? std::clamp(float(double(t - lastFingerTime_) * 1e-9), 0.0f, 0.1f) : 0.0f;
+  job.state = &fingerState_;
+  job.pose = &pose_;
+  job.output = &fingerOut_;
+  lastFingerTime_ = t;
+  if (job.Validate() && job.Run()) recordFingers(fingerRig_, fingerOut_, rep_.fingers);
+}
+
+void HeadsetLoop::appendHandGizmos() {
+  lines_.clear();
+  overlay_.clear();
+  for (int h = 0; h < 2; ++h) {
+    const HandState& hs = in_->hand(h);
+    if (!hs.grip.valid) continue;  // tracking lost: no gizmo rather than a stale one
+    engine::Gizmo g;
+    g.pose = placement_->toWorld(hs.grip.pose).matrix();
+    g.color = kHandColors[h];
+    g.size = 0.05f;
+    engine::appendGizmo(overlay_, g);
+  }
+}
+
+// The renderer's frame: started while the IK thread solves, then the body, skinning, the eyes,
+// the mirror, submit, release.
+Status HeadsetLoop::render(FrameWork& f) {
+  engine::Renderer& r = renderer_->renderer();
+  if (auto s = r.beginFrame(); !s) return s;  // waits for the GPU's previous frame: overlaps the solve
+  const bool solved = joinBody(f);
+  f.renderStart = SteadyClock::now();
+  if (solved) {
+    ++rep_.bodyPoseFrames;
+    if (o_.lateLatch) lateLatchHands(f);
+  } else {
+    pose_ = rest_;
+    placement_->place(o_.avatar->skeleton, f.head, pose_);
+  }
+  driveFingers(f);
+  if (auto s = renderer_->computePose(pose_); !s) return s;
+  appendHandGizmos();
+  engine::SceneFrame scene;
+  scene.avatar = &renderer_->gpuAvatar();
+  scene.palette = renderer_->palette();
+  scene.firstPerson = true;  // the user's own head is hidden
+  scene.lines = lines_;
+  scene.overlayLines = overlay_;  // hand gizmos stay visible through the avatar's hands
+  Status st = drawEyes(f, scene);
+  ++rendererFrames_;
+  engine::SubmitSync sync;
+  if (st && mirror_) st = drawMirror(f, scene, sync);
+  if (st) st = r.endFrame(sync);  // submitted before the images are released, as OpenXR requires
+  if (st && mirror_) st = mirror_->present(device_->queue());
+  releaseImages(f);
+  if (st) recordFrame(f);
+  return st;
+}
+
+Status HeadsetLoop::drawEyes(const FrameWork& f, engine::SceneFrame& scene) {
+  engine::Renderer& r = renderer_->renderer();
+  Status st = r.setScene(scene);
+  for (uint32_t e = 0; e < 2 && st; ++e) {
+    engine::PassTarget target;
+    target.color = swapchainTarget(run_->color()[e], f.color[e], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+    if (run_->submitsDepth())  // OpenXR's release layout for depth
+      target.depth = swapchainTarget(run_->depth()[e], f.depth[e], VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL);
+    const engine::Camera cam =
+        engine::cameraFromPose(f.views.eyes[e].pose.matrix(), fovOf(f.views.eyes[e].fov), kNear, kFar);
+    st = r.drawPass(std::span<const engine::Camera>(&cam, 1), target);
+  }
+  return st;
+}
+
+// The left eye again (its pose, the window's aspect), or (V) the avatar from outside.
+Status HeadsetLoop::drawMirror(const FrameWork& f, engine::SceneFrame& scene, engine::SubmitSync& sync) {
+  engine::Renderer& r = renderer_->renderer();
+  const float vfov = f.views.eyes[0].fov.angleUp - f.views.eyes[0].fov.angleDown;
+  const engine::Camera cam =
+      mirror_->thirdPerson() ? renderer_->orbitAround(pose_, 0.6f, 0.2f)
+                             : engine::cameraFromPose(f.views.eyes[0].pose.matrix(),
+                                                      engine::FovAngles::symmetric(vfov, mirror_->aspect()), kNear, kFar);
+  if (mirror_->thirdPerson()) {  // the whole avatar from outside: the third-person draw list
+    scene.firstPerson = false;
+    if (auto s = r.setScene(scene); !s) return s;
+  }
+  auto shown = mirror_->draw(r, rendererFrames_, cam, sync);
+  if (!shown) return Error{shown.error()};
+  if (*shown) ++rep_.mirrorFrames;
+  return {};
+}
+
+// The render time of the frame (join to submit) goes with the solved body it showed.
+void HeadsetLoop::recordFrame(const FrameWork& f) {
+  if (!shownStats_) return;
+  shownStats_->renderSeconds = std::chrono::duration<double>(SteadyClock::now() - f.renderStart).count();
+  rep_.ikFrames.add(*shownStats_);
+  shownStats_.reset();
+}
+
+// Tracker-to-photon: from locating the trackers to the frame's photons, which leave at the
+// predicted display time, or (a frame late for it) no earlier than its xrEndFrame.
+void HeadsetLoop::recordAges(const FrameWork& f) {
+  const XrTime ended = sys_->now();
+  if (!ended) return;  // the runtime has no XR_KHR_convert_timespec_time: ages unknown
+  const XrTime photons = std::max(f.timing.predictedDisplayTime, ended);
+  if (f.bodyLocatedAt) rep_.ik.bodyAgeMs.push_back(msBetween(photons, f.bodyLocatedAt));
+  if (f.handsLatchedAt) rep_.ik.handAgeMs.push_back(msBetween(photons, f.handsLatchedAt));
+}
+
+void HeadsetLoop::finish() {
+  if (ik_) ik_->stop();
+  if (run_) {
+    for (; statesSeen_ < run_->stateHistory().size(); ++statesSeen_)
+      rep_.states.push_back(sessionStateName(run_->stateHistory()[statesSeen_]));
+    rep_.framesSubmitted = run_->framesSubmitted();
+    rep_.sessionLost = run_->lost();
+  }
+  rep_.endedCleanly = !rep_.states.empty() && rep_.states.back() == std::string("EXITING") && error_.empty();
+  if (placement_) {
+    rep_.calibrated = placement_->calibrated();
+    rep_.calibratedScale = placement_->scale();
+  }
+  rep_.meanFrameMs = rep_.framesSubmitted ? 1000.0 * renderSeconds_ / double(rep_.framesSubmitted) : 0.0;
   // Tear down in dependency order before reading the final validation count.
-  ar.renderer().waitIdle();
-  input->reset();
-  session->reset();
-  avatarRenderer->reset();
-  mirror.reset();
-  device->reset();
-  const auto counter = sys.validationCounter();
-  system->reset();  // destroying the device and instance can report leaks: count after
-  rep.vulkanValidationMessages = counter->load();
-  if (error.empty() && rep.sessionLost)
-    error = "the OpenXR session was lost (the runtime or the headset went away)";
-  rep.error = error;
+  if (renderer_) renderer_->renderer().waitIdle();
+  in_.reset();
+  run_.reset();
+  renderer_.reset();
+  mirror_.reset();
+  device_.reset();
+  if (sys_) {
+    const auto counter = sys_->validationCounter();
+    sys_.reset();  // destroying the device and instance can report leaks: count after
+    rep_.vulkanValidationMessages = counter->load();
+  }
+  if (error_.empty() && rep_.sessionLost) error_ = "the OpenXR session was lost (the runtime or the headset went away)";
+  if (rep_.error.empty()) rep_.error = error_;
+}
+
+}  // namespace
+
+XrLoopReport runXrLoop(const XrLoopOptions& options) {
+  XrLoopReport rep;
+  HeadsetLoop loop(options, rep);
+  if (auto s = loop.setup(); !s)
+    rep.error = s.error();
+  else
+    loop.run();
+  loop.finish();
   return rep;
 }
 

@@ -145,6 +145,13 @@ XrSessionRunner::~XrSessionRunner() {
   }
 }
 
+void XrSessionRunner::noteLoss(XrResult r) {
+  if (r == XR_ERROR_SESSION_LOST || r == XR_ERROR_INSTANCE_LOST) {
+    running_ = false;
+    lost_ = finished_ = true;
+  }
+}
+
 void XrSessionRunner::setState(XrSessionState s) {
   state_ = s;
   history_.push_back(s);
@@ -155,6 +162,10 @@ Status XrSessionRunner::pollEvents() {
     XrEventDataBuffer ev{XR_TYPE_EVENT_DATA_BUFFER};
     const XrResult r = xrPollEvent(system_.instance(), &ev);
     if (r == XR_EVENT_UNAVAILABLE) return {};
+    if (r == XR_ERROR_INSTANCE_LOST) {  // the runtime went away: torn down and retried like a loss
+      noteLoss(r);
+      return {};
+    }
     if (XR_FAILED(r)) return Error{"xrPollEvent failed: " + system_.result(r)};
     switch (ev.type) {
       case XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED: {
@@ -189,8 +200,14 @@ Status XrSessionRunner::pollEvents() {
       case XR_TYPE_EVENT_DATA_INTERACTION_PROFILE_CHANGED:
         profileChanged_ = true;
         break;
+      case XR_TYPE_EVENT_DATA_REFERENCE_SPACE_CHANGE_PENDING: {
+        const auto& e = reinterpret_cast<const XrEventDataReferenceSpaceChangePending&>(ev);
+        const XrReferenceSpaceType world = usingStage_ ? XR_REFERENCE_SPACE_TYPE_STAGE : XR_REFERENCE_SPACE_TYPE_LOCAL;
+        if (e.session == session_ && e.referenceSpaceType == world) worldSpaceChange_ = std::max<XrTime>(e.changeTime, 1);
+        break;
+      }
       default:
-        break;  // reference space changes, events lost: nothing to do
+        break;  // events lost, other extensions' events: nothing to do
     }
   }
 }
@@ -205,6 +222,8 @@ void XrSessionRunner::requestExit() {
   }
 }
 
+XrTime XrSessionRunner::takeWorldSpaceChange() { return std::exchange(worldSpaceChange_, 0); }
+
 bool XrSessionRunner::takeInteractionProfileChanged() {
   return std::exchange(profileChanged_, false);
 }
@@ -213,7 +232,7 @@ Result<FrameTiming> XrSessionRunner::waitFrame() {
   XrFrameWaitInfo wi{XR_TYPE_FRAME_WAIT_INFO};
   XrFrameState fs{XR_TYPE_FRAME_STATE};
   if (XrResult r = xrWaitFrame(session_, &wi, &fs); XR_FAILED(r)) {
-    if (r == XR_ERROR_SESSION_LOST) lost_ = finished_ = true;
+    noteLoss(r);
     return Error{"xrWaitFrame failed: " + system_.result(r)};
   }
   return FrameTiming{fs.predictedDisplayTime, fs.predictedDisplayPeriod, fs.shouldRender == XR_TRUE};
@@ -223,7 +242,7 @@ Status XrSessionRunner::beginFrame() {
   XrFrameBeginInfo bi{XR_TYPE_FRAME_BEGIN_INFO};
   const XrResult r = xrBeginFrame(session_, &bi);
   if (XR_FAILED(r)) {
-    if (r == XR_ERROR_SESSION_LOST) lost_ = finished_ = true;
+    noteLoss(r);
     return Error{"xrBeginFrame failed: " + system_.result(r)};
   }
   return {};
@@ -301,7 +320,7 @@ Status XrSessionRunner::endFrame(const FrameTiming& timing, const Views* views, 
     ei.layers = layers;
   }
   if (XrResult r = xrEndFrame(session_, &ei); XR_FAILED(r)) {
-    if (r == XR_ERROR_SESSION_LOST) lost_ = finished_ = true;
+    noteLoss(r);
     return Error{"xrEndFrame failed: " + system_.result(r)};
   }
   if (views) ++framesSubmitted_;

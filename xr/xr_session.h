@@ -69,6 +69,9 @@ class XrSessionRunner {
   void requestExit();
   // True when the runtime's profile changed since the last call (the input re-reads it).
   bool takeInteractionProfileChanged();
+  // XR_TYPE_EVENT_DATA_REFERENCE_SPACE_CHANGE_PENDING for the world space (the user recentered
+  // in the runtime's own UI): the change time, once; 0 when none is pending.
+  XrTime takeWorldSpaceChange();
 
   Result<FrameTiming> waitFrame();
   Status beginFrame();
@@ -96,6 +99,7 @@ class XrSessionRunner {
   Status init();
   Status createSwapchain(uint32_t eye, bool depth, int64_t format, EyeSwapchain& out);
   void setState(XrSessionState s);
+  void noteLoss(XrResult r);  // XR_ERROR_SESSION_LOST / _INSTANCE_LOST: the session is over
 
   XrSystem& system_;
   XrSession session_ = XR_NULL_HANDLE;
@@ -106,6 +110,7 @@ class XrSessionRunner {
   std::vector<XrSessionState> history_;
   bool running_ = false, finished_ = false, lost_ = false, exitRequested_ = false;
   bool profileChanged_ = false;
+  XrTime worldSpaceChange_ = 0;
   uint64_t framesSubmitted_ = 0;
 };
 

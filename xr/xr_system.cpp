@@ -61,6 +61,9 @@ Status XrSystem::createInstance(const XrSystemOptions& o) {
   if (handTracking_) enable.push_back(XR_EXT_HAND_TRACKING_EXTENSION_NAME);
   depthLayer_ = hasExtension(exts, XR_KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME);
   if (depthLayer_) enable.push_back(XR_KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME);
+  // Tracker-to-photon ages need the runtime's "now" (XrTime); optional.
+  const bool timespec = hasExtension(exts, XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME);
+  if (timespec) enable.push_back(XR_KHR_CONVERT_TIMESPEC_TIME_EXTENSION_NAME);
 
   XrInstanceCreateInfo ci{XR_TYPE_INSTANCE_CREATE_INFO};
   std::snprintf(ci.applicationInfo.applicationName, XR_MAX_APPLICATION_NAME_SIZE, "%s", o.appName.c_str());
@@ -70,6 +73,9 @@ Status XrSystem::createInstance(const XrSystemOptions& o) {
   ci.enabledExtensionNames = enable.data();
   if (XrResult r = xrCreateInstance(&ci, &instance_); XR_FAILED(r))
     return Error{"xrCreateInstance failed: " + resultString(XR_NULL_HANDLE, r)};
+  if (timespec)
+    convertTimespec_ =
+        reinterpret_cast<PFN_xrConvertTimespecTimeToTimeKHR>(proc("xrConvertTimespecTimeToTimeKHR"));
   XrInstanceProperties ip{XR_TYPE_INSTANCE_PROPERTIES};
   if (XR_SUCCEEDED(xrGetInstanceProperties(instance_, &ip))) runtimeName_ = ip.runtimeName;
 
@@ -214,6 +220,14 @@ std::string XrSystem::pathString(XrPath p) const {
   char buf[XR_MAX_PATH_LENGTH] = {};
   uint32_t n = 0;
   return XR_SUCCEEDED(xrPathToString(instance_, p, sizeof(buf), &n, buf)) ? std::string(buf) : std::string();
+}
+
+XrTime XrSystem::now() const {
+  if (!convertTimespec_) return 0;
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  XrTime t = 0;
+  return XR_SUCCEEDED(convertTimespec_(instance_, &ts, &t)) ? t : 0;
 }
 
 PFN_xrVoidFunction XrSystem::proc(const char* name) const {

@@ -52,6 +52,9 @@ class XrSystem {
   std::string result(XrResult r) const { return resultString(instance_, r); }
   // A function of an enabled extension (nullptr when the runtime does not provide it).
   PFN_xrVoidFunction proc(const char* name) const;
+  // The runtime's current time (XR_KHR_convert_timespec_time on CLOCK_MONOTONIC); 0 when the
+  // runtime does not offer the extension.
+  XrTime now() const;
 
  private:
   XrSystem() = default;
@@ -62,6 +65,7 @@ class XrSystem {
   XrSystemId systemId_ = XR_NULL_SYSTEM_ID;
   std::string runtimeName_, systemName_;
   bool handTracking_ = false, depthLayer_ = false;
+  PFN_xrConvertTimespecTimeToTimeKHR convertTimespec_ = nullptr;
   std::array<XrViewConfigurationView, 2> views_{};
   VkInstance vkInstance_ = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;

@@ -1,6 +1,8 @@
 // The lock-free hand-offs: triple buffer semantics, and the IK thread between a tracking thread
 // and a render thread (run under ThreadSanitizer by `make tsan`).
 #include <catch2/catch.hpp>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <thread>
 
@@ -191,4 +193,36 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
   CHECK(hips > headRot);
   CHECK(statusWeight(tracking::TrackerStatus::Absent) == 0.0f);
   CHECK(statusWeight(tracking::TrackerStatus::Held) == 1.0f);
+}
+
+TEST_CASE("IK thread join: waits while this sample is solved, never past the deadline") {
+  // A process function (IkThread(Process)) that takes 200 ms per sample, as a slow solve would.
+  std::atomic<int> solves{0};
+  runtime::IkThread ik(
+      [&](const tracking::PoseSample& s, runtime::SolvedFrame& out) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        out.stats.sequence = uint64_t(++solves);
+        out.stats.sampleTime = s.time;
+      },
+      avatar::SkeletonPose{});
+  ik.start();
+  tracking::PoseSample sample;
+  sample.time = 1.0;
+  ik.submit(sample);
+  // A 5 ms deadline: the join gives up at it (not caught up) and the newest frame is the initial one.
+  auto start = std::chrono::steady_clock::now();
+  CHECK_FALSE(ik.waitUntilCaughtUp(start + std::chrono::milliseconds(5)));
+  const double waitedMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  CHECK(waitedMs >= 4.9);
+  CHECK(waitedMs < 150.0);  // well before the solve ends (a loaded scheduler's wake-up at most)
+  CHECK_FALSE(ik.acquire());
+  // A generous deadline: the join returns as soon as the solve is published, with that frame.
+  start = std::chrono::steady_clock::now();
+  CHECK(ik.waitUntilCaughtUp(start + std::chrono::seconds(5)));
+  CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(1));
+  REQUIRE(ik.acquire());
+  CHECK(ik.frame().stats.sampleTime == 1.0);
+  // Nothing submitted since: caught up at once.
+  CHECK(ik.waitUntilCaughtUp(std::chrono::steady_clock::now()));
+  ik.stop();
 }

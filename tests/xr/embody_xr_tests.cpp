@@ -3,6 +3,7 @@
 // and in the captured left-eye image the avatar's hands (solved by three-point IK) and the hand
 // gizmos are where the replayed controllers project.
 #include <algorithm>
+#include <csignal>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
@@ -123,7 +124,7 @@ std::string ikBudgetMs(double factor = 1.0) {
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
   const double ms = 40.0;
 #else
-  const double ms = 5.0;
+  const double ms = 15.0;  // the IK thread shares the 2 cores with lavapipe's render threads
 #endif
   return std::to_string(std::min(100.0, ms * factor));
 }
@@ -191,7 +192,9 @@ TEST_CASE(
   // solved every frame, and the avatar's skin fills the neighbourhood of each projected controller
   // (the wrist sits a few centimetres behind the grip). Sky and floor away from the arms stay bare.
   CHECK(r.stats["body"] == "ik");
-  CHECK(r.stats["body_pose_frames"] == 120);
+  // The first frame may show the rest pose: the render thread never waits past the deadline, and
+  // the first solve also calibrates the solver.
+  CHECK(r.stats["body_pose_frames"].get<int>() >= 119);
   CHECK(r.stats["tracking"]["non_finite_frames"] == 0);
   CHECK(r.stats["tracking"]["hand_error_p95_m"].get<double>() < 0.02);  // avatar metres, wrists vs targets
   CHECK(countNear(img, left, 16, isAvatar) >= 40);
@@ -259,12 +262,12 @@ TEST_CASE("embody xr --seated sits the avatar: the pelvis stays on the seat, fee
   // first. A seated iteration costs about twice a standing one (more rows and clamping passes,
   // docs/runtime.md "Seated mode"), the trace keeps moving, and on a loaded 2-core machine 10 ms
   // sometimes bought 6 iterations a frame and a 2 cm head p95.
-  const XrRun r = runEmbodyXr("seated", {"--seated", "--frames", "120", "--ik-budget-ms", ikBudgetMs(10.0)},
+  const XrRun r = runEmbodyXr("seated", {"--seated", "--frames", "120", "--ik-budget-ms", ikBudgetMs(5.0)},
                               {{"EMBODY_XR_POSES", writeSeatedTrace()}});
   INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
   requireCleanRun(r);
   CHECK(r.stats["ended_cleanly"] == true);
-  CHECK(r.stats["body_pose_frames"] == 120);
+  CHECK(r.stats["body_pose_frames"].get<int>() >= 119);  // the first frame may show the rest pose
   CHECK(r.process.output.find("seated: seat") != std::string::npos);
   const nlohmann::json& seated = r.stats["seated"];
   INFO(seated.dump());
@@ -335,7 +338,7 @@ TEST_CASE("embody xr handles tracking loss mid-run: the hands disappear and come
   CHECK(countNear(last, projectLeftEye(kRightHand, last.width, last.height), 14, isMagenta) >= 8);
   // The body kept being solved through the loss (held, then eased hands; never NaN, which would
   // have failed skinning) and the avatar's hands are back at the controllers at the end.
-  CHECK(r.stats["body_pose_frames"] == 90);
+  CHECK(r.stats["body_pose_frames"].get<int>() >= 89);  // the first frame may show the rest pose
   CHECK(countNear(last, projectLeftEye(kLeftHand, last.width, last.height), 16, isAvatar) >= 40);
   CHECK(countNear(last, projectLeftEye(kRightHand, last.width, last.height), 16, isAvatar) >= 40);
 }
@@ -355,15 +358,100 @@ TEST_CASE("embody xr ends cleanly when the runtime ends the session", "[xr]") {
   CHECK(r.stats["states"].back() == "EXITING");
 }
 
-TEST_CASE("embody xr reports a lost session with a clear error and shuts down cleanly", "[xr]") {
-  const XrRun r = runEmbodyXr("session_lost", {"--frames", "1000"}, {{"EMBODY_XR_LOSS_FRAMES", "10"}});
+TEST_CASE("embody xr retries a lost session with a new instance, then gives up with a clear error", "[xr]") {
+  // Every session of this runtime is lost after 10 frames: each new instance loses it again.
+  const XrRun r = runEmbodyXr("session_lost", {"--frames", "1000"},
+                              {{"EMBODY_XR_LOSS_FRAMES", "10"}, {"EMBODY_XR_CAPTURE", ""}});
   INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
   REQUIRE_FALSE(r.process.timedOut);
   CHECK(r.process.exitCode == 1);
-  CHECK(r.process.output.find("session was lost") != std::string::npos);
-  requireNoValidation(r);
+  CHECK(r.process.output.find("session was lost and could not be recreated (3 attempts)") != std::string::npos);
+  CHECK(countOccurrences(r.process.output, "creating a new OpenXR instance") == 2);
+  CHECK(countOccurrences(r.process.output, "Core Validation output type") == 3);  // one layer per instance
+  CHECK(countOccurrences(r.process.output, "VALID_ERROR") == 0);
+  CHECK(r.stats["vulkan_validation_messages"] == 0);
   CHECK(r.stats["session_lost"] == true);
+  CHECK(r.stats["session_attempts"] == 3);
   CHECK(r.stats["states"].back() == "LOSS_PENDING");
+}
+
+TEST_CASE("embody xr solves the body on the IK thread within 1 ms and late-latches the hands onto the controllers",
+          "[xr]") {
+  // The done-when of the headset path: the IK thread at the default 1 ms budget, the render thread
+  // joining it at the deadline, and the hands moved onto the controllers located again before
+  // skinning. The trace holds still, so the warm-started solve converges in an iteration or two.
+  const XrRun r = runEmbodyXr("ik_thread", {"--frames", "60", "--ik-budget-ms", "1"}, {{"EMBODY_XR_CAPTURE", ""}});
+  requireCleanRun(r);
+  INFO(r.stats.dump(1));
+  CHECK(r.stats["body_pose_frames"].get<int>() >= 59);  // the first frame may show the rest pose
+  const auto& ik = r.stats["ik_thread"];
+  CHECK(ik["submitted"] == 60);
+  CHECK(ik["joins"] == 60);
+  CHECK(ik["wait_max_ms"].get<double>() <= 1.0 + 5.0);  // the deadline, plus a loaded scheduler's wake-up
+  CHECK(r.stats["ik"]["budget_ms"] == 1.0);
+  // Deadline misses are the scheduler's on a loaded CI machine (a preempted solve); on an idle
+  // machine there are none (docs/xr.md). A few percent at most.
+  CHECK(r.stats["ik"]["deadline_misses"].get<int>() <= 3);
+  CHECK(r.stats["render"]["p50_ms"].get<double>() > 0.0);  // it was always 0 before
+  CHECK(ik["body_age_frames"].get<int>() >= 59);
+  CHECK(ik["body_age_p50_ms"].get<double>() > 0.0);
+  CHECK(ik["hand_age_p50_ms"].get<double>() > 0.0);
+  CHECK(ik["hand_age_p50_ms"].get<double>() < ik["body_age_p50_ms"].get<double>());  // the latch is newer
+  // Both hands latched once the body has reached them (a cold start from the rest pose takes a
+  // few frames at 1 ms; corrections over 10 cm are left to the solver), each within 1 mm of its
+  // located wrist.
+  const auto& latch = r.stats["late_latch"];
+  CHECK(latch["hand_frames"].get<int>() >= 60);
+  CHECK(latch["max_error_mm"].get<double>() < 1.0);
+  CHECK(r.stats["tracking"]["non_finite_frames"] == 0);
+}
+
+TEST_CASE("embody xr calibrates on a valid but untracked head and recenters when the runtime moves its space",
+          "[xr]") {
+  // Monado's simulated HMD (and 3-dof headsets) report the head position valid but not tracked:
+  // the avatar must still be scaled to the user (1.6 m eyes here). The runtime also recenters
+  // its spaces at frame 5 (REFERENCE_SPACE_CHANGE_PENDING), which recenters the avatar.
+  const XrRun r = runEmbodyXr("untracked_head", {"--frames", "12", "--body", "rest"},
+                              {{"EMBODY_XR_CAPTURE", ""},
+                               {"EMBODY_XR_HEAD_UNTRACKED", "1"},
+                               {"EMBODY_XR_SPACE_CHANGE_FRAMES", "5"}});
+  requireCleanRun(r);
+  CHECK(r.stats["head_tracked_frames"] == 0);
+  CHECK(r.stats["head_valid_frames"].get<int>() >= 12);
+  CHECK(r.stats["hand_tracked_frames"][0] == 12);
+  CHECK(r.stats["calibrated"] == true);
+  CHECK(r.stats["avatar_scale"].get<double>() != Approx(1.0).margin(0.005));
+  CHECK(r.stats["runtime_recenters"] == 1);
+  CHECK(r.stats["recenters"] == 1);
+}
+
+TEST_CASE("embody xr ends the session cleanly on SIGINT: STOPPING, xrEndSession, EXITING, exit 0, stats written",
+          "[xr]") {
+  const std::string dir = freshTestDir("sigint");
+  auto env = headlessRuntimeEnv();
+  env["EMBODY_XR_POSES"] = writeTrace(dir);
+  env["EMBODY_XR_CAPTURE"] = dir + "/capture";
+  env["EMBODY_XR_VIEW_SIZE"] = "64x64";
+  // No --frames: only the signal ends it. It goes out once the fifth frame has been shown.
+  SignalPlan plan{SIGINT, [&] { return fs::exists(dir + "/capture/left_00004.png"); }};
+  const auto p = runProcess({embodyBin(), "xr", "--validate", "--stats", dir + "/stats.json"}, env, 90, plan);
+  INFO(p.output.substr(p.output.size() > 4000 ? p.output.size() - 4000 : 0));
+  REQUIRE(p.signalSent);
+  REQUIRE_FALSE(p.timedOut);
+  CHECK(p.termSignal == 0);
+  CHECK(p.exitCode == 0);
+  std::ifstream in(dir + "/stats.json");
+  const auto stats = nlohmann::json::parse(in, nullptr, false);
+  REQUIRE(stats.is_object());
+  CHECK(stats["stopped_by_signal"] == true);
+  CHECK(stats["ended_cleanly"] == true);
+  CHECK(stats["frames_submitted"].get<int>() >= 5);
+  const auto states = stats["states"].get<std::vector<std::string>>();
+  REQUIRE(states.size() >= 4);
+  CHECK(std::vector<std::string>(states.end() - 3, states.end()) ==
+        std::vector<std::string>{"STOPPING", "IDLE", "EXITING"});
+  CHECK(stats["vulkan_validation_messages"] == 0);
+  CHECK(countOccurrences(p.output, "VALID_ERROR") == 0);
 }
 
 TEST_CASE("embody xr without a runtime fails with a clear message", "[xr]") {

@@ -33,7 +33,7 @@ TEST_CASE("XrPoseSource publishes head and wrists with OpenXR's validity, never 
   CHECK(src.published() == 1);
 }
 
-TEST_CASE("the headset loop hands each frame's trackers to the body-pose hook", "[xr]") {
+TEST_CASE("the headset loop hands each frame's trackers to the body hook on the IK thread", "[xr]") {
   const std::string trace = test::writeTraceFile(
       "body_hook",
       {R"({"t":0,"head":{"p":[0,1.6,0],"q":[0,0,0,1]},"left":{"p":[-0.2,1.2,-0.3],"q":[0,0,0,1]},"right":{"p":[0.2,1.2,-0.3],"q":[0,0,0,1]}})",
@@ -47,11 +47,14 @@ TEST_CASE("the headset loop hands each frame's trackers to the body-pose hook", 
   o.avatar = &avatar;
   o.frames = 10;
   o.vulkanValidation = true;
-  std::vector<tracking::PoseSample> seen;
-  o.bodyPose = [&](const tracking::PoseSample& s, avatar::SkeletonPose&) {
+  std::vector<tracking::PoseSample> seen;  // written on the IK thread, read after the loop joined it
+  uint64_t sequence = 0;
+  o.solveBody = [&](const tracking::PoseSample& s, runtime::SolvedFrame& out) {
     seen.push_back(s);
-    return true;
+    out.stats.sequence = ++sequence;
+    out.stats.sampleTime = s.time;
   };
+  o.ikBudgetSeconds = 1.0;  // the join waits for every solve: the hook is checked, not the timing
   const auto r = xr::runXrLoop(o);
   unsetenv("EMBODY_XR_POSES");
   unsetenv("EMBODY_XR_VIEW_SIZE");

@@ -57,6 +57,11 @@ size_t countOccurrences(const std::string& text, const std::string& what) {
 
 ProcessResult runProcess(const std::vector<std::string>& argv, const std::map<std::string, std::string>& env,
                          int timeoutSeconds) {
+  return runProcess(argv, env, timeoutSeconds, SignalPlan{});
+}
+
+ProcessResult runProcess(const std::vector<std::string>& argv, const std::map<std::string, std::string>& env,
+                         int timeoutSeconds, const SignalPlan& plan) {
   ProcessResult r;
   int in[2], out[2];
   if (pipe(in) != 0) return r;
@@ -92,6 +97,10 @@ ProcessResult runProcess(const std::vector<std::string>& argv, const std::map<st
       r.timedOut = true;
       kill(pid, SIGKILL);
       break;
+    }
+    if (plan.signal && !r.signalSent && plan.when && plan.when()) {
+      kill(pid, plan.signal);
+      r.signalSent = true;
     }
     pollfd pfd{out[0], POLLIN, 0};
     if (poll(&pfd, 1, static_cast<int>(std::min<long>(left.count(), 200))) > 0) {

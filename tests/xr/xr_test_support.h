@@ -2,6 +2,7 @@
 // Helpers for the xr tests: paths of the built runtime and CLI, and a child-process runner that
 // sets environment variables, holds the child's stdin open (hello_xr quits when it closes) and
 // enforces a timeout.
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -16,6 +17,7 @@ struct ProcessResult {
   int exitCode = -1;  // -1 when killed or not started
   int termSignal = 0;  // the signal that ended the child (SIGSEGV = 11), 0 when it exited
   bool timedOut = false;
+  bool signalSent = false;  // SignalPlan's signal went out
   std::string output;  // stdout and stderr interleaved
 };
 
@@ -23,6 +25,13 @@ struct ProcessResult {
 // pipe this process keeps open until the child exits.
 ProcessResult runProcess(const std::vector<std::string>& argv, const std::map<std::string, std::string>& env,
                          int timeoutSeconds);
+// The same, sending `signal` to the child once `when()` is true (checked every 200 ms at most).
+struct SignalPlan {
+  int signal = 0;
+  std::function<bool()> when;
+};
+ProcessResult runProcess(const std::vector<std::string>& argv, const std::map<std::string, std::string>& env,
+                         int timeoutSeconds, const SignalPlan& plan);
 
 // Environment that selects the headless runtime with the core validation layer.
 std::map<std::string, std::string> headlessRuntimeEnv();

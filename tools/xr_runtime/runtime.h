@@ -18,6 +18,7 @@
 #include <openxr/openxr_platform.h>
 
 #include <array>
+#include <condition_variable>
 #include <ctime>
 #include <deque>
 #include <glm/glm.hpp>
@@ -178,6 +179,8 @@ struct Session {
   uint64_t framesWaited = 0, framesBegun = 0, framesEnded = 0;
   bool frameBegun = false;
   uint64_t waitedNotBegun = 0;  // xrWaitFrame calls not yet matched by xrBeginFrame
+  // A second xrWaitFrame blocks on this until the previous frame is begun (or the session stops).
+  std::condition_variable_any frameBegun_cv;
   XrTime lastPredicted = 0;
   // Actions.
   bool actionSetsAttached = false;
@@ -190,6 +193,10 @@ struct Session {
   std::string captureDir;
   uint64_t frameLimit = 0;  // EMBODY_XR_FRAMES, 0 = none
   uint64_t lossAt = 0;      // EMBODY_XR_LOSS_FRAMES: LOSS_PENDING after this many frames
+  uint64_t spaceChangeAt = 0;  // EMBODY_XR_SPACE_CHANGE_FRAMES: REFERENCE_SPACE_CHANGE_PENDING (LOCAL, STAGE)
+  // EMBODY_XR_HEAD_UNTRACKED=1: the head is located valid but never tracked (position and
+  // orientation), as Monado's simulated HMD and 3-dof headsets report it.
+  bool headUntracked = false;
   uint32_t capturedFrames = 0;
   Pose localOrigin;      // LOCAL space in STAGE: the head at session start, yaw only
   TrackedPose lastHead;  // last valid head pose, reported (untracked) while tracking is lost

@@ -52,6 +52,21 @@ void requestExit(Instance& inst, Session& s, XrTime t) {
   if (s.state == XR_SESSION_STATE_SYNCHRONIZED) inst.setState(s, XR_SESSION_STATE_STOPPING, t);
 }
 
+// A system-level recenter (EMBODY_XR_SPACE_CHANGE_FRAMES): the runtime announces that LOCAL and
+// STAGE change at the next frame's display time. The poses themselves stay put: the event is what
+// the test checks the application reacts to.
+void pushSpaceChange(Instance& inst, Session& s, XrTime t) {
+  for (XrReferenceSpaceType type : {XR_REFERENCE_SPACE_TYPE_LOCAL, XR_REFERENCE_SPACE_TYPE_STAGE}) {
+    XrEventDataReferenceSpaceChangePending ev{XR_TYPE_EVENT_DATA_REFERENCE_SPACE_CHANGE_PENDING};
+    ev.session = reinterpret_cast<XrSession>(&s);
+    ev.referenceSpaceType = type;
+    ev.changeTime = t + kFramePeriodNs;
+    ev.poseValid = XR_TRUE;
+    ev.poseInPreviousSpace = toXr(Pose{});
+    inst.pushEvent(&ev, sizeof(ev));
+  }
+}
+
 XrResult XRAPI_CALL CreateSession(XrInstance instance, const XrSessionCreateInfo* ci, XrSession* out) {
   Instance* inst = findInstance(instance);
   if (!inst) return XR_ERROR_HANDLE_INVALID;
@@ -79,6 +94,8 @@ XrResult XRAPI_CALL CreateSession(XrInstance instance, const XrSessionCreateInfo
   if (const char* c = std::getenv("EMBODY_XR_CAPTURE")) s->captureDir = c;
   s->frameLimit = envCount("EMBODY_XR_FRAMES");
   s->lossAt = envCount("EMBODY_XR_LOSS_FRAMES");
+  s->spaceChangeAt = envCount("EMBODY_XR_SPACE_CHANGE_FRAMES");
+  s->headUntracked = envCount("EMBODY_XR_HEAD_UNTRACKED") != 0;
   const BodySample first = inst->poses.sample(0.0);
   const Pose head = first.head.valid ? first.head.pose : Pose{{0.0f, 1.6f, 0.0f}, {1, 0, 0, 0}};
   const glm::vec3 fwd = head.q * glm::vec3(0, 0, -1);
@@ -121,6 +138,8 @@ XrResult XRAPI_CALL DestroySession(XrSession session) {
       return reinterpret_cast<const XrEventDataSessionStateChanged*>(&e.data)->session == session;
     if (base->type == XR_TYPE_EVENT_DATA_INTERACTION_PROFILE_CHANGED)
       return reinterpret_cast<const XrEventDataInteractionProfileChanged*>(&e.data)->session == session;
+    if (base->type == XR_TYPE_EVENT_DATA_REFERENCE_SPACE_CHANGE_PENDING)
+      return reinterpret_cast<const XrEventDataReferenceSpaceChangePending*>(&e.data)->session == session;
     return false;
   });
   delete s;
@@ -156,6 +175,7 @@ XrResult XRAPI_CALL EndSession(XrSession session) {
   if (!s->running) return XR_ERROR_SESSION_NOT_RUNNING;
   if (s->state != XR_SESSION_STATE_STOPPING) return XR_ERROR_SESSION_NOT_STOPPING;
   s->running = false;
+  s->frameBegun_cv.notify_all();  // a blocked xrWaitFrame returns XR_ERROR_SESSION_NOT_RUNNING
   const XrTime t = nowNs();
   inst->setState(*s, XR_SESSION_STATE_IDLE, t);
   if (s->exitRequested) inst->setState(*s, XR_SESSION_STATE_EXITING, t);
@@ -183,7 +203,12 @@ XrResult XRAPI_CALL WaitFrame(XrSession session, const XrFrameWaitInfo* info, Xr
     return XR_ERROR_VALIDATION_FAILURE;
   XrTime wakeAt = 0;
   {
-    std::lock_guard lock(inst->mutex);
+    std::unique_lock lock(inst->mutex);
+    if (s->lost) return XR_ERROR_SESSION_LOST;
+    if (!s->running) return XR_ERROR_SESSION_NOT_RUNNING;
+    // "A subsequent xrWaitFrame call must block until the previous frame has been begun with
+    // xrBeginFrame" (OpenXR 1.0, xrWaitFrame): another thread's xrBeginFrame releases it.
+    s->frameBegun_cv.wait(lock, [&] { return s->waitedNotBegun == 0 || !s->running || s->lost; });
     if (s->lost) return XR_ERROR_SESSION_LOST;
     if (!s->running) return XR_ERROR_SESSION_NOT_RUNNING;
     // Display times sit on a 90 Hz grid anchored at session start. The frame is predicted one
@@ -222,6 +247,7 @@ XrResult XRAPI_CALL BeginFrame(XrSession session, const XrFrameBeginInfo* info) 
   if (!s->running) return XR_ERROR_SESSION_NOT_RUNNING;
   if (s->waitedNotBegun == 0) return XR_ERROR_CALL_ORDER_INVALID;
   --s->waitedNotBegun;
+  s->frameBegun_cv.notify_all();  // the next xrWaitFrame may return (never tied to xrEndFrame)
   ++s->framesBegun;
   if (s->frameBegun) return XR_FRAME_DISCARDED;  // the previous frame was never ended
   s->frameBegun = true;
@@ -303,9 +329,11 @@ XrResult XRAPI_CALL EndFrame(XrSession session, const XrFrameEndInfo* info) {
     inst->setState(*s, XR_SESSION_STATE_VISIBLE, t);
     inst->setState(*s, XR_SESSION_STATE_FOCUSED, t);
   }
+  if (s->spaceChangeAt && s->framesEnded == s->spaceChangeAt) pushSpaceChange(*inst, *s, t);
   if (s->lossAt && s->framesEnded == s->lossAt) {
     inst->setState(*s, XR_SESSION_STATE_LOSS_PENDING, t);
     s->lost = true;
+    s->frameBegun_cv.notify_all();
   } else if (s->frameLimit && s->framesEnded == s->frameLimit && !s->exitRequested) {
     requestExit(*inst, *s, t);
   }
@@ -499,7 +527,7 @@ Located locateInStage(Session& s, const Space& space, XrTime t) {
       default:  // VIEW: the head; while tracking is lost, the last known pose, valid but untracked
         if (body.head.valid) {
           s.lastHead = body.head;
-          base = {body.head.pose, true, true};
+          base = {body.head.pose, true, !s.headUntracked};
         } else {
           base = {s.lastHead.pose, true, false};
         }
