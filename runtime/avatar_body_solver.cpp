@@ -640,6 +640,7 @@ BodySignals AvatarBodySolver::bodySignals(double time, const SolveResult& result
     s.legSeparation = std::min(s.legSeparation, left.dot(jointPosition(kneeJoint_[0]) - jointPosition(kneeJoint_[1])));
   }
   s.inferredLegs = layout_.inferLowerBody;
+  s.iterations = result.iterations;
   // The errors a body can fix: the head while its target is no higher than standing allows, the
   // hands while within the arm's reach.
   if (result.residual[head] >= 0.0f && s.headTargetHeight <= 1.02 * s.standingEyeHeight) s.residual = result.residual[head];

@@ -35,9 +35,11 @@ bool CollapseGuard::stalled(const BodySignals& s) {
   if (stallSince_ < 0.0 || s.residual < (1.0 - config_.stallImprovement) * stallReference_) {
     stallSince_ = s.time;  // a new window: the error is falling (or just rose above the threshold)
     stallReference_ = s.residual;
+    stallIterations_ = 0;
     return false;
   }
-  return s.time - stallSince_ >= config_.stallSeconds;
+  stallIterations_ += s.iterations;
+  return s.time - stallSince_ >= config_.stallSeconds && stallIterations_ >= config_.stallIterations;
 }
 
 CollapseReason CollapseGuard::update(const BodySignals& s) {

@@ -9,7 +9,7 @@
 //
 //   NonFinite     the configuration is not finite                      (at once)
 //   Stalled       the head or a reachable hand is far off its target and its error has not
-//                 fallen by `stallImprovement` for `stallSeconds`
+//                 fallen by `stallImprovement` for `stallSeconds` and `stallIterations`
 //   PelvisLow     the pelvis is below `pelvisLowFraction` of its standing height while the head
 //                 target is high (no crouch signal)
 //   Folded        the pelvis is tilted more than `foldedRadians` from upright while the head
@@ -28,7 +28,9 @@ struct CollapseGuardConfig {
   double confirmSeconds = 0.1;
   double stallSeconds = 0.5;
   double stallResidual = 0.10;    // m: errors below this never count as a stall
-  double stallImprovement = 0.2;  // the error must fall by this fraction per stallSeconds
+  double stallImprovement = 0.2;  // the error must fall by this fraction per stallSeconds ...
+  int stallIterations = 60;       // ... and per this many solver iterations (a slow frame rate or
+                                  // a tight budget gives the solver fewer: that is no stall)
   double pelvisLowFraction = 0.5;
   double crouchHeadFraction = 0.75;  // a head target above this fraction of the eye height: no crouch
   double foldedRadians = 1.3;        // ~75 degrees
@@ -50,6 +52,7 @@ struct BodySignals {
   double legSeparation = 0.0;        // min over knees and ankles of (left - right) along the pelvis's left
   bool inferredLegs = false;         // crossing counts only for legs the runtime places
   double residual = 0.0;             // the worst of the head's and the reachable hands' errors
+  int iterations = 0;                // solver iterations this frame
 };
 
 enum class CollapseReason : uint8_t { None, NonFinite, Stalled, PelvisLow, Folded, ThroughFloor, CrossedLegs };
@@ -73,6 +76,7 @@ class CollapseGuard {
   bool stalled(const BodySignals& s);
   CollapseGuardConfig config_;
   double conditionSince_ = -1.0, stallSince_ = -1.0, stallReference_ = 0.0, lastRecovery_ = -1e9;
+  int stallIterations_ = 0;
   int recoveries_ = 0, collapsedFrames_ = 0;
   CollapseReason lastReason_ = CollapseReason::None;
 };

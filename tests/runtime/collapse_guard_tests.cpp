@@ -82,11 +82,20 @@ TEST_CASE("collapse guard: an error that stays high is a stall; one that keeps f
   for (int i = 0; i < 120; ++i) {
     BodySignals s = standing(i / 100.0);
     s.residual = 0.3;
+    s.iterations = 3;
     if (stuck.update(s) == CollapseReason::Stalled && stuckAt < 0) stuckAt = i;
     s.residual = 0.3 * std::exp(-i / 100.0);  // falls by ~40 % per half second
     CHECK(falling.update(s) == CollapseReason::None);
   }
-  CHECK(stuckAt == 50);  // 0.5 s
+  CHECK(stuckAt == 50);  // 0.5 s (and 150 iterations)
+  // The same error at a few frames a second, one iteration each: the solver has had no chance.
+  CollapseGuard slow;
+  for (int i = 0; i < 20; ++i) {
+    BodySignals s = standing(i / 8.0);
+    s.residual = 0.3;
+    s.iterations = 1;
+    CHECK(slow.update(s) == CollapseReason::None);
+  }
 }
 
 TEST_CASE("standing seed: under the head, facing between the head and the hands, never below half height",
