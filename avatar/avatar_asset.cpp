@@ -1,6 +1,14 @@
 #include "avatar/avatar_asset.h"
 
+#include <cmath>
+
 namespace embody::avatar {
+
+glm::vec2 TextureTransform::apply(glm::vec2 uv) const {
+  const glm::vec2 s = scale * uv;
+  const float c = std::cos(rotation), n = std::sin(rotation);
+  return offset + glm::vec2(c * s.x + n * s.y, -n * s.x + c * s.y);
+}
 
 std::string_view avatarFormatName(AvatarFormat f) {
   switch (f) {

@@ -26,6 +26,7 @@ struct SkinnedVertex {
   glm::vec2 uv{0.0f};
   glm::uvec4 joints0{0}, joints1{0};
   glm::vec4 weights0{1.0f, 0.0f, 0.0f, 0.0f}, weights1{0.0f};
+  glm::vec2 uv1{0.0f};  // TEXCOORD_1 (a material's texture may read it; KHR_texture_transform texCoord)
 };
 
 enum class AlphaMode { Opaque, Mask, Blend };
@@ -35,10 +36,29 @@ struct Image {
   std::vector<uint8_t> rgba;  // 8-bit RGBA, row-major, top row first
 };
 
+// KHR_texture_transform on one textureInfo: uv' = offset + R(rotation) * (scale * uv), with
+// R = [cos sin; -sin cos] (u' = cos*u + sin*v, v' = -sin*u + cos*v: the specification's example,
+// "the lower left quadrant rotated clockwise 90 degrees", and three.js / cesium-native agree).
+// texCoord picks TEXCOORD_0 or TEXCOORD_1 (the textureInfo's texCoord, overridden by the extension's).
+struct TextureTransform {
+  glm::vec2 offset{0.0f};
+  float rotation = 0.0f;  // radians
+  glm::vec2 scale{1.0f};
+  int texCoord = 0;  // 0 or 1
+  bool isIdentity() const { return offset == glm::vec2(0.0f) && rotation == 0.0f && scale == glm::vec2(1.0f); }
+  glm::vec2 apply(glm::vec2 uv) const;
+};
+
 struct Material {
   std::string name;
   glm::vec4 baseColorFactor{1.0f};
   int baseColorImage = -1;  // index into AvatarAsset::images, -1 for none
+  TextureTransform baseColorTransform;
+  glm::vec3 emissiveFactor{0.0f};
+  float emissiveStrength = 1.0f;  // KHR_materials_emissive_strength (multiplies emissiveFactor)
+  int emissiveImage = -1;         // index into AvatarAsset::images, -1 for none
+  TextureTransform emissiveTransform;
+  bool unlit = false;  // KHR_materials_unlit: colour = base colour, no lighting
   AlphaMode alphaMode = AlphaMode::Opaque;
   float alphaCutoff = 0.5f;
   bool doubleSided = false;

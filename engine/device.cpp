@@ -213,6 +213,14 @@ bool Device::supportsSamples(VkSampleCountFlagBits samples) const {
   return (limits_.framebufferColorSampleCounts & limits_.framebufferDepthSampleCounts & samples) != 0;
 }
 
+bool Device::supportsLinearBlit(VkFormat format) const {
+  VkFormatProperties props{};
+  vkGetPhysicalDeviceFormatProperties(physical_, format, &props);
+  const VkFormatFeatureFlags need = VK_FORMAT_FEATURE_BLIT_SRC_BIT | VK_FORMAT_FEATURE_BLIT_DST_BIT |
+                                    VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT;
+  return (props.optimalTilingFeatures & need) == need;
+}
+
 Status Device::submitAndWait(const std::function<void(VkCommandBuffer)>& record) const {
   VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
   ai.commandPool = oneShotPool_.get();

@@ -73,6 +73,9 @@ class Device {
   // UINT32_MAX when none.
   uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred = 0) const;
   bool supportsSamples(VkSampleCountFlagBits samples) const;
+  // Whether optimal-tiling images of `format` can be blit sources and destinations with linear
+  // filtering and sampled linearly (what generating mip levels at upload needs).
+  bool supportsLinearBlit(VkFormat format) const;
 
   // Records `record` into a one-shot command buffer, submits it and waits (uploads, readback,
   // compute tests). Not for per-frame work.

@@ -1,6 +1,8 @@
 #include "engine/gpu_avatar.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include "engine/renderer.h"
@@ -39,126 +41,223 @@ std::string GpuAvatar::validate(const avatar::AvatarAsset& asset) {
   if (auto s = checkList(mesh.indices, mesh.primitives, "third-person"); !s.empty()) return s;
   if (auto s = checkList(mesh.firstPersonIndices, mesh.firstPersonPrimitives, "first-person"); !s.empty()) return s;
   for (const auto& m : asset.materials) {
-    if (m.baseColorImage >= int(asset.images.size())) return "material '" + m.name + "' refers to a missing image";
-    if (m.baseColorImage >= 0) {
-      const auto& img = asset.images[m.baseColorImage];
+    for (int image : {m.baseColorImage, m.emissiveImage}) {
+      if (image >= int(asset.images.size())) return "material '" + m.name + "' refers to a missing image";
+      if (image < 0) continue;
+      const auto& img = asset.images[image];
       if (img.width <= 0 || img.height <= 0 || img.rgba.size() != size_t(img.width) * img.height * 4)
-        return "image " + std::to_string(m.baseColorImage) + " has inconsistent size/data";
+        return "image " + std::to_string(image) + " has inconsistent size/data";
     }
+    if (m.baseColorTransform.texCoord < 0 || m.baseColorTransform.texCoord > 1 || m.emissiveTransform.texCoord < 0 ||
+        m.emissiveTransform.texCoord > 1)
+      return "material '" + m.name + "' reads a texture coordinate set other than 0 or 1";
   }
   return {};
 }
 
+namespace {
+
+static_assert(sizeof(avatar::SkinnedVertex) == 26 * 4, "shaders/skin.comp reads the vertex as 26 words");
+
+// std140 mirror of `Material` in shaders/material.glsl.
+struct MaterialBlock {
+  glm::vec4 baseColorFactor{1.0f};
+  glm::vec4 emissive{0.0f};
+  glm::vec4 baseColorUv[2];
+  glm::vec4 emissiveUv[2];
+  glm::vec4 params{0.5f, 0.0f, 0.0f, 0.0f};
+};
+
+// KHR_texture_transform as the two rows of its 2x3 matrix (see avatar::TextureTransform); the
+// first row's w carries the texture coordinate set.
+void uvRows(const avatar::TextureTransform& t, glm::vec4 rows[2]) {
+  const float c = std::cos(t.rotation), s = std::sin(t.rotation);
+  rows[0] = glm::vec4(c * t.scale.x, s * t.scale.y, t.offset.x, float(t.texCoord));
+  rows[1] = glm::vec4(-s * t.scale.x, c * t.scale.y, t.offset.y, 0.0f);
+}
+
+MaterialBlock materialBlock(const avatar::Material& m) {
+  MaterialBlock b;
+  b.baseColorFactor = m.baseColorFactor;
+  b.emissive = glm::vec4(m.emissiveFactor * m.emissiveStrength, 0.0f);
+  uvRows(m.baseColorTransform, b.baseColorUv);
+  uvRows(m.emissiveTransform, b.emissiveUv);
+  b.params = glm::vec4(m.alphaCutoff, m.unlit ? 1.0f : 0.0f, 0.0f, 0.0f);
+  return b;
+}
+
+// Centroid (bind space) and the joint with the most skin weight over a draw's vertices.
+void locateDraw(const avatar::SkinnedMesh& mesh, const std::vector<uint32_t>& indices, GpuDraw& d,
+                std::vector<float>& weightPerJoint) {
+  std::fill(weightPerJoint.begin(), weightPerJoint.end(), 0.0f);
+  glm::vec3 sum(0.0f);
+  for (uint32_t i = 0; i < d.indexCount; ++i) {
+    const avatar::SkinnedVertex& v = mesh.vertices[indices[d.firstIndex + i]];
+    sum += v.position;
+    for (int k = 0; k < 4; ++k) {
+      weightPerJoint[v.joints0[k]] += v.weights0[k];
+      weightPerJoint[v.joints1[k]] += v.weights1[k];
+    }
+  }
+  d.center = d.indexCount ? sum / float(d.indexCount) : glm::vec3(0.0f);
+  d.joint = uint32_t(std::max_element(weightPerJoint.begin(), weightPerJoint.end()) - weightPerJoint.begin());
+}
+
+}  // namespace
+
+Status GpuAvatar::uploadMesh(const Device& device, Uploader& up, const avatar::SkinnedMesh& mesh) {
+  // Storage usage too: the compute skinner (GpuSkinner) reads the same vertex buffer.
+  auto vb = Buffer::create(device, mesh.vertices.size() * sizeof(avatar::SkinnedVertex),
+                           VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                           MemoryUse::DeviceLocal);
+  const size_t indexCount = mesh.indices.size() + mesh.firstPersonIndices.size();
+  auto ib = Buffer::create(device, indexCount * sizeof(uint32_t), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+                           MemoryUse::DeviceLocal);
+  if (!vb) return Error{vb.error()};
+  if (!ib) return Error{ib.error()};
+  vertices_ = std::move(vb).value();
+  indices_ = std::move(ib).value();
+  if (auto s = up.upload(vertices_, asBytes(mesh.vertices)); !s) return s;
+  if (auto s = up.upload(indices_, asBytes(mesh.indices)); !s) return s;
+  return up.upload(indices_, asBytes(mesh.firstPersonIndices), mesh.indices.size() * sizeof(uint32_t));
+}
+
+// Every image a material uses, mipmapped (when the device can blit the format linearly), after a
+// 1x1 white texture (index 0) for untextured slots. Returns the texture index of each asset image.
+Result<std::vector<int>> GpuAvatar::uploadTextures(const Device& device, Uploader& up,
+                                                   const avatar::AvatarAsset& asset) {
+  constexpr VkFormat kFormat = VK_FORMAT_R8G8B8A8_SRGB;  // glTF base colour and emissive are sRGB-encoded
+  const bool mipmaps = device.supportsLinearBlit(kFormat);
+  auto makeTexture = [&](const avatar::Image& img) -> Status {
+    ImageDesc d;
+    d.extent = {uint32_t(img.width), uint32_t(img.height)};
+    d.format = kFormat;
+    d.mipLevels = mipmaps ? fullMipChain(d.extent) : 1;
+    d.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    auto t = Image::create(device, d);
+    if (!t) return Error{t.error()};
+    if (auto s = up.upload(*t, img.rgba); !s) return s;
+    textures_.push_back(std::move(t).value());
+    return {};
+  };
+  avatar::Image white;
+  white.width = white.height = 1;
+  white.rgba = {255, 255, 255, 255};
+  if (auto s = makeTexture(white); !s) return Error{s.error()};
+  std::vector<int> textureOf(asset.images.size(), 0);
+  for (const auto& m : asset.materials) {
+    for (int image : {m.baseColorImage, m.emissiveImage}) {
+      if (image < 0 || textureOf[image] > 0) continue;
+      if (auto s = makeTexture(asset.images[image]); !s) return Error{s.error()};
+      textureOf[image] = int(textures_.size() - 1);
+    }
+  }
+  VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  sci.magFilter = VK_FILTER_LINEAR;
+  sci.minFilter = VK_FILTER_LINEAR;
+  sci.mipmapMode = VK_SAMPLER_MIPMAP_MODE_LINEAR;
+  sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_REPEAT;
+  sci.maxLod = VK_LOD_CLAMP_NONE;
+  VkSampler sampler = VK_NULL_HANDLE;
+  if (vkCreateSampler(device.handle(), &sci, nullptr, &sampler) != VK_SUCCESS) return Error{"vkCreateSampler failed"};
+  sampler_ = UniqueSampler(device.handle(), sampler);
+  return textureOf;
+}
+
+Status GpuAvatar::createMaterials(const Device& device, Uploader& up, VkDescriptorSetLayout layout,
+                                  const std::vector<avatar::Material>& materials, const std::vector<int>& textureOf) {
+  const VkDevice dev = device.handle();
+  const VkDeviceSize align = std::max<VkDeviceSize>(device.limits().minUniformBufferOffsetAlignment, 16);
+  const VkDeviceSize stride = (sizeof(MaterialBlock) + align - 1) / align * align;
+  std::vector<std::byte> blocks(stride * materials.size());
+  for (size_t i = 0; i < materials.size(); ++i) {
+    const MaterialBlock b = materialBlock(materials[i]);
+    std::memcpy(blocks.data() + i * stride, &b, sizeof(b));
+  }
+  auto buffer = Buffer::create(device, blocks.size(), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, MemoryUse::DeviceLocal);
+  if (!buffer) return Error{buffer.error()};
+  materialBlocks_ = std::move(buffer).value();
+  if (auto s = up.upload(materialBlocks_, blocks); !s) return s;
+
+  const uint32_t setCount = static_cast<uint32_t>(materials.size());
+  const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, setCount},
+                                         {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 * setCount}};
+  VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  dpci.maxSets = setCount;
+  dpci.poolSizeCount = 2;
+  dpci.pPoolSizes = sizes;
+  VkDescriptorPool pool = VK_NULL_HANDLE;
+  if (vkCreateDescriptorPool(dev, &dpci, nullptr, &pool) != VK_SUCCESS) return Error{"vkCreateDescriptorPool failed"};
+  pool_ = UniqueDescriptorPool(dev, pool);
+  auto textureFor = [&](int image) { return textures_[image >= 0 ? textureOf[image] : 0].view(); };
+  for (size_t i = 0; i < materials.size(); ++i) {
+    const avatar::Material& m = materials[i];
+    auto set = allocateDescriptorSet(dev, pool, layout);
+    if (!set) return Error{set.error()};
+    const VkDescriptorBufferInfo block{materialBlocks_.handle(), i * stride, sizeof(MaterialBlock)};
+    const VkDescriptorImageInfo images[2] = {
+        {sampler_.get(), textureFor(m.baseColorImage), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
+        {sampler_.get(), textureFor(m.emissiveImage), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}};
+    VkWriteDescriptorSet w[3];
+    for (uint32_t b = 0; b < 3; ++b) {
+      w[b] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+      w[b].dstSet = *set;
+      w[b].dstBinding = b;
+      w[b].descriptorCount = 1;
+      w[b].descriptorType = b == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+      if (b == 0) w[b].pBufferInfo = &block;
+      else w[b].pImageInfo = &images[b - 1];
+    }
+    vkUpdateDescriptorSets(dev, 3, w, 0, nullptr);
+    materials_.push_back({m.alphaMode, m.doubleSided, *set});
+  }
+  return {};
+}
+
+void GpuAvatar::buildDrawLists(const avatar::AvatarAsset& asset, const std::vector<avatar::Material>& materials) {
+  const auto& mesh = asset.mesh;
+  std::vector<float> weightPerJoint(asset.skeleton.joints.size());
+  auto split = [&](const std::vector<avatar::Primitive>& prims, const std::vector<uint32_t>& indices,
+                   uint32_t indexBase, GpuDrawList& out) {
+    for (const auto& p : prims) {
+      if (p.indexCount == 0) continue;
+      const uint32_t mat = p.material >= 0 ? uint32_t(p.material) : uint32_t(materials.size() - 1);
+      GpuDraw d{p.firstIndex, p.indexCount, mat};
+      switch (materials[mat].alphaMode) {
+        case avatar::AlphaMode::Opaque: out.opaque.push_back(d); break;
+        case avatar::AlphaMode::Mask: out.mask.push_back(d); break;
+        case avatar::AlphaMode::Blend:
+          locateDraw(mesh, indices, d, weightPerJoint);
+          out.blend.push_back(d);
+          break;
+      }
+    }
+    for (auto* list : {&out.opaque, &out.mask, &out.blend})
+      for (GpuDraw& d : *list) d.firstIndex += indexBase;
+  };
+  split(mesh.primitives, mesh.indices, 0, thirdPerson_);
+  split(mesh.firstPersonPrimitives, mesh.firstPersonIndices, static_cast<uint32_t>(mesh.indices.size()), firstPerson_);
+}
+
 Result<std::unique_ptr<GpuAvatar>> Renderer::upload(const avatar::AvatarAsset& asset) {
   if (auto why = GpuAvatar::validate(asset); !why.empty()) return Error{"cannot draw this avatar: " + why};
-  const VkDevice dev = device_.handle();
   std::unique_ptr<GpuAvatar> a(new GpuAvatar());
   const auto& mesh = asset.mesh;
   a->vertexCount_ = static_cast<uint32_t>(mesh.vertices.size());
   a->jointCount_ = static_cast<uint32_t>(asset.skeleton.joints.size());
   a->triangles_ = mesh.triangleCount();
   a->hasFirstPerson_ = !mesh.firstPersonPrimitives.empty();
-
-  // Storage usage too: the compute skinner (GpuSkinner) reads the same vertex buffer.
-  auto vb = Buffer::create(device_, mesh.vertices.size() * sizeof(avatar::SkinnedVertex),
-                           VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                           MemoryUse::DeviceLocal);
-  const size_t indexCount = mesh.indices.size() + mesh.firstPersonIndices.size();
-  auto ib = Buffer::create(device_, indexCount * sizeof(uint32_t), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
-                           MemoryUse::DeviceLocal);
-  if (!vb) return Error{vb.error()};
-  if (!ib) return Error{ib.error()};
-  a->vertices_ = std::move(vb).value();
-  a->indices_ = std::move(ib).value();
-  Uploader up(device_);
-  if (auto s = up.upload(a->vertices_, asBytes(mesh.vertices)); !s) return Error{s.error()};
-  if (auto s = up.upload(a->indices_, asBytes(mesh.indices)); !s) return Error{s.error()};
-  if (auto s = up.upload(a->indices_, asBytes(mesh.firstPersonIndices), mesh.indices.size() * sizeof(uint32_t)); !s)
-    return Error{s.error()};
-
-  // Textures: every image a material uses, plus a 1x1 white one for untextured materials.
-  std::vector<int> textureOf(asset.images.size(), -1);
-  auto makeTexture = [&](const avatar::Image& img) -> Result<int> {
-    ImageDesc d;
-    d.extent = {uint32_t(img.width), uint32_t(img.height)};
-    d.format = VK_FORMAT_R8G8B8A8_SRGB;  // glTF base colour is sRGB-encoded
-    d.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-    auto t = Image::create(device_, d);
-    if (!t) return Error{t.error()};
-    if (auto s = up.upload(*t, img.rgba); !s) return Error{s.error()};
-    a->textures_.push_back(std::move(t).value());
-    return int(a->textures_.size() - 1);
-  };
-  avatar::Image white;
-  white.width = white.height = 1;
-  white.rgba = {255, 255, 255, 255};
-  auto whiteTex = makeTexture(white);
-  if (!whiteTex) return Error{whiteTex.error()};
-  for (const auto& m : asset.materials) {
-    if (m.baseColorImage < 0 || textureOf[m.baseColorImage] >= 0) continue;
-    auto t = makeTexture(asset.images[m.baseColorImage]);
-    if (!t) return Error{t.error()};
-    textureOf[m.baseColorImage] = *t;
-  }
-  if (auto s = up.flush(); !s) return Error{s.error()};
-
-  VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
-  sci.magFilter = VK_FILTER_LINEAR;
-  sci.minFilter = VK_FILTER_LINEAR;
-  sci.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
-  sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_REPEAT;
-  sci.maxLod = 0.0f;
-  VkSampler sampler = VK_NULL_HANDLE;
-  if (vkCreateSampler(dev, &sci, nullptr, &sampler) != VK_SUCCESS) return Error{"vkCreateSampler failed"};
-  a->sampler_ = UniqueSampler(dev, sampler);
-
   // Materials: the asset's, then the glTF default material (white, opaque, single-sided) last.
   std::vector<avatar::Material> materials = asset.materials;
   materials.push_back(avatar::Material{});
-  const uint32_t setCount = static_cast<uint32_t>(materials.size());
-  VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, setCount};
-  VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-  dpci.maxSets = setCount;
-  dpci.poolSizeCount = 1;
-  dpci.pPoolSizes = &size;
-  VkDescriptorPool pool = VK_NULL_HANDLE;
-  if (vkCreateDescriptorPool(dev, &dpci, nullptr, &pool) != VK_SUCCESS) return Error{"vkCreateDescriptorPool failed"};
-  a->pool_ = UniqueDescriptorPool(dev, pool);
-  for (const auto& m : materials) {
-    GpuMaterial g;
-    g.baseColorFactor = m.baseColorFactor;
-    g.alphaMode = m.alphaMode;
-    g.alphaCutoff = m.alphaCutoff;
-    g.doubleSided = m.doubleSided;
-    auto set = allocateDescriptorSet(dev, pool, materialLayout_.get());
-    if (!set) return Error{set.error()};
-    g.descriptorSet = *set;
-    const int tex = m.baseColorImage >= 0 ? textureOf[m.baseColorImage] : *whiteTex;
-    VkDescriptorImageInfo ii{sampler, a->textures_[tex].view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-    VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-    w.dstSet = g.descriptorSet;
-    w.dstBinding = 0;
-    w.descriptorCount = 1;
-    w.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-    w.pImageInfo = &ii;
-    vkUpdateDescriptorSets(dev, 1, &w, 0, nullptr);
-    a->materials_.push_back(g);
-  }
-
-  auto split = [&](const std::vector<avatar::Primitive>& prims, uint32_t indexBase, GpuDrawList& out) {
-    for (const auto& p : prims) {
-      if (p.indexCount == 0) continue;
-      const uint32_t mat = p.material >= 0 ? uint32_t(p.material) : setCount - 1;
-      const GpuDraw d{indexBase + p.firstIndex, p.indexCount, mat};
-      switch (materials[mat].alphaMode) {
-        case avatar::AlphaMode::Opaque: out.opaque.push_back(d); break;
-        case avatar::AlphaMode::Mask: out.mask.push_back(d); break;
-        case avatar::AlphaMode::Blend: out.blend.push_back(d); break;
-      }
-    }
-  };
-  split(mesh.primitives, 0, a->thirdPerson_);
-  split(mesh.firstPersonPrimitives, static_cast<uint32_t>(mesh.indices.size()), a->firstPerson_);
+  Uploader up(device_);
+  if (auto s = a->uploadMesh(device_, up, mesh); !s) return Error{s.error()};
+  auto textureOf = a->uploadTextures(device_, up, asset);
+  if (!textureOf) return Error{textureOf.error()};
+  if (auto s = a->createMaterials(device_, up, materialLayout_.get(), materials, *textureOf); !s)
+    return Error{s.error()};
+  if (auto s = up.flush(); !s) return Error{s.error()};
+  a->buildDrawLists(asset, materials);
   return a;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
 // An AvatarAsset uploaded to the GPU: one vertex buffer (avatar::SkinnedVertex as is), one index
-// buffer holding the third-person and first-person lists back to back, a texture + descriptor
-// set per material, and the draw lists split by alpha mode. Created by Renderer::upload.
+// buffer holding the third-person and first-person lists back to back, mipmapped textures, a
+// uniform block + descriptor set per material, and the draw lists split by alpha mode. Created by
+// Renderer::upload.
 #include <glm/glm.hpp>
 #include <vector>
 
@@ -11,17 +12,20 @@
 namespace embody::engine {
 
 struct GpuMaterial {
-  glm::vec4 baseColorFactor{1.0f};
   avatar::AlphaMode alphaMode = avatar::AlphaMode::Opaque;
-  float alphaCutoff = 0.5f;
   bool doubleSided = false;
-  VkDescriptorSet descriptorSet = VK_NULL_HANDLE;  // set 1: the base-colour texture
+  // set 1: the material's uniform block (shaders/material.glsl), base-colour and emissive textures
+  VkDescriptorSet descriptorSet = VK_NULL_HANDLE;
 };
 
 struct GpuDraw {
   uint32_t firstIndex = 0;  // into the shared index buffer
   uint32_t indexCount = 0;
   uint32_t material = 0;  // into GpuAvatar::materials() (the default material is appended last)
+  // Where the triangles are, for sorting blended draws back to front: the centroid of their
+  // vertices in bind space and the joint that moves it (the one with the most skin weight).
+  glm::vec3 center{0.0f};
+  uint32_t joint = 0;
 };
 
 // Draws of one view kind (third- or first-person), grouped by pipeline.
@@ -51,7 +55,13 @@ class GpuAvatar {
  private:
   friend class Renderer;
   GpuAvatar() = default;
-  Buffer vertices_, indices_;
+  // Steps of Renderer::upload.
+  Status uploadMesh(const Device& device, Uploader& up, const avatar::SkinnedMesh& mesh);
+  Result<std::vector<int>> uploadTextures(const Device& device, Uploader& up, const avatar::AvatarAsset& asset);
+  Status createMaterials(const Device& device, Uploader& up, VkDescriptorSetLayout layout,
+                         const std::vector<avatar::Material>& materials, const std::vector<int>& textureOf);
+  void buildDrawLists(const avatar::AvatarAsset& asset, const std::vector<avatar::Material>& materials);
+  Buffer vertices_, indices_, materialBlocks_;
   std::vector<Image> textures_;
   UniqueSampler sampler_;
   UniqueDescriptorPool pool_;

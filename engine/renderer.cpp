@@ -1,5 +1,6 @@
 #include "engine/renderer.h"
 
+#include <algorithm>
 #include <cstring>
 #include <string>
 
@@ -18,10 +19,9 @@ struct SceneBlock {
 
 // Mirror of `Push` in shaders/common.glsl.
 struct PushBlock {
-  glm::vec4 baseColorFactor{1.0f};
   uint32_t viewBase = 0;
-  float alphaCutoff = 0.5f;
 };
+constexpr VkShaderStageFlags kPushStages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
 
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 
@@ -185,6 +185,13 @@ Status Renderer::setScene(const SceneFrame& scene) {
   f.avatar = scene.avatar;
   f.firstPerson = scene.firstPerson;
   f.grid = scene.grid;
+  // Blended draws' centres in this pose, for sorting them per pass (vectors grow once, then reuse).
+  f.blendCenters.clear();
+  if (scene.avatar) {
+    const GpuDrawList& list = scene.firstPerson ? scene.avatar->firstPerson() : scene.avatar->thirdPerson();
+    for (const GpuDraw& d : list.blend)
+      f.blendCenters.push_back(glm::vec3(scene.palette[d.joint] * glm::vec4(d.center, 1.0f)));
+  }
   return {};
 }
 
@@ -227,21 +234,158 @@ Status Renderer::prepare(VkFormat color, std::optional<VkFormat> depth, VkSample
   return {};
 }
 
-void Renderer::drawAvatarList(VkCommandBuffer cmd, const PipelineSet&, const GpuAvatar& a,
-                              const std::vector<GpuDraw>& draws, VkPipeline pipeline, uint32_t viewBase) {
+void Renderer::drawAvatarList(VkCommandBuffer cmd, const GpuAvatar& a, const std::vector<GpuDraw>& draws,
+                              std::span<const uint32_t> order, VkPipeline pipeline) {
   if (draws.empty()) return;
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
-  for (const GpuDraw& d : draws) {
+  for (size_t i = 0; i < draws.size(); ++i) {
+    const GpuDraw& d = draws[order.empty() ? i : order[i]];
     const GpuMaterial& m = a.materials()[d.material];
     vkCmdSetCullMode(cmd, m.doubleSided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout_.get(), 1, 1, &m.descriptorSet, 0,
                             nullptr);
-    PushBlock push{m.baseColorFactor, viewBase, m.alphaCutoff};
-    vkCmdPushConstants(cmd, pipelineLayout_.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
-                       sizeof(push), &push);
     vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, 0, 0);
     ++stats_.drawCalls;
   }
+}
+
+void Renderer::sortBlendBackToFront(FrameSlot& f, glm::vec3 eye) {
+  f.blendOrder.resize(f.blendCenters.size());
+  for (uint32_t i = 0; i < f.blendOrder.size(); ++i) f.blendOrder[i] = i;
+  // std::sort (stable_sort may allocate); equal distances keep file order.
+  std::sort(f.blendOrder.begin(), f.blendOrder.end(), [&](uint32_t x, uint32_t y) {
+    const float dx = glm::dot(f.blendCenters[x] - eye, f.blendCenters[x] - eye);
+    const float dy = glm::dot(f.blendCenters[y] - eye, f.blendCenters[y] - eye);
+    return dx != dy ? dx > dy : x < y;
+  });
+}
+
+void Renderer::drawLines(VkCommandBuffer cmd, const PipelineSet& p, VkBuffer buffer, VkDeviceSize offset,
+                         uint32_t count) {
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.lines.get());
+  vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+  vkCmdBindVertexBuffers(cmd, 0, 1, &buffer, &offset);
+  vkCmdDraw(cmd, count, 1, 0, 0);
+  ++stats_.drawCalls;
+}
+
+// The pass's contents: opaque and alpha-tested avatar first (it occludes most of what follows, so
+// the grid and gizmos behind it are rejected by the depth test before shading), then the grid and
+// gizmos, then blended avatar surfaces back to front, then the skeleton overlay on top.
+void Renderer::recordScene(VkCommandBuffer cmd, const PipelineSet& p, FrameSlot& f, glm::vec3 eye) {
+  const GpuAvatar* a = f.avatar;
+  const GpuDrawList* list = a ? (f.firstPerson ? &a->firstPerson() : &a->thirdPerson()) : nullptr;
+  auto bindAvatar = [&] {
+    const VkDeviceSize zero = 0;
+    const VkBuffer vb = a->vertexBuffer();
+    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &zero);
+  };
+  if (a) {
+    bindAvatar();
+    vkCmdBindIndexBuffer(cmd, a->indexBuffer(), 0, VK_INDEX_TYPE_UINT32);
+    drawAvatarList(cmd, *a, list->opaque, {}, p.opaque.get());
+    drawAvatarList(cmd, *a, list->mask, {}, p.mask.get());
+  }
+  if (f.grid) drawLines(cmd, p, grid_.handle(), 0, gridVertexCount_);
+  if (f.lineCount > 0) drawLines(cmd, p, f.lines.handle(), 0, f.lineCount);
+  if (a && !list->blend.empty()) {
+    sortBlendBackToFront(f, eye);
+    bindAvatar();
+    vkCmdSetDepthWriteEnable(cmd, VK_FALSE);  // blended surfaces test against depth but do not occlude
+    drawAvatarList(cmd, *a, list->blend, f.blendOrder, p.blend.get());
+    vkCmdSetDepthWriteEnable(cmd, VK_TRUE);
+  }
+  if (f.overlayCount > 0) {
+    vkCmdSetDepthTestEnable(cmd, VK_FALSE);
+    drawLines(cmd, p, f.lines.handle(), VkDeviceSize(f.lineCount) * sizeof(LineVertex), f.overlayCount);
+  }
+}
+
+Result<Renderer::PassAttachments> Renderer::passAttachments(const PassTarget& target) {
+  PassAttachments att;
+  const uint32_t layers = target.color.layerCount;
+  const bool msaa = target.samples != VK_SAMPLE_COUNT_1_BIT;
+  att.ownDepth = !target.depth || msaa;
+  att.depthFormat = att.ownDepth ? kDepthFormat : target.depth->format;
+  if (att.ownDepth) {
+    auto d = transient(kDepthFormat, target.color.extent, layers, target.samples);
+    if (!d) return Error{d.error()};
+    att.depthImage = (*d)->handle();
+    att.depthView = (*d)->view();
+  } else {
+    att.depthImage = target.depth->image;
+    att.depthView = target.depth->view;
+    att.depthBase = target.depth->baseLayer;
+  }
+  if (msaa) {
+    auto c = transient(target.color.format, target.color.extent, layers, target.samples);
+    if (!c) return Error{c.error()};
+    att.msaaImage = (*c)->handle();
+    att.msaaView = (*c)->view();
+  }
+  return att;
+}
+
+void Renderer::beginRendering(VkCommandBuffer cmd, const PassTarget& target, const PassAttachments& att,
+                              uint32_t viewMask) {
+  const TargetImage& color = target.color;
+  const uint32_t layers = color.layerCount;
+  const bool msaa = att.msaaImage != VK_NULL_HANDLE;
+  // Always a barrier, even without a layout change: an earlier pass of this frame may have
+  // written the same image (a mirror view after the eyes), and that write must come first.
+  transitionImage(cmd, color.image, VK_IMAGE_ASPECT_COLOR_BIT, color.initialLayout,
+                  VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, color.baseLayer, layers);
+  // Depth is cleared every pass, so its previous contents never matter: start from UNDEFINED.
+  transitionImage(cmd, att.depthImage, aspectOf(att.depthFormat), VK_IMAGE_LAYOUT_UNDEFINED,
+                  VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, att.depthBase, layers);
+  if (msaa)
+    transitionImage(cmd, att.msaaImage, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, 0, layers);
+
+  VkRenderingAttachmentInfo colorAtt{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  colorAtt.imageView = msaa ? att.msaaView : color.view;
+  colorAtt.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  colorAtt.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  colorAtt.storeOp = msaa ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE;
+  colorAtt.clearValue.color = {{target.clearColor.r, target.clearColor.g, target.clearColor.b, target.clearColor.a}};
+  if (msaa) {
+    colorAtt.resolveMode = VK_RESOLVE_MODE_AVERAGE_BIT;
+    colorAtt.resolveImageView = color.view;
+    colorAtt.resolveImageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  }
+  VkRenderingAttachmentInfo depthAtt{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  depthAtt.imageView = att.depthView;
+  depthAtt.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+  depthAtt.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  depthAtt.storeOp = att.ownDepth ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE;
+  depthAtt.clearValue.depthStencil = {1.0f, 0};
+  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+  ri.renderArea = {{0, 0}, color.extent};
+  ri.layerCount = 1;  // under multiview the view mask picks the layers
+  ri.viewMask = viewMask;
+  ri.colorAttachmentCount = 1;
+  ri.pColorAttachments = &colorAtt;
+  ri.pDepthAttachment = &depthAtt;
+  vkCmdBeginRendering(cmd, &ri);
+
+  const VkViewport viewport{0.0f, 0.0f, float(color.extent.width), float(color.extent.height), 0.0f, 1.0f};
+  const VkRect2D scissor{{0, 0}, color.extent};
+  vkCmdSetViewport(cmd, 0, 1, &viewport);
+  vkCmdSetScissor(cmd, 0, 1, &scissor);
+  vkCmdSetDepthTestEnable(cmd, VK_TRUE);
+  vkCmdSetDepthWriteEnable(cmd, VK_TRUE);
+  vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+}
+
+void Renderer::endRendering(VkCommandBuffer cmd, const PassTarget& target, const PassAttachments& att) {
+  vkCmdEndRendering(cmd);
+  const TargetImage& color = target.color;
+  if (color.finalLayout != VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL)
+    transitionImage(cmd, color.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                    color.finalLayout, color.baseLayer, color.layerCount);
+  if (!att.ownDepth && target.depth->finalLayout != VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL)
+    transitionImage(cmd, att.depthImage, aspectOf(att.depthFormat), VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
+                    target.depth->finalLayout, att.depthBase, color.layerCount);
 }
 
 Status Renderer::drawPass(std::span<const Camera> cameras, const PassTarget& target) {
@@ -256,151 +400,28 @@ Status Renderer::drawPass(std::span<const Camera> cameras, const PassTarget& tar
     return Error{"the device does not support this MSAA sample count"};
   if (target.color.extent.width == 0 || target.color.extent.height == 0) return Error{"empty colour target"};
   const uint32_t viewMask = multiview ? 0b11u : 0u;
-  const bool msaa = target.samples != VK_SAMPLE_COUNT_1_BIT;
-  const VkFormat depthFormat = target.depth && !msaa ? target.depth->format : kDepthFormat;
-  auto pset = pipelines({target.color.format, depthFormat, target.samples, viewMask});
+  auto att = passAttachments(target);
+  if (!att) return Error{att.error()};
+  auto pset = pipelines({target.color.format, att->depthFormat, target.samples, viewMask});
   if (!pset) return Error{pset.error()};
-  const PipelineSet& p = **pset;
 
   const uint32_t viewBase = f.viewsUsed;
   auto* block = static_cast<SceneBlock*>(f.sceneBlock.mapped());
-  for (size_t i = 0; i < cameras.size(); ++i)
+  glm::vec3 eye(0.0f);  // blended draws sort by distance from the cameras' midpoint
+  for (size_t i = 0; i < cameras.size(); ++i) {
     block->views[viewBase + i] = {cameras[i].viewProjection(), glm::vec4(cameras[i].position(), 1.0f)};
+    eye += cameras[i].position() / float(cameras.size());
+  }
   f.viewsUsed += static_cast<uint32_t>(cameras.size());
   f.sceneBlock.flush();
 
-  // Attachments: the caller's colour (resolve target under MSAA) and depth, or transients.
-  const VkExtent2D extent = target.color.extent;
-  VkImage depthImage = VK_NULL_HANDLE;
-  VkImageView depthView = VK_NULL_HANDLE;
-  const bool ownDepth = !target.depth || msaa;
-  if (ownDepth) {
-    auto d = transient(kDepthFormat, extent, layers, target.samples);
-    if (!d) return Error{d.error()};
-    depthImage = (*d)->handle();
-    depthView = (*d)->view();
-  } else {
-    depthImage = target.depth->image;
-    depthView = target.depth->view;
-  }
-  VkImage msaaImage = VK_NULL_HANDLE;
-  VkImageView msaaView = VK_NULL_HANDLE;
-  if (msaa) {
-    auto c = transient(target.color.format, extent, layers, target.samples);
-    if (!c) return Error{c.error()};
-    msaaImage = (*c)->handle();
-    msaaView = (*c)->view();
-  }
-
   const VkCommandBuffer cmd = f.cmd;
-  const TargetImage& color = target.color;
-  // Always a barrier, even without a layout change: an earlier pass of this frame may have
-  // written the same image (a mirror view after the eyes), and that write must come first.
-  transitionImage(cmd, color.image, VK_IMAGE_ASPECT_COLOR_BIT, color.initialLayout,
-                  VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, color.baseLayer, layers);
-  const VkImageAspectFlags depthAspect = aspectOf(depthFormat);
-  const uint32_t depthBase = ownDepth ? 0 : target.depth->baseLayer;
-  // Depth is cleared every pass, so its previous contents never matter: start from UNDEFINED.
-  transitionImage(cmd, depthImage, depthAspect, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL,
-                  depthBase, layers);
-  if (msaa)
-    transitionImage(cmd, msaaImage, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-                    VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, 0, layers);
-
-  VkRenderingAttachmentInfo colorAtt{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-  colorAtt.imageView = msaa ? msaaView : color.view;
-  colorAtt.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-  colorAtt.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-  colorAtt.storeOp = msaa ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE;
-  colorAtt.clearValue.color = {{target.clearColor.r, target.clearColor.g, target.clearColor.b, target.clearColor.a}};
-  if (msaa) {
-    colorAtt.resolveMode = VK_RESOLVE_MODE_AVERAGE_BIT;
-    colorAtt.resolveImageView = color.view;
-    colorAtt.resolveImageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-  }
-  VkRenderingAttachmentInfo depthAtt{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-  depthAtt.imageView = depthView;
-  depthAtt.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
-  depthAtt.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-  depthAtt.storeOp = ownDepth ? VK_ATTACHMENT_STORE_OP_DONT_CARE : VK_ATTACHMENT_STORE_OP_STORE;
-  depthAtt.clearValue.depthStencil = {1.0f, 0};
-  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
-  ri.renderArea = {{0, 0}, extent};
-  ri.layerCount = 1;  // under multiview the view mask picks the layers
-  ri.viewMask = viewMask;
-  ri.colorAttachmentCount = 1;
-  ri.pColorAttachments = &colorAtt;
-  ri.pDepthAttachment = &depthAtt;
-  vkCmdBeginRendering(cmd, &ri);
-
-  const VkViewport viewport{0.0f, 0.0f, float(extent.width), float(extent.height), 0.0f, 1.0f};
-  const VkRect2D scissor{{0, 0}, extent};
-  vkCmdSetViewport(cmd, 0, 1, &viewport);
-  vkCmdSetScissor(cmd, 0, 1, &scissor);
-  vkCmdSetDepthTestEnable(cmd, VK_TRUE);
-  vkCmdSetDepthWriteEnable(cmd, VK_TRUE);
-  vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
+  beginRendering(cmd, target, *att, viewMask);
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout_.get(), 0, 1, &f.set, 0, nullptr);
-  const PushBlock linePush{glm::vec4(1.0f), viewBase, 0.0f};
-  const VkShaderStageFlags pushStages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
-
-  // Opaque and alpha-tested avatar first: it occludes most of what follows, so the grid and
-  // gizmos behind it are rejected by the depth test before shading.
-  const GpuAvatar* a = f.avatar;
-  const GpuDrawList* list = a ? (f.firstPerson ? &a->firstPerson() : &a->thirdPerson()) : nullptr;
-  if (a) {
-    const VkDeviceSize zero = 0;
-    const VkBuffer vb = a->vertexBuffer();
-    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &zero);
-    vkCmdBindIndexBuffer(cmd, a->indexBuffer(), 0, VK_INDEX_TYPE_UINT32);
-    drawAvatarList(cmd, p, *a, list->opaque, p.opaque.get(), viewBase);
-    drawAvatarList(cmd, p, *a, list->mask, p.mask.get(), viewBase);
-  }
-  if (f.grid || f.lineCount > 0) {
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.lines.get());
-    vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
-    vkCmdPushConstants(cmd, pipelineLayout_.get(), pushStages, 0, sizeof(linePush), &linePush);
-    const VkDeviceSize zero = 0;
-    if (f.grid) {
-      const VkBuffer gb = grid_.handle();
-      vkCmdBindVertexBuffers(cmd, 0, 1, &gb, &zero);
-      vkCmdDraw(cmd, gridVertexCount_, 1, 0, 0);
-      ++stats_.drawCalls;
-    }
-    if (f.lineCount > 0) {
-      const VkBuffer lb = f.lines.handle();
-      vkCmdBindVertexBuffers(cmd, 0, 1, &lb, &zero);
-      vkCmdDraw(cmd, f.lineCount, 1, 0, 0);
-      ++stats_.drawCalls;
-    }
-  }
-  if (a && !list->blend.empty()) {
-    const VkDeviceSize zero = 0;
-    const VkBuffer vb = a->vertexBuffer();
-    vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &zero);
-    vkCmdSetDepthWriteEnable(cmd, VK_FALSE);  // blended surfaces test against depth but do not occlude
-    drawAvatarList(cmd, p, *a, list->blend, p.blend.get(), viewBase);
-    vkCmdSetDepthWriteEnable(cmd, VK_TRUE);
-  }
-  if (f.overlayCount > 0) {
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.lines.get());
-    vkCmdSetCullMode(cmd, VK_CULL_MODE_NONE);
-    vkCmdSetDepthTestEnable(cmd, VK_FALSE);
-    vkCmdPushConstants(cmd, pipelineLayout_.get(), pushStages, 0, sizeof(linePush), &linePush);
-    const VkDeviceSize offset = VkDeviceSize(f.lineCount) * sizeof(LineVertex);
-    const VkBuffer lb = f.lines.handle();
-    vkCmdBindVertexBuffers(cmd, 0, 1, &lb, &offset);
-    vkCmdDraw(cmd, f.overlayCount, 1, 0, 0);
-    ++stats_.drawCalls;
-  }
-  vkCmdEndRendering(cmd);
-
-  if (color.finalLayout != VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL)
-    transitionImage(cmd, color.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
-                    color.finalLayout, color.baseLayer, layers);
-  if (!ownDepth && target.depth->finalLayout != VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL)
-    transitionImage(cmd, depthImage, depthAspect, VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, target.depth->finalLayout,
-                    depthBase, layers);
+  const PushBlock push{viewBase};
+  vkCmdPushConstants(cmd, pipelineLayout_.get(), kPushStages, 0, sizeof(push), &push);
+  recordScene(cmd, **pset, f, eye);
+  endRendering(cmd, target, *att);
   return {};
 }
 

@@ -129,6 +129,15 @@ class Renderer {
     const GpuAvatar* avatar = nullptr;
     bool firstPerson = false, grid = true;
     bool recording = false;
+    std::vector<glm::vec3> blendCenters;  // world centre of each blended draw in this frame's pose
+    std::vector<uint32_t> blendOrder;     // their back-to-front order for the current pass
+  };
+  struct PassAttachments {  // depth (the target's or transient) and, under MSAA, the transient colour
+    VkImage depthImage = VK_NULL_HANDLE, msaaImage = VK_NULL_HANDLE;
+    VkImageView depthView = VK_NULL_HANDLE, msaaView = VK_NULL_HANDLE;
+    VkFormat depthFormat = VK_FORMAT_UNDEFINED;
+    uint32_t depthBase = 0;
+    bool ownDepth = true;
   };
   struct PipelineSet {
     UniquePipeline opaque, mask, blend, lines;
@@ -149,8 +158,16 @@ class Renderer {
   Result<const Image*> transient(VkFormat format, VkExtent2D extent, uint32_t layers, VkSampleCountFlagBits samples);
   Status ensureCapacity(Buffer& buffer, VkDeviceSize bytes, VkBufferUsageFlags usage, FrameSlot& slot);
   void writeFrameDescriptors(FrameSlot& slot);
-  void drawAvatarList(VkCommandBuffer cmd, const PipelineSet& p, const GpuAvatar& a,
-                      const std::vector<GpuDraw>& draws, VkPipeline pipeline, uint32_t viewBase);
+  // Pieces of drawPass.
+  Result<PassAttachments> passAttachments(const PassTarget& target);
+  void beginRendering(VkCommandBuffer cmd, const PassTarget& target, const PassAttachments& att, uint32_t viewMask);
+  void recordScene(VkCommandBuffer cmd, const PipelineSet& p, FrameSlot& f, glm::vec3 eye);
+  void endRendering(VkCommandBuffer cmd, const PassTarget& target, const PassAttachments& att);
+  // `order` indexes `draws` (empty: as listed).
+  void drawAvatarList(VkCommandBuffer cmd, const GpuAvatar& a, const std::vector<GpuDraw>& draws,
+                      std::span<const uint32_t> order, VkPipeline pipeline);
+  void drawLines(VkCommandBuffer cmd, const PipelineSet& p, VkBuffer buffer, VkDeviceSize offset, uint32_t count);
+  static void sortBlendBackToFront(FrameSlot& f, glm::vec3 eye);
 
   const Device& device_;
   UniqueDescriptorSetLayout sceneLayout_, materialLayout_;

@@ -34,7 +34,8 @@ Status Renderer::init() {
   linesVert_ = std::move(lv).value();
   linesFrag_ = std::move(lf).value();
 
-  // set 0: scene block (views, light) + joint palette; set 1: a material's base-colour texture.
+  // set 0: scene block (views, light) + joint palette; set 1: a material's uniform block,
+  // base-colour and emissive textures.
   VkDescriptorSetLayoutBinding sceneBindings[2] = {
       {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
       {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, nullptr}};
@@ -44,15 +45,17 @@ Status Renderer::init() {
   VkDescriptorSetLayout layout = VK_NULL_HANDLE;
   if (vkCreateDescriptorSetLayout(dev, &lci, nullptr, &layout) != VK_SUCCESS) return Error{"descriptor set layout"};
   sceneLayout_ = UniqueDescriptorSetLayout(dev, layout);
-  VkDescriptorSetLayoutBinding texBinding{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1,
-                                          VK_SHADER_STAGE_FRAGMENT_BIT, nullptr};
-  lci.bindingCount = 1;
-  lci.pBindings = &texBinding;
+  const VkDescriptorSetLayoutBinding materialBindings[3] = {
+      {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
+      {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
+      {2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr}};
+  lci.bindingCount = 3;
+  lci.pBindings = materialBindings;
   if (vkCreateDescriptorSetLayout(dev, &lci, nullptr, &layout) != VK_SUCCESS) return Error{"descriptor set layout"};
   materialLayout_ = UniqueDescriptorSetLayout(dev, layout);
 
   VkDescriptorSetLayout sets[2] = {sceneLayout_.get(), materialLayout_.get()};
-  VkPushConstantRange push{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, 32};
+  VkPushConstantRange push{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(uint32_t)};
   VkPipelineLayoutCreateInfo pli{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
   pli.setLayoutCount = 2;
   pli.pSetLayouts = sets;
@@ -94,7 +97,8 @@ Result<const Renderer::PipelineSet*> Renderer::pipelines(const PipelineKey& key)
                {3, 0, VK_FORMAT_R32G32B32A32_UINT, offsetof(V, joints0)},
                {4, 0, VK_FORMAT_R32G32B32A32_UINT, offsetof(V, joints1)},
                {5, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(V, weights0)},
-               {6, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(V, weights1)}};
+               {6, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(V, weights1)},
+               {7, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(V, uv1)}};
     }
     VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
     vi.vertexBindingDescriptionCount = 1;

@@ -98,7 +98,7 @@ Result<Image> Image::create(const Device& device, const ImageDesc& desc) {
   ici.imageType = VK_IMAGE_TYPE_2D;
   ici.format = desc.format;
   ici.extent = {desc.extent.width, desc.extent.height, 1};
-  ici.mipLevels = 1;
+  ici.mipLevels = std::max(desc.mipLevels, 1u);
   ici.arrayLayers = desc.layers;
   ici.samples = desc.samples;
   ici.tiling = VK_IMAGE_TILING_OPTIMAL;
@@ -119,7 +119,7 @@ Result<Image> Image::create(const Device& device, const ImageDesc& desc) {
   vci.image = raw;
   vci.viewType = desc.layers > 1 ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
   vci.format = desc.format;
-  vci.subresourceRange = {aspectOf(desc.format), 0, 1, 0, desc.layers};
+  vci.subresourceRange = {aspectOf(desc.format), 0, ici.mipLevels, 0, desc.layers};
   VkImageView view = VK_NULL_HANDLE;
   if (VkResult r = vkCreateImageView(device.handle(), &vci, nullptr, &view); r != VK_SUCCESS)
     return Error{std::string("vkCreateImageView: ") + vkResultName(r)};
@@ -144,8 +144,11 @@ LayoutUse useOf(VkImageLayout layout, bool source) {
     case VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL:
       return {VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
               VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT};
-    case VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL: return {VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT};
-    case VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL: return {VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT};
+    // All transfers (copies, and the blits that fill mip levels).
+    case VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL:
+      return {VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT};
+    case VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL:
+      return {VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT};
     case VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL:
       return {VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT};
     default: return {VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT};
@@ -155,7 +158,8 @@ LayoutUse useOf(VkImageLayout layout, bool source) {
 }  // namespace
 
 void transitionImage(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect, VkImageLayout from,
-                     VkImageLayout to, uint32_t baseLayer, uint32_t layerCount) {
+                     VkImageLayout to, uint32_t baseLayer, uint32_t layerCount, uint32_t baseMip,
+                     uint32_t mipCount) {
   const LayoutUse src = useOf(from, true), dst = useOf(to, false);
   VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
   b.srcStageMask = src.stage;
@@ -167,11 +171,17 @@ void transitionImage(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspe
   b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
   b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
   b.image = image;
-  b.subresourceRange = {aspect, 0, 1, baseLayer, layerCount};
+  b.subresourceRange = {aspect, baseMip, mipCount, baseLayer, layerCount};
   VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
   dep.imageMemoryBarrierCount = 1;
   dep.pImageMemoryBarriers = &b;
   vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+uint32_t fullMipChain(VkExtent2D extent) {
+  uint32_t levels = 1;
+  for (uint32_t size = std::max(extent.width, extent.height); size > 1; size /= 2) ++levels;
+  return levels;
 }
 
 void memoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
@@ -231,8 +241,39 @@ Status Uploader::upload(const Image& dst, std::span<const uint8_t> rgba) {
   if (rgba.size() != size_t(e.width) * e.height * 4) return Error{"texture data does not match the image size"};
   auto s = stage(std::as_bytes(rgba));
   if (!s) return Error{s.error()};
-  imageCopies_.push_back({dst.handle(), e, *s});
+  imageCopies_.push_back({dst.handle(), e, std::max(dst.desc().mipLevels, 1u), *s});
   return {};
+}
+
+void Uploader::recordImageCopy(VkCommandBuffer cmd, VkBuffer staging, const ImageCopy& c) {
+  constexpr VkImageAspectFlags kColor = VK_IMAGE_ASPECT_COLOR_BIT;
+  transitionImage(cmd, c.dst, kColor, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+  VkBufferImageCopy region{};
+  region.imageSubresource = {kColor, 0, 0, 1};
+  region.imageExtent = {c.extent.width, c.extent.height, 1};
+  vkCmdCopyBufferToImage(cmd, staging, c.dst, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+  // Each level is a linear 2x2 box of the one above: level i-1 becomes a blit source, level i
+  // (still TRANSFER_DST) its destination.
+  int32_t w = int32_t(c.extent.width), h = int32_t(c.extent.height);
+  for (uint32_t level = 1; level < c.mipLevels; ++level) {
+    transitionImage(cmd, c.dst, kColor, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, 0,
+                    1, level - 1, 1);
+    const int32_t nw = std::max(w / 2, 1), nh = std::max(h / 2, 1);
+    VkImageBlit blit{};
+    blit.srcSubresource = {kColor, level - 1, 0, 1};
+    blit.srcOffsets[1] = {w, h, 1};
+    blit.dstSubresource = {kColor, level, 0, 1};
+    blit.dstOffsets[1] = {nw, nh, 1};
+    vkCmdBlitImage(cmd, c.dst, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, c.dst, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                   &blit, VK_FILTER_LINEAR);
+    w = nw;
+    h = nh;
+  }
+  if (c.mipLevels > 1)
+    transitionImage(cmd, c.dst, kColor, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                    0, 1, 0, c.mipLevels - 1);
+  transitionImage(cmd, c.dst, kColor, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                  0, 1, c.mipLevels - 1, 1);
 }
 
 Status Uploader::flush() {
@@ -242,17 +283,7 @@ Status Uploader::flush() {
       VkBufferCopy region{0, c.dstOffset, c.size};
       vkCmdCopyBuffer(cmd, staging_[c.staging].handle(), c.dst, 1, &region);
     }
-    for (const auto& c : imageCopies_) {
-      transitionImage(cmd, c.dst, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-                      VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
-      VkBufferImageCopy region{};
-      region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-      region.imageExtent = {c.extent.width, c.extent.height, 1};
-      vkCmdCopyBufferToImage(cmd, staging_[c.staging].handle(), c.dst, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
-                             &region);
-      transitionImage(cmd, c.dst, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
-                      VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-    }
+    for (const auto& c : imageCopies_) recordImageCopy(cmd, staging_[c.staging].handle(), c);
     // Make buffer copies visible to every later read (vertex input, index, shader storage).
     memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
                   VK_ACCESS_2_MEMORY_READ_BIT);

@@ -48,6 +48,7 @@ struct ImageDesc {
   VkImageUsageFlags usage = 0;
   VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;
   uint32_t layers = 1;
+  uint32_t mipLevels = 1;  // Uploader::upload fills level 0 and blits the rest (needs TRANSFER_SRC usage)
 };
 
 class Image {
@@ -76,7 +77,11 @@ VkImageAspectFlags aspectOf(VkFormat format);
 
 // One image layout transition (synchronization2). Stage/access masks are derived from the layouts.
 void transitionImage(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect, VkImageLayout from,
-                     VkImageLayout to, uint32_t baseLayer = 0, uint32_t layerCount = VK_REMAINING_ARRAY_LAYERS);
+                     VkImageLayout to, uint32_t baseLayer = 0, uint32_t layerCount = VK_REMAINING_ARRAY_LAYERS,
+                     uint32_t baseMip = 0, uint32_t mipCount = VK_REMAINING_MIP_LEVELS);
+
+// Mip levels for a full chain down to 1x1.
+uint32_t fullMipChain(VkExtent2D extent);
 
 // A global memory barrier (synchronization2): make `srcAccess` writes at `srcStage` visible to
 // `dstAccess` at `dstStage` (uploads -> vertex input, compute -> host readback, copy -> host).
@@ -92,7 +97,9 @@ class Uploader {
  public:
   explicit Uploader(const Device& device) : device_(device) {}
   Status upload(const Buffer& dst, std::span<const std::byte> bytes, VkDeviceSize dstOffset = 0);
-  // RGBA8 pixels, tightly packed; leaves the image in SHADER_READ_ONLY_OPTIMAL.
+  // RGBA8 pixels, tightly packed, into level 0; levels below are filtered down from it by linear
+  // blits (the format must support them: see Device::supportsLinearBlit). Leaves the image in
+  // SHADER_READ_ONLY_OPTIMAL.
   Status upload(const Image& dst, std::span<const uint8_t> rgba);
   Status flush();
 
@@ -106,8 +113,10 @@ class Uploader {
   struct ImageCopy {
     VkImage dst;
     VkExtent2D extent;
+    uint32_t mipLevels;
     size_t staging;
   };
+  static void recordImageCopy(VkCommandBuffer cmd, VkBuffer staging, const ImageCopy& c);
   Result<size_t> stage(std::span<const std::byte> bytes);
   const Device& device_;
   std::vector<Buffer> staging_;

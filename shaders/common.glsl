@@ -1,4 +1,4 @@
-// Shared by every graphics shader: the per-frame scene block (views, light), the push constants
+// Shared by every graphics shader: the per-frame scene block (views, light), the push constant
 // and the view index. Included with GL_GOOGLE_include_directive; not compiled on its own.
 #extension GL_EXT_multiview : require
 
@@ -18,9 +18,7 @@ layout(set = 0, binding = 0, std140) uniform Scene {
 } scene;
 
 layout(push_constant) uniform Push {
-  vec4 baseColorFactor;
-  uint viewBase;      // first view of this pass; gl_ViewIndex adds 0 or 1 under multiview
-  float alphaCutoff;
+  uint viewBase;  // first view of this pass; gl_ViewIndex adds 0 or 1 under multiview
 } pc;
 
 uint viewIndex() { return pc.viewBase + gl_ViewIndex; }

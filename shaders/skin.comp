@@ -4,8 +4,8 @@
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 64) in;
 
-// avatar::SkinnedVertex, 24 x 32-bit words: position(3) normal(3) uv(2) joints0(4) joints1(4)
-// weights0(4) weights1(4). Read as words because std430 would pad a vec3 member to 16 bytes.
+// avatar::SkinnedVertex, 26 x 32-bit words: position(3) normal(3) uv(2) joints0(4) joints1(4)
+// weights0(4) weights1(4) uv1(2). Read as words because std430 would pad a vec3 member to 16 bytes.
 layout(set = 0, binding = 0, std430) readonly buffer Vertices { float words[]; } vertices;
 layout(set = 0, binding = 1, std430) readonly buffer Palette { mat4 joints[]; } palette;
 struct Skinned { vec4 position; vec4 normal; };
@@ -14,7 +14,7 @@ layout(push_constant) uniform Push { uint vertexCount; } pc;
 
 #include "skinning.glsl"
 
-const uint kStride = 24u;
+const uint kStride = 26u;
 
 vec4 readVec4(uint base) {
   return vec4(vertices.words[base], vertices.words[base + 1u], vertices.words[base + 2u], vertices.words[base + 3u]);

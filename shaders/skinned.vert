@@ -13,14 +13,15 @@ layout(location = 3) in uvec4 inJoints0;
 layout(location = 4) in uvec4 inJoints1;
 layout(location = 5) in vec4 inWeights0;
 layout(location = 6) in vec4 inWeights1;
+layout(location = 7) in vec2 inUv1;
 
 layout(location = 0) out vec3 outNormal;
-layout(location = 1) out vec2 outUv;
+layout(location = 1) out vec4 outUvs;  // xy: TEXCOORD_0, zw: TEXCOORD_1
 
 void main() {
   const mat4 m = skinMatrix(inJoints0, inJoints1, inWeights0, inWeights1);
   const vec4 world = m * vec4(inPosition, 1.0);
   outNormal = mat3(m) * inNormal;  // normalised per fragment
-  outUv = inUv;
+  outUvs = vec4(inUv, inUv1);
   gl_Position = scene.views[viewIndex()].viewProj * world;
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstring>
 #include <fstream>
+#include <set>
 #include <glm/gtc/type_ptr.hpp>
 #include <nlohmann/json.hpp>
 
@@ -52,6 +53,53 @@ void pngSink(void* context, void* data, int size) {
   out->insert(out->end(), p, p + size);
 }
 
+// A textureInfo for `image` with its KHR_texture_transform (written when it is not the identity
+// or reads TEXCOORD_1).
+json textureInfo(int image, const TextureTransform& t, std::set<std::string>& extensionsUsed) {
+  json info = {{"index", image}};
+  if (t.texCoord != 0) info["texCoord"] = t.texCoord;
+  if (!t.isIdentity()) {
+    json tt = json::object();
+    if (t.offset != glm::vec2(0.0f)) tt["offset"] = {t.offset.x, t.offset.y};
+    if (t.rotation != 0.0f) tt["rotation"] = t.rotation;
+    if (t.scale != glm::vec2(1.0f)) tt["scale"] = {t.scale.x, t.scale.y};
+    info["extensions"]["KHR_texture_transform"] = tt;
+    extensionsUsed.insert("KHR_texture_transform");
+  }
+  return info;
+}
+
+json materialJson(const Material& m, const AvatarAsset& asset, std::set<std::string>& extensionsUsed) {
+  auto hasImage = [&](int image) { return image >= 0 && static_cast<size_t>(image) < asset.images.size(); };
+  json pbr = {{"baseColorFactor", {m.baseColorFactor.r, m.baseColorFactor.g, m.baseColorFactor.b, m.baseColorFactor.a}},
+              {"metallicFactor", 0.0},
+              {"roughnessFactor", 0.8}};
+  if (hasImage(m.baseColorImage))
+    pbr["baseColorTexture"] = textureInfo(m.baseColorImage, m.baseColorTransform, extensionsUsed);
+  json mat = {{"name", m.name.empty() ? std::string("material") : m.name}, {"pbrMetallicRoughness", pbr}};
+  if (m.emissiveFactor != glm::vec3(0.0f)) {
+    mat["emissiveFactor"] = {m.emissiveFactor.r, m.emissiveFactor.g, m.emissiveFactor.b};
+    if (hasImage(m.emissiveImage))
+      mat["emissiveTexture"] = textureInfo(m.emissiveImage, m.emissiveTransform, extensionsUsed);
+    if (m.emissiveStrength != 1.0f) {
+      mat["extensions"]["KHR_materials_emissive_strength"] = {{"emissiveStrength", m.emissiveStrength}};
+      extensionsUsed.insert("KHR_materials_emissive_strength");
+    }
+  }
+  if (m.unlit) {
+    mat["extensions"]["KHR_materials_unlit"] = json::object();
+    extensionsUsed.insert("KHR_materials_unlit");
+  }
+  if (m.alphaMode == AlphaMode::Mask) {
+    mat["alphaMode"] = "MASK";
+    mat["alphaCutoff"] = m.alphaCutoff;
+  } else if (m.alphaMode == AlphaMode::Blend) {
+    mat["alphaMode"] = "BLEND";
+  }
+  if (m.doubleSided) mat["doubleSided"] = true;
+  return mat;
+}
+
 }  // namespace
 
 Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
@@ -87,11 +135,15 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
 
   // Vertex streams, one bufferView each (tightly packed).
   const size_t vc = mesh.vertices.size();
-  std::vector<float> positions, normals, uvs, weights0, weights1;
+  std::vector<float> positions, normals, uvs, uvs1, weights0, weights1;
   std::vector<uint16_t> joints0, joints1;
   glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
   bool eight = false;
   for (const auto& v : mesh.vertices) eight |= v.weights1 != glm::vec4(0.0f);
+  bool secondUv = false;  // TEXCOORD_1 is written when a material reads it or a vertex sets it
+  for (const auto& v : mesh.vertices) secondUv |= v.uv1 != glm::vec2(0.0f);
+  for (const auto& m : asset.materials)
+    secondUv |= m.baseColorTransform.texCoord == 1 || m.emissiveTransform.texCoord == 1;
   for (const auto& v : mesh.vertices) {
     positions.insert(positions.end(), {v.position.x, v.position.y, v.position.z});
     lo = glm::min(lo, v.position);
@@ -99,6 +151,7 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
     const glm::vec3 nn = glm::length(v.normal) > 0.0f ? glm::normalize(v.normal) : glm::vec3(0, 1, 0);
     normals.insert(normals.end(), {nn.x, nn.y, nn.z});
     uvs.insert(uvs.end(), {v.uv.x, v.uv.y});
+    if (secondUv) uvs1.insert(uvs1.end(), {v.uv1.x, v.uv1.y});
     for (int k = 0; k < 4; ++k) {
       // Unused influences are (joint 0, weight 0), as the specification asks.
       joints0.push_back(static_cast<uint16_t>(v.weights0[k] > 0.0f ? v.joints0[k] : 0u));
@@ -120,6 +173,9 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
         accessor(doc, bin.view(normals.data(), normals.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC3");
     attributes["TEXCOORD_0"] =
         accessor(doc, bin.view(uvs.data(), uvs.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC2");
+    if (secondUv)
+      attributes["TEXCOORD_1"] =
+          accessor(doc, bin.view(uvs1.data(), uvs1.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC2");
     attributes["JOINTS_0"] = accessor(doc, bin.view(joints0.data(), joints0.size() * 2, kArrayBuffer, doc), 0,
                                       kUShort, vc, "VEC4");
     attributes["WEIGHTS_0"] = accessor(doc, bin.view(weights0.data(), weights0.size() * 4, kArrayBuffer, doc),
@@ -168,23 +224,9 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
         {{"bufferView", bin.view(png.data(), png.size(), 0, doc)}, {"mimeType", "image/png"}});
     doc["textures"].push_back({{"source", i}});
   }
-  for (const Material& m : asset.materials) {
-    json pbr = {{"baseColorFactor",
-                 {m.baseColorFactor.r, m.baseColorFactor.g, m.baseColorFactor.b, m.baseColorFactor.a}},
-                {"metallicFactor", 0.0},
-                {"roughnessFactor", 0.8}};
-    if (m.baseColorImage >= 0 && static_cast<size_t>(m.baseColorImage) < asset.images.size())
-      pbr["baseColorTexture"] = {{"index", m.baseColorImage}};
-    json mat = {{"name", m.name.empty() ? std::string("material") : m.name}, {"pbrMetallicRoughness", pbr}};
-    if (m.alphaMode == AlphaMode::Mask) {
-      mat["alphaMode"] = "MASK";
-      mat["alphaCutoff"] = m.alphaCutoff;
-    } else if (m.alphaMode == AlphaMode::Blend) {
-      mat["alphaMode"] = "BLEND";
-    }
-    if (m.doubleSided) mat["doubleSided"] = true;
-    doc["materials"].push_back(mat);
-  }
+  std::set<std::string> extensionsUsed;
+  for (const Material& m : asset.materials) doc["materials"].push_back(materialJson(m, asset, extensionsUsed));
+  if (!extensionsUsed.empty()) doc["extensionsUsed"] = extensionsUsed;
 
   json sceneNodes = json::array({root});
   if (!primitives.empty()) {

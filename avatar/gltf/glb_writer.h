@@ -2,9 +2,11 @@
 // Writes an AvatarAsset as a standard glTF 2.0 binary (GLB): one node per skeleton joint (TRS),
 // one skinned mesh node at the scene root, one skin over every joint with the asset's inverse
 // bind matrices, POSITION/NORMAL/TEXCOORD_0/JOINTS_0/WEIGHTS_0 (+ JOINTS_1/WEIGHTS_1 when some
-// vertex has more than four influences), one primitive per draw-list primitive, materials with
-// base colour factor and alpha mode. Images are embedded as PNG. The skeleton must have a single
-// root (glTF requires the joints of a skin to share one).
+// vertex has more than four influences; TEXCOORD_1 when a material or vertex uses it), one
+// primitive per draw-list primitive, materials with base colour (factor, texture,
+// KHR_texture_transform), emissive (+ KHR_materials_emissive_strength), KHR_materials_unlit, alpha
+// mode and double-sidedness. Images are embedded as PNG. The skeleton must have a single root
+// (glTF requires the joints of a skin to share one).
 #include <cstdint>
 #include <string>
 #include <vector>

@@ -489,6 +489,8 @@ struct MeshBuilder {
     if (!nrm.ok()) return Error{nrm.error()};
     auto uv = optional("TEXCOORD_0", 2, {F, UB, US});
     if (!uv.ok()) return Error{uv.error()};
+    auto uv1 = optional("TEXCOORD_1", 2, {F, UB, US});
+    if (!uv1.ok()) return Error{uv1.error()};
 
     const int skinIndex = m.nodes[node].skin;
     const tinygltf::Skin* skin = nullptr;
@@ -557,6 +559,7 @@ struct MeshBuilder {
         v.normal = len > 1e-12f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
       }
       if (!uv->empty()) v.uv = glm::vec2(uv.value()[i * 2], uv.value()[i * 2 + 1]);
+      if (!uv1->empty()) v.uv1 = glm::vec2(uv1.value()[i * 2], uv1.value()[i * 2 + 1]);
       if (!skin) {
         v.joints0 = glm::uvec4(static_cast<uint32_t>(nodeJoint), 0, 0, 0);
         v.weights0 = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
@@ -634,6 +637,48 @@ struct MeshBuilder {
   }
 };
 
+// A finite number from a tinygltf JSON value, or `fallback`.
+double numberOr(const tinygltf::Value& v, double fallback) {
+  if (!v.IsNumber()) return fallback;
+  const double x = v.GetNumberAsDouble();
+  return std::isfinite(x) ? x : fallback;
+}
+
+glm::vec2 vec2Or(const tinygltf::Value& v, glm::vec2 fallback) {
+  if (!v.IsArray() || v.ArrayLen() != 2 || !v.Get(0).IsNumber() || !v.Get(1).IsNumber()) return fallback;
+  const glm::vec2 r(numberOr(v.Get(0), fallback.x), numberOr(v.Get(1), fallback.y));
+  return r;
+}
+
+// The image a textureInfo refers to (-1 when absent or broken, with a warning) and its
+// KHR_texture_transform. Texture coordinate sets beyond TEXCOORD_1 are not read: such a
+// texture falls back to TEXCOORD_0 with a warning.
+int textureImage(const tinygltf::Model& m, const AvatarAsset& asset, int tex, int texCoord,
+                 const tinygltf::ExtensionMap& extensions, TextureTransform& transform, const std::string& what,
+                 std::vector<std::string>& warnings) {
+  transform = {};
+  transform.texCoord = texCoord;
+  if (auto it = extensions.find("KHR_texture_transform"); it != extensions.end() && it->second.IsObject()) {
+    const auto& t = it->second;
+    transform.offset = vec2Or(t.Get("offset"), glm::vec2(0.0f));
+    transform.scale = vec2Or(t.Get("scale"), glm::vec2(1.0f));
+    transform.rotation = static_cast<float>(numberOr(t.Get("rotation"), 0.0));
+    if (t.Has("texCoord")) transform.texCoord = static_cast<int>(numberOr(t.Get("texCoord"), texCoord));
+  }
+  if (transform.texCoord != 0 && transform.texCoord != 1) {
+    warnings.push_back(what + ": TEXCOORD_" + std::to_string(transform.texCoord) + " is not read; TEXCOORD_0 used");
+    transform.texCoord = 0;
+  }
+  if (tex < 0) return -1;
+  if (static_cast<size_t>(tex) < m.textures.size() && m.textures[tex].source >= 0 &&
+      static_cast<size_t>(m.textures[tex].source) < m.images.size()) {
+    const int img = m.textures[tex].source;
+    return asset.images[img].rgba.empty() ? -1 : img;
+  }
+  warnings.push_back(what + ": texture " + std::to_string(tex) + " or its image is out of range; untextured");
+  return -1;
+}
+
 void addMaterialsAndImages(const tinygltf::Model& m, AvatarAsset& asset, std::vector<std::string>& warnings) {
   asset.images.resize(m.images.size());
   for (size_t i = 0; i < m.images.size(); ++i) {
@@ -647,22 +692,24 @@ void addMaterialsAndImages(const tinygltf::Model& m, AvatarAsset& asset, std::ve
   }
   for (size_t i = 0; i < m.materials.size(); ++i) {
     const auto& src = m.materials[i];
+    const std::string what = "material " + std::to_string(i);
     Material mat;
     mat.name = src.name;
     const auto& f = src.pbrMetallicRoughness.baseColorFactor;
     if (f.size() == 4 && std::all_of(f.begin(), f.end(), [](double x) { return std::isfinite(x); }))
       mat.baseColorFactor = glm::vec4(f[0], f[1], f[2], f[3]);
-    const int tex = src.pbrMetallicRoughness.baseColorTexture.index;
-    if (tex >= 0) {
-      if (static_cast<size_t>(tex) < m.textures.size() && m.textures[tex].source >= 0 &&
-          static_cast<size_t>(m.textures[tex].source) < m.images.size()) {
-        const int img = m.textures[tex].source;
-        if (!asset.images[img].rgba.empty()) mat.baseColorImage = img;
-      } else {
-        warnings.push_back("material " + std::to_string(i) + ": texture " + std::to_string(tex) +
-                           " or its image is out of range; untextured");
-      }
-    }
+    const auto& base = src.pbrMetallicRoughness.baseColorTexture;
+    mat.baseColorImage = textureImage(m, asset, base.index, base.texCoord, base.extensions, mat.baseColorTransform,
+                                      what + " base colour", warnings);
+    const auto& e = src.emissiveFactor;
+    if (e.size() == 3 && std::all_of(e.begin(), e.end(), [](double x) { return std::isfinite(x) && x >= 0.0; }))
+      mat.emissiveFactor = glm::vec3(e[0], e[1], e[2]);
+    mat.emissiveImage = textureImage(m, asset, src.emissiveTexture.index, src.emissiveTexture.texCoord,
+                                     src.emissiveTexture.extensions, mat.emissiveTransform, what + " emissive",
+                                     warnings);
+    if (auto it = src.extensions.find("KHR_materials_emissive_strength"); it != src.extensions.end())
+      mat.emissiveStrength = static_cast<float>(std::max(0.0, numberOr(it->second.Get("emissiveStrength"), 1.0)));
+    mat.unlit = src.extensions.count("KHR_materials_unlit") > 0;
     if (src.alphaMode == "MASK")
       mat.alphaMode = AlphaMode::Mask;
     else if (src.alphaMode == "BLEND")

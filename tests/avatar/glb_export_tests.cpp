@@ -1,4 +1,4 @@
-#include <sys/wait.h>
+#include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <cstdio>
@@ -11,25 +11,9 @@
 #include "avatar/gltf/gltf_loader.h"
 #include "avatar/procedural/default_avatar.h"
 #include "test_paths.h"
+#include "tests/support/gltf_validator.h"
 
 using namespace embody::avatar;
-
-namespace {
-std::string runCapture(const std::string& cmd, int& exitCode) {
-  std::string out;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) {
-    exitCode = -1;
-    return out;
-  }
-  char buf[4096];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) out.append(buf, n);
-  const int status = pclose(p);
-  exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return out;
-}
-}  // namespace
 
 TEST_CASE("the exported default avatar reloads with the same skeleton, mesh and mapping", "[export]") {
   const bool fingers = GENERATE(false, true);  // also the mannequin with finger bones
@@ -80,33 +64,22 @@ TEST_CASE("the exported default avatar reloads with the same skeleton, mesh and 
 
 TEST_CASE("the exported default avatar passes the Khronos glTF validator with zero errors",
           "[export][validator]") {
-  int rc = 0;
-  runCapture("command -v node >/dev/null 2>&1", rc);
-  if (rc != 0) {
-    WARN("SKIPPED: node is not installed (scripts/install-deps.sh installs it)");
-    return;
-  }
-  const std::filesystem::path src = embody::test::kSourceDir;
-  const std::filesystem::path tools = src / ".tools";
-  if (!std::filesystem::exists(tools / "node_modules" / "gltf-validator" / "package.json")) {
-    WARN("SKIPPED: gltf-validator not installed under " << tools.string()
-                                                        << " (run scripts/install-deps.sh)");
-    return;
-  }
   const bool fingers = GENERATE(false, true);  // also the mannequin with finger bones
   INFO("fingers " << fingers);
   const auto file = std::filesystem::temp_directory_path() /
                     ("embody_default_avatar_" + std::to_string(::getpid()) + ".glb");
   REQUIRE(writeGlbFile(buildDefaultAvatar(DefaultAvatarOptions{.fingers = fingers}), file.string()).ok());
-  const std::string out = runCapture("node '" + (src / "scripts" / "validate_gltf.js").string() + "' '" +
-                                         file.string() + "' '" + tools.string() + "' 2>&1",
-                                     rc);
+  const auto v = embody::test::validateGltfFile(file.string());
   std::filesystem::remove(file);
-  INFO(out);
-  REQUIRE(rc != 3);
-  const auto report = nlohmann::json::parse(out, nullptr, false);
+  if (!v.skipReason.empty()) {
+    WARN("SKIPPED: " << v.skipReason);
+    return;
+  }
+  INFO(v.report);
+  REQUIRE(v.exitCode != 3);
+  const auto report = nlohmann::json::parse(v.report, nullptr, false);
   REQUIRE_FALSE(report.is_discarded());
   CHECK(report["numErrors"].get<int>() == 0);
   CHECK(report["numWarnings"].get<int>() == 0);
-  CHECK(rc == 0);
+  CHECK(v.exitCode == 0);
 }

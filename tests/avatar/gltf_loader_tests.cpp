@@ -177,3 +177,48 @@ TEST_CASE("a 60000-node chain loads and maps without deep recursion", "[gltf]") 
   CHECK(a->skeleton.joints.back().parent == n - 2);
   CHECK(a->humanoid.method == MappingMethod::None);
 }
+
+TEST_CASE("material extensions: texture transform (texCoord override), unlit, emissive strength", "[gltf]") {
+  TriangleFile f;
+  f.doc["textures"] = {{{"source", 0}}};
+  f.doc["images"] = {{{"uri", "data:image/png;base64,AAAA"}}};  // undecodable: untextured
+  auto transform = [](nlohmann::json t) {
+    return nlohmann::json{{"index", 0}, {"texCoord", 0}, {"extensions", {{"KHR_texture_transform", t}}}};
+  };
+  f.doc["materials"] = {
+      {{"pbrMetallicRoughness",
+        {{"baseColorTexture", transform({{"offset", {0.25, 0.5}}, {"rotation", 0.5}, {"scale", {2, 3}}, {"texCoord", 1}})}}},
+       {"emissiveFactor", {0.1, 0.2, 0.3}},
+       {"emissiveTexture", transform({{"texCoord", 2}})},
+       {"extensions", {{"KHR_materials_unlit", nlohmann::json::object()},
+                       {"KHR_materials_emissive_strength", {{"emissiveStrength", 5.0}}}}}},
+      // Malformed values fall back to the defaults.
+      {{"pbrMetallicRoughness", {{"baseColorTexture", transform({{"offset", "left"}, {"scale", {1}}, {"rotation", "x"}})}}},
+       {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", -2.0}}}}}}};
+  f.doc["meshes"][0]["primitives"][0]["material"] = 0;
+  embody::avatar::GltfLoadReport report;
+  auto a = loadGltfFromMemory(f.glb(), "", &report);
+  REQUIRE(a.ok());
+  REQUIRE(a->materials.size() == 2);
+  const auto& m = a->materials[0];
+  CHECK(m.baseColorImage == -1);
+  CHECK(m.baseColorTransform.offset == glm::vec2(0.25f, 0.5f));
+  CHECK(m.baseColorTransform.rotation == Approx(0.5f));
+  CHECK(m.baseColorTransform.scale == glm::vec2(2.0f, 3.0f));
+  CHECK(m.baseColorTransform.texCoord == 1);  // the extension's texCoord wins over the textureInfo's
+  CHECK(m.emissiveTransform.texCoord == 0);   // TEXCOORD_2 is not read: falls back, with a warning
+  CHECK(m.unlit);
+  CHECK(m.emissiveStrength == Approx(5.0f));
+  CHECK(m.emissiveFactor == glm::vec3(0.1f, 0.2f, 0.3f));
+  bool warned = false;
+  for (const auto& w : report.warnings) warned |= w.find("TEXCOORD_2") != std::string::npos;
+  CHECK(warned);
+  // u' = cos*sx*u + sin*sy*v + ox, v' = -sin*sx*u + cos*sy*v + oy
+  const glm::vec2 p = m.baseColorTransform.apply({1.0f, 0.0f});
+  CHECK(p.x == Approx(0.25f + 2.0f * std::cos(0.5f)));
+  CHECK(p.y == Approx(0.5f - 2.0f * std::sin(0.5f)));
+  const auto& bad = a->materials[1];
+  CHECK(bad.baseColorTransform.isIdentity());
+  CHECK_FALSE(bad.unlit);
+  CHECK(bad.emissiveStrength == 0.0f);
+}

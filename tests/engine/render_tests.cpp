@@ -118,10 +118,14 @@ TEST_CASE("frames are upright and first person hides the head", "[gpu][render]")
 TEST_CASE("alpha modes: OPAQUE ignores alpha, MASK cuts, BLEND mixes", "[gpu][render]") {
   test::GpuContext ctx;
   const glm::vec4 red(1.0f, 0.0f, 0.0f, 0.4f);
-  const auto asset = quadsAsset({{"opaque", red, -1, avatar::AlphaMode::Opaque, 0.5f, true},
-                                 {"mask", red, -1, avatar::AlphaMode::Mask, 0.5f, true},
-                                 {"mask-kept", red, -1, avatar::AlphaMode::Mask, 0.3f, true},
-                                 {"blend", red, -1, avatar::AlphaMode::Blend, 0.5f, true}});
+  auto material = [&](const char* name, avatar::AlphaMode mode, float cutoff) {
+    return avatar::Material{
+        .name = name, .baseColorFactor = red, .alphaMode = mode, .alphaCutoff = cutoff, .doubleSided = true};
+  };
+  const auto asset = quadsAsset({material("opaque", avatar::AlphaMode::Opaque, 0.5f),
+                                 material("mask", avatar::AlphaMode::Mask, 0.5f),
+                                 material("mask-kept", avatar::AlphaMode::Mask, 0.3f),
+                                 material("blend", avatar::AlphaMode::Blend, 0.5f)});
   engine::AvatarRendererOptions o;
   o.width = 320;
   o.height = 160;

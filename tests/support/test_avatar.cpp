@@ -90,11 +90,18 @@ avatar::AvatarAsset makeTestAvatar(const TestAvatarOptions& o) {
 
   a.images.push_back(checker(64, 8, {220, 120, 60, 255}, {240, 220, 190, 255}));  // body
   a.images.push_back(checker(32, 4, {60, 170, 90, 255}, {0, 0, 0, 0}));           // flag: holes
-  a.materials.push_back({"body", glm::vec4(1.0f), 0, avatar::AlphaMode::Opaque, 0.5f, false});
-  a.materials.push_back({"head", glm::vec4(0.85f, 0.7f, 0.6f, 1.0f), -1, avatar::AlphaMode::Opaque, 0.5f, false});
-  a.materials.push_back({"fin", glm::vec4(0.2f, 0.5f, 1.0f, 0.45f), -1, avatar::AlphaMode::Blend, 0.5f, true});
-  a.materials.push_back({"flag", glm::vec4(1.0f), 1, avatar::AlphaMode::Mask, 0.5f, true});
-  a.materials.push_back({"hands", glm::vec4(0.3f, 0.3f, 0.35f, 1.0f), -1, avatar::AlphaMode::Opaque, 0.5f, false});
+  a.materials.push_back({.name = "body", .baseColorFactor = glm::vec4(1.0f), .baseColorImage = 0});
+  a.materials.push_back({.name = "head", .baseColorFactor = glm::vec4(0.85f, 0.7f, 0.6f, 1.0f)});
+  a.materials.push_back({.name = "fin",
+                         .baseColorFactor = glm::vec4(0.2f, 0.5f, 1.0f, 0.45f),
+                         .alphaMode = avatar::AlphaMode::Blend,
+                         .doubleSided = true});
+  a.materials.push_back({.name = "flag",
+                         .baseColorFactor = glm::vec4(1.0f),
+                         .baseColorImage = 1,
+                         .alphaMode = avatar::AlphaMode::Mask,
+                         .doubleSided = true});
+  a.materials.push_back({.name = "hands", .baseColorFactor = glm::vec4(0.3f, 0.3f, 0.35f, 1.0f)});
 
   Builder b{a};
   // Tube: rings along y, each vertex weighted by a Gaussian of its distance to the spine joints.
