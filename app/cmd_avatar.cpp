@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "app/args.h"
+#include "app/avatar_arg.h"
 #include "avatar/avatar_loader.h"
 #include "avatar/body/body_model.h"
 #include "avatar/body/calibration.h"
@@ -178,6 +179,8 @@ int runInfo(app::Argv argv) {
       }
       if (auto s = prepareAvatar(asset.value(), text.value()); !s.ok()) asset = Error{s.error()};
     }
+  } else if (app::isBvhPath(args.get("FILE"))) {
+    asset = app::loadAvatarArg(args.get("FILE"), args.get("bone-map"));  // the clip's skeleton
   } else {
     AvatarLoadOptions options;
     options.boneMapFile = args.get("bone-map");
@@ -242,9 +245,7 @@ int runCalibrate(app::Argv argv) {
   if (args.get("FILE") == "default") {
     asset = buildDefaultAvatar();
   } else {
-    AvatarLoadOptions options;
-    options.boneMapFile = args.get("bone-map");
-    asset = loadAvatarFile(args.get("FILE"), options);
+    asset = app::loadAvatarArg(args.get("FILE"), args.get("bone-map"));
   }
   if (!asset.ok()) {
     std::fprintf(stderr, "error: %s\n", asset.error().c_str());

@@ -31,6 +31,7 @@ int runDemo(app::Argv argv) {
   args.option("frames", "N", "frames to render", "270");
   args.option("size", "WxH", "frame size", "480x480");
   args.option("ik-budget-ms", "MS", "IK time budget per frame", "1");
+  args.option("ik-iterations", "N", "a fixed IK iteration count per frame instead of the time budget (reproducible output)");
   args.option("device", "SELECTOR", "Vulkan device: auto, an index, 'lavapipe', or part of its name", "auto");
   args.flag("no-mirror", "do not open the mirror window even when a display is available");
   if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
@@ -39,6 +40,9 @@ int runDemo(app::Argv argv) {
   try {
     job.frames = args.integer("frames");
     job.budgetMs = args.number("ik-budget-ms");
+    if (args.has("ik-iterations")) job.ikIterations = args.integer("ik-iterations");
+    if (args.has("ik-iterations") && !(job.ikIterations >= 1 && job.ikIterations <= 1000))
+      throw std::invalid_argument("--ik-iterations must be 1 .. 1000");
     const std::string size = args.get("size");
     const size_t x = size.find('x');
     if (x == std::string::npos) throw std::invalid_argument("--size must look like 480x480");

@@ -34,7 +34,8 @@ int runRender(app::Argv argv) {
                  "Drives an avatar with a motion through the runtime (tracking -> budgeted IK thread -> skinning -> "
                  "offscreen frames) and writes frame_00000.png..., contact_sheet.png and stats.json into --out. "
                  "Without --motion: one frame of the rest pose (frame_0000.png).");
-  args.option("avatar", "FILE|default", "a .gltf/.glb/.vrm file, or 'default' (the built-in procedural avatar)",
+  args.option("avatar", "FILE|default", "a .gltf/.glb/.vrm file, a .bvh clip (its skeleton with capsules), or "
+              "'default' (the built-in procedural avatar)",
               "default");
   args.option("out", "DIR", "output folder (created if missing)");
   args.option("motion", "SOURCE", "FILE.bvh, FILE.jsonl or synthetic:NAME (embody motion list)");
@@ -51,7 +52,12 @@ int runRender(app::Argv argv) {
   args.option("profile", "FILE", "user profile JSON (embody avatar calibrate): the user's height");
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (default: fit the clip to the user's height)");
   args.option("ik-budget-ms", "MS", "IK time budget per frame", "1");
+  args.option("ik-iterations", "N", "a fixed IK iteration count per frame instead of the time budget: the same "
+              "command gives the same output bytes (offline, reproducible runs)");
   args.option("record", "FILE.jsonl", "also record the motion's samples as a JSON Lines trace");
+  args.option("export", "FILE.bvh|FILE.glb", "write the solved motion (the body shown, every frame): BVH on the "
+              "avatar's hierarchy (for a BVH avatar the clip's own hierarchy, channels and frame time), or the avatar "
+              "as glTF binary with the motion as an animation");
   args.flag("uncoupled-spine", "independent spine sites (one ball joint each) instead of the coupled spine (the default)");
   args.flag("coupled-spine", "the coupled spine model (Raunhardt & Boulic 2008; the default, kept for old scripts)");
   args.flag("three-point", "keep only head and hands (HMD + controllers): the lower body is inferred, feet step");
@@ -113,6 +119,7 @@ int runRender(app::Argv argv) {
     try {
       app::readSharedJobOptions(args, job);
       job.record = args.get("record");
+      job.exportPath = args.get("export");
       if (args.has("frames")) job.frames = args.integer("frames");
       if (args.has("frames") && job.frames < 1) throw std::invalid_argument("--frames must be at least 1");
     } catch (const std::invalid_argument& e) {

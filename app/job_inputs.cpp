@@ -13,9 +13,16 @@ Result<JobInputs> openJobInputs(const RenderJob& job) {
     if (!profile) return Error{"profile " + job.profile + ": " + profile.error()};
     in.userHeight = float(profile->userHeight);
   }
-  auto loaded = loadAvatarArg(job.avatar, job.boneMap);
-  if (!loaded) return Error{loaded.error()};
-  in.asset = std::move(loaded).value();
+  if (isBvhPath(job.avatar) && job.boneMap.empty()) {  // keep the clip: --export writes its hierarchy
+    auto bvh = tracking::loadBvhAvatar(job.avatar, {});
+    if (!bvh) return Error{bvh.error()};
+    in.asset = bvh->asset;
+    in.bvhAvatar = std::move(bvh).value();
+  } else {
+    auto loaded = loadAvatarArg(job.avatar, job.boneMap);
+    if (!loaded) return Error{loaded.error()};
+    in.asset = std::move(loaded).value();
+  }
   in.sourceOptions.userHeight = in.userHeight > 0.0f ? in.userHeight : 1.75f;
   in.sourceOptions.bvhScale = job.bvhScale;
   if (job.threePoint) in.sourceOptions.trackers = tracking::TrackerMask::threePoint();

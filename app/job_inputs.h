@@ -3,11 +3,13 @@
 // the user's height (--user-height, else the --profile's), the avatar, the pose source, and the
 // body solver's options. Files first: bad files are the likely errors and need no device.
 #include <memory>
+#include <optional>
 
 #include "app/render_job.h"
 #include "avatar/avatar_asset.h"
 #include "core/result.h"
 #include "runtime/avatar_body_solver.h"
+#include "tracking/bvh_avatar.h"
 #include "tracking/pose_source.h"
 
 namespace embody::app {
@@ -17,6 +19,8 @@ struct JobInputs {
   avatar::AvatarAsset asset;
   tracking::SourceOptions sourceOptions;  // sourceOptions.userHeight: what the motion is fitted to
   std::unique_ptr<tracking::PoseSource> source;
+  // --avatar CLIP.bvh: the clip behind the avatar (its hierarchy for --export), else empty.
+  std::optional<tracking::BvhAvatar> bvhAvatar;
 };
 
 // Errors (exit code 1) name the file that failed.

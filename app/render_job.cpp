@@ -7,11 +7,14 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <stdexcept>
 #include <glm/gtc/constants.hpp>
 #include <nlohmann/json.hpp>
 
+#include "app/avatar_arg.h"
 #include "app/job_inputs.h"
+#include "avatar/gltf/glb_writer.h"
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
 #include "engine/image_io.h"
@@ -19,6 +22,7 @@
 #include "runtime/avatar_body_solver.h"
 #include "runtime/ik_thread.h"
 #include "runtime/seated_stats.h"
+#include "tracking/bvh_export.h"
 #include "tracking/pose_source.h"
 #include "tracking/trace.h"
 
@@ -32,6 +36,30 @@ int fail(const std::string& message, int code = 1) {
   std::fprintf(stderr, "error: %s\n", message.c_str());
   return code;
 }
+
+// Two images side by side.
+avatar::Image sideBySide(const avatar::Image& a, const avatar::Image& b) {
+  avatar::Image out;
+  out.width = a.width + b.width;
+  out.height = std::max(a.height, b.height);
+  out.rgba.assign(size_t(out.width) * size_t(out.height) * 4, 0);
+  for (int y = 0; y < out.height; ++y) {
+    if (y < a.height) std::copy_n(&a.rgba[size_t(y) * size_t(a.width) * 4], size_t(a.width) * 4, &out.rgba[size_t(y) * size_t(out.width) * 4]);
+    if (y < b.height)
+      std::copy_n(&b.rgba[size_t(y) * size_t(b.width) * 4], size_t(b.width) * 4,
+                  &out.rgba[(size_t(y) * size_t(out.width) + size_t(a.width)) * 4]);
+  }
+  return out;
+}
+
+void progressBar(int done, int total, double elapsed) {
+  const int width = 30, filled = total > 0 ? done * width / total : width;
+  std::printf("\r[%s%s] %d/%d frames  %.1f s", std::string(size_t(filled), '#').c_str(),
+              std::string(size_t(width - filled), ' ').c_str(), done, total, elapsed);
+  std::fflush(stdout);
+}
+
+}  // namespace
 
 // Up to `count` frames evenly through the run, tiled into one image at most ~1200 px wide.
 avatar::Image contactSheet(const std::vector<avatar::Image>& thumbs) {
@@ -72,36 +100,13 @@ avatar::Image shrink(const avatar::Image& img, int factor) {
   return out;
 }
 
-// Two images side by side.
-avatar::Image sideBySide(const avatar::Image& a, const avatar::Image& b) {
-  avatar::Image out;
-  out.width = a.width + b.width;
-  out.height = std::max(a.height, b.height);
-  out.rgba.assign(size_t(out.width) * size_t(out.height) * 4, 0);
-  for (int y = 0; y < out.height; ++y) {
-    if (y < a.height) std::copy_n(&a.rgba[size_t(y) * size_t(a.width) * 4], size_t(a.width) * 4, &out.rgba[size_t(y) * size_t(out.width) * 4]);
-    if (y < b.height)
-      std::copy_n(&b.rgba[size_t(y) * size_t(b.width) * 4], size_t(b.width) * 4,
-                  &out.rgba[(size_t(y) * size_t(out.width) + size_t(a.width)) * 4]);
-  }
-  return out;
-}
-
-void progressBar(int done, int total, double elapsed) {
-  const int width = 30, filled = total > 0 ? done * width / total : width;
-  std::printf("\r[%s%s] %d/%d frames  %.1f s", std::string(size_t(filled), '#').c_str(),
-              std::string(size_t(width - filled), ' ').c_str(), done, total, elapsed);
-  std::fflush(stdout);
-}
-
-}  // namespace
-
 int runRenderJob(const RenderJob& job) {
   if (job.view != "third" && job.view != "first" && job.view != "stereo") return fail("--view must be first, third or stereo", 2);
   if (!(job.fps >= 1.0 && job.fps <= 1000.0)) return fail("--fps must be 1 .. 1000", 2);
   if (job.frames < 0 || job.frames > 100000) return fail("--frames must be 0 .. 100000", 2);
   if (job.width < 16 || job.height < 16 || job.width > 8192 || job.height > 8192) return fail("--size must be 16x16 .. 8192x8192", 2);
   if (!(job.budgetMs > 0.0 && job.budgetMs <= 1000.0)) return fail("--ik-budget-ms must be > 0 and <= 1000", 2);
+  if (job.ikIterations < 0 || job.ikIterations > 1000) return fail("--ik-iterations must be 1 .. 1000", 2);
   if (job.userHeight != 0.0f && !(job.userHeight >= 0.5f && job.userHeight <= 2.5f)) return fail("--user-height must be 0.5 .. 2.5 m", 2);
   avatar::SpineMode spine;
   if (!avatar::parseSpineMode(job.spine, spine)) return fail("--spine must be auto, full or simplified", 2);
@@ -118,6 +123,25 @@ int runRenderJob(const RenderJob& job) {
 
   auto solver = runtime::AvatarBodySolver::create(asset, bodyOptionsFor(job, spine, *inputs));
   if (!solver) return fail("avatar " + job.avatar + ": " + solver.error());
+
+  const bool exportGlb = job.exportPath.size() > 4 && job.exportPath.substr(job.exportPath.size() - 4) == ".glb";
+  if (!job.exportPath.empty() && !isBvhPath(job.exportPath) && !exportGlb)
+    return fail("--export writes FILE.bvh or FILE.glb: " + job.exportPath, 2);
+  std::optional<tracking::SolvedMotionBvh> exported;
+  avatar::GlbAnimation animation;
+  animation.frameTime = 1.0 / job.fps;
+  if (exportGlb) animation.frames.reserve(size_t(frames));
+  if (isBvhPath(job.exportPath)) {
+    exported = inputs->bvhAvatar ? tracking::SolvedMotionBvh::forBvhAvatar(*inputs->bvhAvatar)
+                                 : tracking::SolvedMotionBvh::forAvatar(asset, 1.0 / job.fps);
+    exported->reserve(size_t(frames));
+    if (std::abs(exported->clip().frameTime * job.fps - 1.0) > 1e-6) {
+      if (inputs->bvhAvatar)
+        std::printf("export: frames at %.6g Hz (--fps), not the clip's %.6g Hz: pass --fps %.6g to keep its frame time\n",
+                    job.fps, 1.0 / exported->clip().frameTime, 1.0 / exported->clip().frameTime);
+      exported->setFrameTime(1.0 / job.fps);
+    }
+  }
 
   tracking::TraceWriter recorder;
   if (!job.record.empty())
@@ -146,6 +170,7 @@ int runRenderJob(const RenderJob& job) {
   const runtime::Clock& clock = runtime::steadyClock();
   runtime::IkStageConfig cfg;
   cfg.budgetSeconds = job.budgetMs * 1e-3;
+  cfg.fixedIterations = job.ikIterations;
   cfg.guard.userHeight = so.userHeight;
   const avatar::SkeletonPose rest = avatar::SkeletonPose::rest(asset.skeleton);
   runtime::IkThread ik(**solver, clock, cfg, rest);
@@ -171,6 +196,8 @@ int runRenderJob(const RenderJob& job) {
     ik.acquire();
     const runtime::SolvedFrame& solved = ik.frame();
     runtime::FrameStats fs = solved.stats;
+    if (exported) exported->add(solved.pose);
+    if (exportGlb) animation.frames.push_back(solved.pose);
     // The IK thread is idle until the next submit (waitForFrames synchronised with its solve).
     if (job.seated) seated.add(**solver);
     const auto t0 = Clock::now();
@@ -206,6 +233,11 @@ int runRenderJob(const RenderJob& job) {
   if (!job.record.empty())
     if (auto s = recorder.close(); !s) return fail(s.error());
 
+  if (exported)
+    if (auto s = exported->write(job.exportPath); !s) return fail(s.error());
+  if (exportGlb)
+    if (auto s = avatar::writeGlbFile(asset, job.exportPath, &animation); !s) return fail("--export " + job.exportPath + ": " + s.error());
+  if (!job.exportPath.empty()) std::printf("exported the solved motion (%d frames) to %s\n", frames, job.exportPath.c_str());
   if (auto s = engine::writePng((job.out / "contact_sheet.png").string(), contactSheet(thumbs)); !s) return fail(s.error());
   const runtime::StatsSummary sum = stats.summary();
   nlohmann::json j;
@@ -251,6 +283,9 @@ void readSharedJobOptions(const app::Args& args, RenderJob& job) {
   if (args.has("bvh-scale") && !(job.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");
   job.fps = args.number("fps");
   job.budgetMs = args.number("ik-budget-ms");
+  if (args.has("ik-iterations")) job.ikIterations = args.integer("ik-iterations");
+  if (args.has("ik-iterations") && !(job.ikIterations >= 1 && job.ikIterations <= 1000))
+    throw std::invalid_argument("--ik-iterations must be 1 .. 1000");
 }
 
 }  // namespace embody::app

@@ -5,8 +5,10 @@
 // stats.json into the output folder.
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "app/args.h"
+#include "avatar/avatar_asset.h"
 
 namespace embody::app {
 
@@ -18,6 +20,7 @@ struct RenderJob {
   std::string motion = "synthetic:figure8";
   std::string profile;             // --profile FILE (avatar/body/calibration.h: saveProfile)
   std::string record;              // --record FILE.jsonl ("" none)
+  std::string exportPath;          // --export FILE.bvh|.glb: the solved motion, every frame ("" none)
   float userHeight = 0.0f;         // 0: the profile's, else from the first head sample
   double bvhScale = 0.0;
   bool threePoint = false;         // keep only head and hands
@@ -28,12 +31,18 @@ struct RenderJob {
   std::string view = "third";      // third | first | stereo
   float yaw = 0.5f, pitch = 0.15f; // third-person orbit (radians)
   double budgetMs = 1.0;
+  int ikIterations = 0;            // --ik-iterations: > 0 a fixed count per frame (deterministic), 0 the budget
   std::string device = "auto";
   bool validate = false, msaa = false, skeleton = false, gizmos = false, grid = true;
   bool writeFrames = true;
   bool progress = true;            // a progress bar when stdout is a terminal
   std::filesystem::path out;
 };
+
+// Up to 12 thumbnails tiled four to a row (the contact sheet of render and eval), and a
+// box-filtered downscale by an integer factor.
+avatar::Image contactSheet(const std::vector<avatar::Image>& thumbs);
+avatar::Image shrink(const avatar::Image& img, int factor);
 
 // Runs the job; prints errors as "error: ..." and returns the process exit code (0, 1 runtime
 // error, 2 bad option values).

@@ -669,6 +669,38 @@ LevelDamping levelDamping(const Eigen::MatrixXd& gram, Workspace& w, size_t k, c
 }
 
 // Scale for one level's contribution to Δq of norm `norm` (1 when within the trust region).
+// The undamped step on a rank-deficient level (damping_max = 0): y := G⁺ y, so that Ĵᵀ y = Ĵ⁺ res
+// (least squares, minimum norm), as the reference path's SVD with σ ≤ rank_tolerance dropped.
+// A pivoted Cholesky gives G's rank and, with C the m x rank lower-trapezoidal factor of the
+// permuted G ≈ C Cᵀ, G⁺ = C (CᵀC)⁻² Cᵀ. Without it the plain solve divides by a round-off pivot
+// (|Δq| ~ 1e7 on two copies of one task).
+void truncatedSolve(const Eigen::MatrixXd& gram, Workspace& w, size_t k, const SolveOptions& o, Eigen::VectorXd& y) {
+  const auto m = gram.rows();
+  Eigen::MatrixXd& work = w.level_factor2[k];
+  const Eigen::VectorXi& perm = w.level_perm[k];
+  const int a = detail::pivotedCholesky(gram, o.rank_tolerance * o.rank_tolerance, static_cast<int>(m), work,
+                                        w.level_perm[k], w.level_factor2_inv[k]);
+  if (a == 0) {
+    y.setZero();
+    return;
+  }
+  work.topLeftCorner(a, a).triangularView<Eigen::StrictlyUpper>().setZero();
+  const auto c = work.leftCols(a);
+  Eigen::VectorXd& t = w.level_tmp[k];
+  for (Eigen::Index i = 0; i < m; ++i) t(i) = y(perm(i));
+  auto u = w.level_coef[k].head(a);
+  u.noalias() = c.transpose() * t;
+  auto gram_c = w.level_solve.topLeftCorner(a, a);
+  gram_c.noalias() = c.transpose() * c;
+  Eigen::internal::llt_inplace<double, Eigen::Lower>::blocked(gram_c);
+  for (int twice = 0; twice < 2; ++twice) {
+    gram_c.triangularView<Eigen::Lower>().solveInPlace(u);
+    gram_c.triangularView<Eigen::Lower>().transpose().solveInPlace(u);
+  }
+  t.noalias() = c * u;
+  for (Eigen::Index i = 0; i < m; ++i) y(perm(i)) = t(i);
+}
+
 double levelStepScale(double norm, const SolveOptions& o) {
   if (!(o.max_level_step > 0) || !std::isfinite(o.max_level_step) || !(norm > o.max_level_step)) return 1.0;
   return o.max_level_step / norm;
@@ -883,8 +915,10 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
         detail::choleskySolve(damped, w.level_factor2_inv[k], y.data());
       else
         y.setZero();
-    } else {  // λ = 0 only when G is positive definite
+    } else if (d.gram_pd && d.sigma_min > o.rank_tolerance) {
       detail::choleskySolve(w.level_factor[k], w.level_factor_inv[k], y.data());
+    } else {  // λ = 0 on a rank-deficient level: only with damping_max = 0
+      truncatedSolve(gram, w, k, o, y);
     }
     auto dz = w.tmp_n.head(r);
     if (gather) {
@@ -1031,7 +1065,9 @@ void referencePass(const Model& model, Workspace& w, const SolveOptions& o) {
     for (int i = 0; i < p; ++i) {
       const double sigma = sv(i);
       const double denom = sigma * sigma + lambda2;
-      coef(i) = denom > 0 ? coef(i) * sigma / denom : 0.0;
+      // λ = 0 (damping_max = 0) drops the rank-deficient directions as the projector does.
+      const bool kept = lambda2 > 0 || sigma > o.rank_tolerance;
+      coef(i) = kept && denom > 0 ? coef(i) * sigma / denom : 0.0;
     }
     if (const double cap = levelStepScale(coef.head(p).norm(), o); cap < 1.0) coef.head(p) *= cap;  // |V c| = |c|
     w.dq.noalias() += svd.matrixV() * coef.head(p);

@@ -176,6 +176,8 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
                        {pos(body_.leftFoot) - hipsGround, pos(body_.rightFoot) - hipsGround}, avatarHeight_ / 1.75);
   }
 
+  if (options.sameBody.enabled) useSameBody(options.sameBody);  // before the tasks take the eye offset
+
   // Tasks from the layout (layout priority 1 = solver level 0).
   layout_ = options.seat.enabled ? seatedTaskLayoutFor(options.trackers) : taskLayoutFor(options.trackers);
   std::vector<ik::TaskDesc> tasks;
@@ -256,6 +258,21 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
         break;
     }
   }
+  if (options.jointMarkers) {
+    int lowest = 1;
+    for (const TaskSpec& spec : layout_.tasks) lowest = std::max(lowest, spec.priority);
+    for (size_t a = 0; a < avatar_.skeleton.joints.size(); ++a) {
+      const int j = body_.ikJointOfAvatar[a];
+      if (j < 0 || body_.avatarJoint[size_t(j)] != int(a)) continue;
+      ik::TaskDesc t;
+      t.name = "marker_" + avatar_.skeleton.joints[a].name;
+      t.type = ik::TaskType::Pose;
+      t.joint = j;
+      t.position_tolerance = 5e-4;
+      t.rotation_tolerance = 0.01;
+      markerTask_.emplace_back(int(a), add(t, lowest + 1, 1.0f));
+    }
+  }
   auto model = withTasks(body_.model, tasks);
   if (!model) return Error{"body model with tracker tasks: " + model.error()};
   body_.model = std::move(model).value();
@@ -267,13 +284,34 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
     if (limbHinge_[k] >= 0) restQ_[body_.model.joints[size_t(limbHinge_[k])].first_dof] = k < 2 ? 0.15 : 0.3;
   (void)data_->setConfiguration(restQ_);
   lastGoodQ_ = restQ_;
-  if (options.userHeight > 0.0f) calibrate(options.userHeight);
+  if (options.userHeight > 0.0f && !options.sameBody.enabled) calibrate(options.userHeight);
   return Status::success();
 }
 
 void AvatarBodySolver::calibrate(float userHeight) {
   const auto dims = tracking::BodyDimensions::fromHeight(userHeight);
   scale_ = avatarEyeHeight_ / double(dims.eyeHeight);
+}
+
+void AvatarBodySolver::useSameBody(const AvatarBodyOptions::SameBody& same) {
+  scale_ = 1.0;
+  floor_ = 0.0;
+  fromTracking_ = Eigen::Quaterniond::Identity();
+  const size_t head = size_t(tracking::index(TrackerId::Head));
+  eyeInHead_ = restRotation_[head].conjugate() * same.eyeOffset;
+  for (size_t i = 0; i < tracking::kTrackerCount; ++i)
+    jointFromTracker_[i] = same.reference[i].normalized().conjugate() * restRotation_[i];
+}
+
+void AvatarBodySolver::setMarkers(const std::vector<glm::dvec3>& positions, const std::vector<glm::dquat>& rotations) {
+  for (const auto& [a, task] : markerTask_) {
+    if (size_t(a) >= positions.size() || size_t(a) >= rotations.size()) continue;
+    const glm::dvec3& p = positions[size_t(a)];
+    const glm::dquat& r = rotations[size_t(a)];
+    const int j = body_.ikJointOfAvatar[size_t(a)];
+    const Eigen::Quaterniond world = Eigen::Quaterniond(r.w, r.x, r.y, r.z).normalized() * body_.ikRestRotation[size_t(j)];
+    setPose(task, -1, Eigen::Vector3d(p.x, p.y, p.z), world, 1.0);
+  }
 }
 
 Eigen::Vector3d AvatarBodySolver::toAvatar(const glm::vec3& p) const {
@@ -324,7 +362,7 @@ void AvatarBodySolver::setPose(ik::TaskId position, ik::TaskId orientation, cons
 void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
   ik::Data& d = *data_;
   const size_t headIndex = size_t(tracking::index(TrackerId::Head));
-  if (!heightsCalibrated_ && targets.status[headIndex] == TrackerStatus::Tracked) {
+  if (!heightsCalibrated_ && !options_.sameBody.enabled && targets.status[headIndex] == TrackerStatus::Tracked) {
     heightsCalibrated_ = true;
     const auto& lf = targets.pose[TrackerId::LeftFoot];
     const auto& rf = targets.pose[TrackerId::RightFoot];
@@ -503,14 +541,17 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   const bool cold = !solvedOnce_ || reseeded_;
   reseeded_ = false;
   o.max_level_step = cold ? std::max(options_.maxLevelStep, ik::SolveOptions{}.max_level_step) : options_.maxLevelStep;
-  const int maxIterations = cold ? 4 * options_.maxIterations : options_.maxIterations;
+  // Deterministic mode: the fixed count (four times it on a cold start, as the cap), no clock.
+  const bool fixed = request.fixedIterations > 0;
+  const int cap = fixed ? request.fixedIterations : options_.maxIterations;
+  const int maxIterations = cold ? 4 * cap : cap;
   o.clock = &clock;
   int iterations = 0;
   bool converged = false, broken = false;
   while (iterations < maxIterations) {
     const TimePoint start = clock.now();
-    if (start + fromSeconds(predictedIteration_ + predictedFinish_) > request.deadline && iterations > 0) break;
-    if (start + fromSeconds(predictedFinish_) >= request.deadline) break;
+    if (!fixed && start + fromSeconds(predictedIteration_ + predictedFinish_) > request.deadline && iterations > 0) break;
+    if (!fixed && start + fromSeconds(predictedFinish_) >= request.deadline) break;
     const ik::SolveReport& report = ik::solve(body_.model, *data_, o);
     const double cost = toSeconds(clock.now() - start);
     predictedIteration_ = std::max(cost, 0.9 * predictedIteration_);

@@ -76,6 +76,20 @@ struct AvatarBodyOptions {
   double recoveryBlendSeconds = 0.2;
   // Knee and elbow direction tasks at the lowest level (pole_tasks.h).
   bool limbPoles = true;
+  // The tracked person IS this avatar (embody eval: the avatar is the clip's own skeleton, built
+  // in tracking space, tracking/bvh_avatar.h): tracking space is avatar space (scale 1, floor at
+  // y = 0, no turn), no height or stride calibration, and the trackers' rest references are the
+  // source's (tracking::BvhMapping), so a perfect solve puts every joint where the clip's is.
+  // Joint markers (embody eval --trackers full, the paper's §5.2.3): a pose task (position and
+  // orientation) on every avatar joint an IK joint pivots at, one level below the tracker layout;
+  // targets from setMarkers() before each solve. They do not come from a tracking source: no
+  // filter, no loss guard.
+  bool jointMarkers = false;
+  struct SameBody {
+    bool enabled = false;
+    Eigen::Vector3d eyeOffset = Eigen::Vector3d::Zero();  // from the head joint, rest pose, tracking axes
+    std::array<Eigen::Quaterniond, tracking::kTrackerCount> reference{};  // tracker orientation at rest
+  } sameBody;
 };
 
 // The solved lower body and trunk, measured (avatar space; angles in radians).
@@ -133,11 +147,17 @@ class AvatarBodySolver final : public BodySolver {
   double hingeAngle(int limb) const;
   // Where a solved foot (0 left, 1 right) points: its rest forward turned as the foot is.
   Eigen::Vector3d footForward(int side) const;
+  // Marker targets (jointMarkers) per avatar skeleton joint, avatar space: world positions and
+  // world rotations relative to the joint's rest (identity at rest). Joints without a marker are
+  // ignored; call before each solve.
+  void setMarkers(const std::vector<glm::dvec3>& positions, const std::vector<glm::dquat>& rotations);
+  size_t markerCount() const { return markerTask_.size(); }
 
  private:
   AvatarBodySolver(const avatar::AvatarAsset& avatar) : avatar_(avatar) {}
   Status build(const AvatarBodyOptions& options);
   void calibrate(float userHeight);
+  void useSameBody(const AvatarBodyOptions::SameBody& same);
   void setTargets(const tracking::GuardedSample& targets);
   void setSeatedTargets(const tracking::GuardedSample& targets);
   // Standing start: the root under the head, facing the head's and hands' heading (body_seed.h).
@@ -166,6 +186,7 @@ class AvatarBodySolver final : public BodySolver {
   std::array<Eigen::Quaterniond, tracking::kTrackerCount> jointFromTracker_{};
   std::array<Eigen::Quaterniond, tracking::kTrackerCount> restRotation_{};
   ik::TaskId balanceTask_ = -1, hipsPosTask_ = -1, hipsRotTask_ = -1;
+  std::vector<std::pair<int, ik::TaskId>> markerTask_;  // avatar joint, its pose task
   ik::JointId leftShoulder_ = -1, rightShoulder_ = -1;
   // Limb direction: knees (0 left, 1 right) then elbows (2, 3): the task, the chain's root,
   // middle and end joints and the hinge joint, and the rest segment lengths.

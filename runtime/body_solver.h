@@ -16,6 +16,9 @@ struct SolveRequest {
   const tracking::GuardedSample* targets = nullptr;  // never null in a request from the runtime
   const Clock* clock = nullptr;
   TimePoint deadline{};  // by which solve() must have returned (IterationBudget, IterationCostModel)
+  // > 0: deterministic mode (--ik-iterations): exactly this many solver iterations (fewer only
+  // when converged), the deadline ignored, so the same samples give the same poses to the bit.
+  int fixedIterations = 0;
 };
 
 struct SolveResult {

@@ -26,6 +26,7 @@ const FrameStats& IkStage::process(const tracking::PoseSample& sample, SolvedFra
   request.targets = &out.targets;
   request.clock = &clock_;
   request.deadline = deadline - fromSeconds(std::min(config_.reserveSeconds, 0.5 * config_.budgetSeconds));
+  request.fixedIterations = config_.fixedIterations;
   const SolveResult r = solver_.solve(request, out.pose);
   const TimePoint end = clock_.now();
 
@@ -36,7 +37,7 @@ const FrameStats& IkStage::process(const tracking::PoseSample& sample, SolvedFra
   s.budgetSeconds = config_.budgetSeconds;
   s.iterations = r.iterations;
   s.converged = r.converged;
-  s.deadlineMiss = end > deadline;
+  s.deadlineMiss = config_.fixedIterations == 0 && end > deadline;
   s.residual = r.residual;
   s.reachable = r.reachable;
   s.status = out.targets.status;

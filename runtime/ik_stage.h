@@ -14,6 +14,9 @@ struct IkStageConfig {
   // Kept back from the solver's deadline for the work after it returns (writing the pose,
   // publishing), so the whole stage ends within the budget.
   double reserveSeconds = 0.05e-3;
+  // > 0 (--ik-iterations): a fixed iteration count per sample instead of the budget, so offline
+  // runs (render, eval) are reproducible to the bit. 0: the budget (live use).
+  int fixedIterations = 0;
   bool filter = true;            // One Euro filter on (off for exact replays)
   tracking::TrackerFilterParams filterParams;
   tracking::TrackingGuardConfig guard;

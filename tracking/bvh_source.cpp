@@ -216,6 +216,7 @@ Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, 
     const float first = fastest(trace.samples[0], trace.samples[1]);
     if (first > 10.0f && fastest(trace.samples[1], trace.samples[2]) < 10.0f) {
       trace.samples.erase(trace.samples.begin());
+      m.firstFrame = 1;
       char buf[160];
       std::snprintf(buf, sizeof buf, "frame 0 is a reference pose (a tracker jumps at %.0f m/s to frame 1); skipped",
                     static_cast<double>(first));
@@ -234,6 +235,10 @@ Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, 
       if (trace.trackers.has(id)) s[id].position += shift;
     sanitize(s);
   }
+  m.toXr = toXr;
+  m.shift = glm::dvec3(shift);
+  m.eyeOffset = eyeOffset;
+  m.reference = reference;
   for (const auto& w : clip.warnings) m.notes.push_back(w);
   trace.notes = m.notes;
   if (mappingOut) *mappingOut = std::move(m);

@@ -34,6 +34,14 @@ struct BvhMapping {
   double scale = 0.0;            // metres per unit used
   std::string upAxis, facingAxis;  // in file axes, e.g. "+Y", "+Z"
   std::vector<std::string> notes;
+  // File -> tracking space, as the trace uses it: p_tracking = toXr * p_file * scale + shift
+  // (rotations: toXr * R * toXr^T), so the clip's joints can be set beside what the runtime made
+  // of its trackers (tracking/bvh_avatar.h, embody eval).
+  glm::dmat3 toXr{1.0};
+  glm::dvec3 shift{0.0};
+  size_t firstFrame = 0;  // 1 when frame 0 was a reference pose and skipped
+  glm::dvec3 eyeOffset{0.0};  // tracking axes, from the head joint, in the rest pose
+  std::array<glm::dquat, kTrackerCount> reference{};  // tracker orientation in the rest pose (tracking axes)
 };
 
 // Samples every frame of the clip into a trace (time = frame * frameTime).

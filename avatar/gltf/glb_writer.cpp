@@ -53,6 +53,47 @@ void pngSink(void* context, void* data, int size) {
   out->insert(out->end(), p, p + size);
 }
 
+// The animation's samplers and channels: times, then per joint a rotation track and, where the
+// translation moves, a translation track.
+Status addAnimation(const Skeleton& sk, const GlbAnimation& anim, BinBuilder& bin, json& doc) {
+  const size_t frames = anim.frames.size(), n = sk.joints.size();
+  if (frames == 0) return Error{"the animation has no frames"};
+  if (!(anim.frameTime > 0.0)) return Error{"the animation's frame time must be positive"};
+  for (const auto& f : anim.frames)
+    if (f.local.size() != n) return Error{"an animation frame does not match the skeleton"};
+  std::vector<float> times(frames);
+  for (size_t f = 0; f < frames; ++f) times[f] = float(double(f) * anim.frameTime);
+  const int input = accessor(doc, bin.view(times.data(), times.size() * 4, 0, doc), 0, kFloat, frames, "SCALAR");
+  doc["accessors"][size_t(input)]["min"] = {times.front()};
+  doc["accessors"][size_t(input)]["max"] = {times.back()};
+  json samplers = json::array(), channels = json::array();
+  auto track = [&](size_t joint, const char* path, std::vector<float>& values, const char* type) {
+    const int out = accessor(doc, bin.view(values.data(), values.size() * 4, 0, doc), 0, kFloat, frames, type);
+    samplers.push_back({{"input", input}, {"output", out}, {"interpolation", "LINEAR"}});
+    channels.push_back({{"sampler", samplers.size() - 1}, {"target", {{"node", joint}, {"path", path}}}});
+  };
+  std::vector<float> values;
+  for (size_t j = 0; j < n; ++j) {
+    values.clear();
+    glm::quat previous(1.0f, 0.0f, 0.0f, 0.0f);
+    for (const auto& f : anim.frames) {
+      glm::quat q = glm::normalize(f.local[j].rotation);
+      if (glm::dot(q, previous) < 0.0f) q = -q;  // the short way round between samples
+      previous = q;
+      values.insert(values.end(), {q.x, q.y, q.z, q.w});
+    }
+    track(j, "rotation", values, "VEC4");
+    bool moves = false;
+    for (const auto& f : anim.frames) moves |= glm::length(f.local[j].translation - sk.joints[j].rest.translation) > 1e-6f;
+    if (!moves) continue;
+    values.clear();
+    for (const auto& f : anim.frames) values.insert(values.end(), {f.local[j].translation.x, f.local[j].translation.y, f.local[j].translation.z});
+    track(j, "translation", values, "VEC3");
+  }
+  doc["animations"] = json::array({{{"name", anim.name}, {"samplers", samplers}, {"channels", channels}}});
+  return {};
+}
+
 // A textureInfo for `image` with its KHR_texture_transform (written when it is not the identity
 // or reads TEXCOORD_1).
 json textureInfo(int image, const TextureTransform& t, std::set<std::string>& extensionsUsed) {
@@ -102,7 +143,7 @@ json materialJson(const Material& m, const AvatarAsset& asset, std::set<std::str
 
 }  // namespace
 
-Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
+Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimation* animation) {
   const Skeleton& sk = asset.skeleton;
   const SkinnedMesh& mesh = asset.mesh;
   const size_t n = sk.joints.size();
@@ -237,6 +278,8 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
     sceneNodes.push_back(n);
   }
   doc["scenes"] = json::array({{{"nodes", sceneNodes}}});
+  if (animation)
+    if (auto s = addAnimation(sk, *animation, bin, doc); !s) return Error{s.error()};
   while (bin.bytes().size() % 4) bin.bytes().push_back(0);
   doc["buffers"] = json::array({{{"byteLength", bin.bytes().size()}}});
 
@@ -258,8 +301,8 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset) {
   return out;
 }
 
-Status writeGlbFile(const AvatarAsset& asset, const std::string& path) {
-  auto bytes = encodeGlb(asset);
+Status writeGlbFile(const AvatarAsset& asset, const std::string& path, const GlbAnimation* animation) {
+  auto bytes = encodeGlb(asset, animation);
   if (!bytes.ok()) return Error{bytes.error()};
   std::ofstream f(path, std::ios::binary);
   if (!f) return Error{"cannot write '" + path + "'"};

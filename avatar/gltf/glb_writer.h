@@ -16,7 +16,16 @@
 
 namespace embody::avatar {
 
-Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset);
-Status writeGlbFile(const AvatarAsset& asset, const std::string& path);
+// Motion to store with the avatar: one glTF animation ("name"), a sample every frameTime seconds,
+// LINEAR: every joint's rotation, and the translation of every joint whose translation moves
+// (the hips), from each frame's local transforms.
+struct GlbAnimation {
+  std::string name = "motion";
+  double frameTime = 1.0 / 90.0;
+  std::vector<SkeletonPose> frames;  // each sized to the skeleton
+};
+
+Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimation* animation = nullptr);
+Status writeGlbFile(const AvatarAsset& asset, const std::string& path, const GlbAnimation* animation = nullptr);
 
 }  // namespace embody::avatar

@@ -108,6 +108,35 @@ Result<ExperimentResult> runIsolatedSpineExperiment(const SpineDescription& d, c
   return result;
 }
 
+Result<std::vector<SlackSweepPoint>> sweepBandSlack(const SpineDescription& d, const ExperimentOptions& o,
+                                                   const std::vector<double>& slacks_deg) {
+  if (o.iterations < 1 || o.iterations > 100000) return Error{"band-slack sweep: iterations must be 1..100000"};
+  std::vector<SlackSweepPoint> out;
+  for (double deg : slacks_deg) {
+    if (!std::isfinite(deg) || deg < 0 || deg > 45) return Error{"band-slack sweep: slack must be 0..45 degrees"};
+    SpineDescription copy = d;
+    copy.band_slack = deg * kDeg;
+    ExperimentResult scratch;
+    auto run = runOne(copy, true, o, scratch);
+    if (!run) return Error{run.error()};
+    out.push_back({deg, run->final_position_error, run->final_orientation_error, run->swing_spread,
+                   run->torsion_sign_changes, run->equalities_hold});
+  }
+  return out;
+}
+
+nlohmann::json sweepSummary(const std::vector<SlackSweepPoint>& sweep) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const SlackSweepPoint& p : sweep)
+    j.push_back({{"band_slack_deg", p.slack_deg},
+                 {"final_position_error_m", p.position_error},
+                 {"final_orientation_error_deg", p.orientation_error / kDeg},
+                 {"swing_spread", p.swing_spread},
+                 {"torsion_sign_changes_within_regions", p.torsion_sign_changes},
+                 {"equalities_hold", p.equalities_hold}});
+  return j;
+}
+
 nlohmann::json experimentSummary(const ExperimentResult& r, const ExperimentOptions& o) {
   nlohmann::json j;
   j["coupled"] = runJson(r.coupled);

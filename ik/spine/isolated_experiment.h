@@ -60,6 +60,20 @@ struct ExperimentResult {
 Result<ExperimentResult> runIsolatedSpineExperiment(const SpineDescription& description,
                                                     const ExperimentOptions& options = {});
 
+// The §5.1 result hinges on the inter-region band slack s (|q_j - r q_i| <= s between regions), a
+// value the paper does not give: the coupled run repeated for each slack (degrees) in `slacks_deg`.
+struct SlackSweepPoint {
+  double slack_deg = 0.0;
+  double position_error = 0.0;     // metres, neck, after options.iterations
+  double orientation_error = 0.0;  // radians, head
+  double swing_spread = 0.0;
+  int torsion_sign_changes = 0;
+  bool equalities_hold = true;
+};
+Result<std::vector<SlackSweepPoint>> sweepBandSlack(const SpineDescription& description, const ExperimentOptions& options,
+                                                   const std::vector<double>& slacks_deg);
+nlohmann::json sweepSummary(const std::vector<SlackSweepPoint>& sweep);
+
 // summary.json: {"coupled": {...}, "uncoupled": {...}, "setup": {...}} with, per run,
 // final_position_error_m, final_orientation_error_deg, mean_iteration_us, swing_spread,
 // torsion_sign_changes_within_regions.

@@ -79,7 +79,14 @@ TEST_CASE("embody experiment isolated-spine writes CSV, summary.json and the fig
   int rows = 0;
   for (std::string line; std::getline(csv, line);) ++rows;
   CHECK(rows == 60);
-  for (const char* png : {"fig6_shapes.png", "fig7_convergence.png", "fig8_swing.png"}) {
+  // The band-slack sweep: 0..5° in 0.5° steps, rigid bands reach least.
+  REQUIRE(s["band_slack_sweep"].size() == 11);
+  CHECK(s["band_slack_sweep"][0]["final_position_error_m"].get<double>() >
+        s["band_slack_sweep"][10]["final_position_error_m"].get<double>());
+  std::ifstream sweep(dir / "band_slack_sweep.csv");
+  std::getline(sweep, header);
+  CHECK(header == "band_slack_deg,position_error_m,orientation_error_deg,swing_spread,torsion_sign_changes");
+  for (const char* png : {"fig6_shapes.png", "fig7_convergence.png", "fig8_swing.png", "fig_band_slack.png"}) {
     INFO(png);
     std::ifstream f(dir / png, std::ios::binary);
     REQUIRE(f);

@@ -16,20 +16,16 @@ TEST_CASE("isolated spine: uncoupled reaches closer, coupled is smoother and nev
   const auto& c = s["coupled"];
   const auto& u = s["uncoupled"];
   INFO(s.dump(2));
-  for (const char* key : {"final_position_error_m", "final_orientation_error_deg", "mean_iteration_us", "swing_spread",
-                          "torsion_sign_changes_within_regions"}) {
-    CHECK(c.contains(key));
-    CHECK(u.contains(key));
-  }
-  // The head orientation has the higher priority: both keep it.
-  CHECK(c["final_orientation_error_deg"].get<double>() < 0.5);
-  CHECK(u["final_orientation_error_deg"].get<double>() < 0.5);
+  // The head orientation has the higher priority: both keep it to round-off (measured ~1e-13°;
+  // json::get throws on a missing key, which fails the test too).
+  CHECK(c["final_orientation_error_deg"].get<double>() < 1e-6);
+  CHECK(u["final_orientation_error_deg"].get<double>() < 1e-6);
   // The uncoupled spine (72 dofs) reaches the sideways neck target more closely.
   CHECK(u["final_position_error_m"].get<double>() < 0.5 * c["final_position_error_m"].get<double>());
-  // The coupled spine bends every level in proportion to its mobility and keeps torsion one way.
-  CHECK(c["swing_spread"].get<double>() < 0.1 * u["swing_spread"].get<double>());
-  CHECK(c["torsion_sign_changes_within_regions"].get<int>() == 0);
+  // The coupled spine bends every level in proportion to its mobility (its spread and torsion
+  // sign follow from the equality rows, so only those are checked); the uncoupled one does not.
   CHECK(r->coupled.equalities_hold);
+  CHECK(u["swing_spread"].get<double>() > 10 * c["swing_spread"].get<double>() + 1e-3);
   // Both runs moved the neck toward the target.
   const double start = (r->neck_target - r->neck_start).norm();
   CHECK(c["final_position_error_m"].get<double>() < 0.8 * start);
@@ -43,4 +39,22 @@ TEST_CASE("isolated spine: invalid options are refused") {
   o.iterations = 10;
   o.pull = std::numeric_limits<double>::quiet_NaN();
   CHECK_FALSE(runIsolatedSpineExperiment(defaultFullSpine(), o).ok());
+}
+
+TEST_CASE("isolated spine: the band-slack sweep shows how much of the reach the bands take") {
+  ExperimentOptions o;
+  auto sweep = sweepBandSlack(defaultFullSpine(), o, {0.0, 2.0, 5.0});
+  REQUIRE(sweep.ok());
+  REQUIRE(sweep->size() == 3);
+  const auto& p = *sweep;
+  for (const SlackSweepPoint& point : p) {
+    INFO("slack " << point.slack_deg << " deg: neck error " << point.position_error << " m");
+    CHECK(point.equalities_hold);
+    CHECK(point.orientation_error < 1e-8);  // radians: the head keeps its orientation at any slack
+  }
+  // Rigid bands (0°) leave the three regions one chain: the neck cannot get far; every degree of
+  // slack lets the regions bend more independently (measured 0.120, 0.049, 0.008 m).
+  CHECK(p[0].position_error > 2 * p[1].position_error);
+  CHECK(p[1].position_error > 2 * p[2].position_error);
+  CHECK_FALSE(sweepBandSlack(defaultFullSpine(), o, {-1.0}).ok());
 }

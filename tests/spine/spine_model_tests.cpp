@@ -152,7 +152,11 @@ TEST_CASE("neutral posture: lordosis, kyphosis, lordosis, head above the pelvis,
   CHECK((tall.back() - tall.front()).norm() == Approx(2 * spineLength));
 }
 
-TEST_CASE("after random targets every equality holds to 1e-9 and torsion keeps its sign inside each region") {
+TEST_CASE("after random targets every equality holds to 1e-9 and the higher-priority head orientation is kept") {
+  // Torsion sign, swing spread and the chained limits all follow from the equality rows (each
+  // row is q_j = r q_i with r > 0 and r·range_i ≤ range_j), so they are not checked again here;
+  // what the equalities do not give is checked instead: the priority of the head orientation
+  // over the neck position, and that the neck does move toward its target.
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (const SpineDescription* d : {&defaultFullSpine(), &defaultSimplifiedSpine()}) {
@@ -166,30 +170,69 @@ TEST_CASE("after random targets every equality holds to 1e-9 and torsion keeps i
       for (int trial = 0; trial < 6; ++trial) {
         INFO(d->name << (axis ? " with axis coupling" : "") << ", trial " << trial);
         const Eigen::Vector3d target = neck + 0.15 * Eigen::Vector3d(u(rng), 0.3 * u(rng), u(rng));
-        const Eigen::Quaterniond head(Eigen::AngleAxisd(0.6 * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized()));
+        const Eigen::Quaterniond head(Eigen::AngleAxisd(0.3 * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized()));
         REQUIRE(data.setTarget(s.neck_position, target).ok());
         REQUIRE(data.setTarget(s.head_orientation, head).ok());
+        ik::kinematics(s.model, data, false);
+        const double before = (data.taskPosition(s.neck_position) - target).norm();
         ik::SolveOptions so;
         so.max_iterations = 40;
-        ik::solve(s.model, data, so);
+        const ik::SolveReport& r = ik::solve(s.model, data, so);
         REQUIRE(data.q().allFinite());
         const double worst = (s.model.equality_matrix * data.q() - s.model.equality_rhs).cwiseAbs().maxCoeff();
         CHECK(worst < 1e-9);
-        const auto motion = siteMotion(s.model, data.q(), s.joints);
-        CHECK(torsionSignChangesWithinRegions(*d, s.joints, motion, 0.0) == 0);
-        CHECK(swingSpread(*d, s.joints, motion) < 1e-6);
-        // The region's first joints carry the limits; the chain keeps the others inside theirs.
-        for (size_t k = 0; k < d->sites.size(); ++k)
-          for (int c = 0; c < 2; ++c) {
-            if (s.joints.sites[k].swing < 0) continue;
-            const double v = c == 0 ? motion[k].s_x : motion[k].s_y;
-            const double r = s.joints.ranges[k][c];
-            CHECK(v <= upperLimit(*d, Component(c), r) + 1e-6);
-            CHECK(v >= lowerLimit(*d, Component(c), r) - 1e-6);
-          }
+        // Without cross-axis rows any head orientation is reachable: level 0 holds and level 1
+        // makes progress. With them torsion is tied to bending, so a random orientation may not be.
+        if (!axis) {
+          CHECK(r.tasks[s.head_orientation].rotation < 1e-3);
+          CHECK(r.tasks[s.neck_position].position < before);
+        }
       }
     }
   }
+}
+
+TEST_CASE("inter-region bands hold on the anatomical spine over 600 iterations of a moving target") {
+  const SpineDescription& d = defaultFullSpine();
+  const IsolatedSpine s = build(d, {});
+  std::vector<size_t> bands;
+  for (size_t i = 0; i < s.model.inequalities.size(); ++i)
+    if (s.model.inequalities[i].name.rfind("band ", 0) == 0) bands.push_back(i);
+  REQUIRE(static_cast<int>(bands.size()) == s.joints.band_inequalities);
+  REQUIRE(!bands.empty());
+  ik::Data data(s.model);
+  ik::kinematics(s.model, data, false);
+  const Eigen::Vector3d neck = data.taskPosition(s.neck_position);
+  const Eigen::Quaterniond rest = data.taskOrientation(s.head_orientation);
+  ik::SolveOptions so;
+  int pinnedBandIterations = 0, yielded = 0;
+  double worstBand = -1.0;
+  for (int it = 0; it < 600; ++it) {
+    // A wide figure-eight in the frontal plane with the head turning: bands bind on the way.
+    const double t = 2 * std::numbers::pi * it / 200.0;
+    REQUIRE(data.setTarget(s.neck_position, Eigen::Vector3d(neck + Eigen::Vector3d(0.2 * std::sin(t), 0.02 * std::sin(2 * t), 0.12 * std::sin(2 * t)))).ok());
+    REQUIRE(data.setTarget(s.head_orientation, Eigen::Quaterniond(rest * Eigen::AngleAxisd(0.5 * std::sin(t), Eigen::Vector3d::UnitY()))).ok());
+    ik::iterate(s.model, data, so);
+    const ik::SolveReport& r = data.report();
+    REQUIRE(data.q().allFinite());
+    REQUIRE((s.model.equality_matrix * data.q() - s.model.equality_rhs).cwiseAbs().maxCoeff() < 1e-9);
+    bool pinned = false;
+    for (size_t i : bands) {
+      double v = -s.model.inequalities[i].rhs;
+      for (const ik::LinearTerm& term : s.model.inequalities[i].terms) v += term.coefficient * data.q()(s.model.dofIndex(term.dof));
+      const bool excused = std::find(r.unsatisfiable.begin(), r.unsatisfiable.end(), static_cast<int>(i)) != r.unsatisfiable.end();
+      if (excused) {
+        ++yielded;  // a band yields to an anatomical limit (spine_model.cpp): reported, never silent
+        continue;
+      }
+      worstBand = std::max(worstBand, v);
+      pinned = pinned || std::find(r.active_clamps.begin(), r.active_clamps.end(), static_cast<int>(i)) != r.active_clamps.end();
+    }
+    pinnedBandIterations += pinned ? 1 : 0;
+  }
+  INFO(pinnedBandIterations << " iterations with a band pinned, " << yielded << " band rows yielded to limits");
+  CHECK(worstBand < 1e-9);               // |q_j - r q_i| <= s to round-off
+  CHECK(pinnedBandIterations > 50);      // and the bands did bind: the check is not vacuous
 }
 
 TEST_CASE("axis coupling ties torsion to bending: cervical same side, lumbar opposite, 7 free dofs") {

@@ -1,0 +1,227 @@
+// embody eval: the body scored against real motion capture (eval/, docs/eval.md). The avatar is
+// the clip's own skeleton; only the chosen trackers reach the runtime; every joint of the solved
+// body is set beside the clip's. One clip: a method table and the report files in --out. A
+// folder: every clip at every tracker set, one table.
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "app/args.h"
+#include "app/eval_sheet.h"
+#include "eval/clip_eval.h"
+#include "eval/report.h"
+#include "tracking/bvh_avatar.h"
+#include "tracking/bvh_export.h"
+
+namespace {
+
+using namespace embody;
+namespace fs = std::filesystem;
+
+struct EvalJob {
+  std::vector<fs::path> clips;
+  bool folder = false;
+  std::vector<eval::TrackerSet> sets;
+  eval::EvalOptions options;
+  double bvhScale = 0.0;
+  fs::path out;
+  bool plots = true;
+  bool sheet = true;
+  std::string device = "auto";
+};
+
+// One table row per (clip, tracker set): MPJPE of each method, or why the clip was not scored.
+struct Row {
+  std::string clip, trackers, error;
+  std::array<double, 3> mpjpe{}, hands{}, lower{};
+  double mpjre = 0.0, jitter = 0.0, clipJitter = 0.0, seconds = 0.0;
+};
+
+int fail(const std::string& message, int code) {
+  std::fprintf(stderr, "error: %s\n", message.c_str());
+  return code;
+}
+
+// Runs one clip at one tracker set, writes its report into `dir`, fills `row`.
+bool evaluateOne(const tracking::BvhAvatar& avatar, const EvalJob& job, eval::TrackerSet set, const fs::path& dir, Row& row,
+                 bool verbose) {
+  row.trackers = eval::trackerSetName(set);
+  eval::EvalOptions o = job.options;
+  o.trackers = set;
+  o.keepPoses = job.sheet ? 12 : 0;
+  const auto started = std::chrono::steady_clock::now();
+  auto solved = tracking::SolvedMotionBvh::forBvhAvatar(avatar);
+  auto e = eval::evaluateClip(avatar, o, &solved);
+  if (!e) return row.error = e.error(), false;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) return row.error = "cannot create " + dir.string() + ": " + ec.message(), false;
+  if (o.fps > 0.0) solved.setFrameTime(1.0 / o.fps);
+  if (auto s = solved.write((dir / "solved.bvh").string()); !s) return row.error = s.error(), false;
+  eval::ReportOptions ro;
+  ro.trackers = row.trackers;
+  ro.ikIterations = o.ikIterations;
+  ro.plots = job.plots;
+  auto notes = eval::writeReport(*e, ro, dir);
+  if (!notes) return row.error = notes.error(), false;
+  if (job.sheet)
+    if (auto s = app::writeEvalSheet(avatar, *e, dir / "contact_sheet.png", job.device); !s)
+      notes->push_back("contact sheet not drawn: " + s.error());
+  row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  for (size_t k = 0; k < e->runs.size(); ++k) {
+    const auto& m = e->runs[k].metrics;
+    row.mpjpe[k] = 100.0 * m.mpjpe[eval::kAll].mean;
+    row.hands[k] = 100.0 * m.mpjpe[eval::kHands].mean;
+    row.lower[k] = 100.0 * m.mpjpe[eval::kLower].mean;
+  }
+  row.mpjre = e->runs[0].metrics.mpjreDegrees;
+  row.jitter = e->runs[0].metrics.jitter;
+  row.clipJitter = e->runs[0].metrics.clipJitter;
+  if (verbose) {
+    std::printf("%s: %d frames at %.6g Hz, trackers %s, %d IK iterations a frame, %zu joints scored\n", e->clip.c_str(),
+                e->frames, e->fps, row.trackers.c_str(), o.ikIterations, e->skeleton.groups[eval::kAll].size());
+    std::printf("%s", eval::methodTable(*e).c_str());
+    for (const auto& n : *notes) std::printf("note: %s\n", n.c_str());
+    std::printf("wrote metrics.json, solved.bvh, frames.csv, joints.csv, errors.png, joints.png, contact_sheet.png to %s "
+                "(%.1f s)\n",
+                dir.c_str(), row.seconds);
+  }
+  return true;
+}
+
+void progressBar(size_t done, size_t total, const std::string& what) {
+  const size_t width = 30, filled = total ? done * width / total : width;
+  std::printf("\r[%s%s] %zu/%zu %-40.40s", std::string(filled, '#').c_str(), std::string(width - filled, ' ').c_str(), done,
+              total, what.c_str());
+  std::fflush(stdout);
+}
+
+std::string table(const std::vector<Row>& rows) {
+  std::string out =
+      "| clip | trackers | MPJPE cm coupled | uncoupled | naive | hands cm (coupled) | lower cm (coupled / naive) | "
+      "MPJRE ° | jitter m/s³ (clip) |\n|---|---|---|---|---|---|---|---|---|\n";
+  char buf[400];
+  for (const auto& r : rows) {
+    if (!r.error.empty()) {
+      out += "| " + r.clip + " | " + r.trackers + " | not scored: " + r.error + " | | | | | | |\n";
+      continue;
+    }
+    std::snprintf(buf, sizeof buf, "| %s | %s | %.2f | %.2f | %.2f | %.2f | %.2f / %.2f | %.1f | %.0f (%.0f) |\n", r.clip.c_str(),
+                  r.trackers.c_str(), r.mpjpe[0], r.mpjpe[1], r.mpjpe[2], r.hands[0], r.lower[0], r.lower[2], r.mpjre, r.jitter,
+                  r.clipJitter);
+    out += buf;
+  }
+  return out;
+}
+
+int runJob(const EvalJob& job) {
+  std::vector<Row> rows;
+  const bool bar = job.folder && isatty(STDOUT_FILENO);
+  const size_t total = job.clips.size() * job.sets.size();
+  size_t done = 0;
+  int failures = 0;
+  for (const auto& clip : job.clips) {
+    tracking::BvhTrackerOptions bo;
+    bo.scale = job.bvhScale;
+    auto avatar = tracking::loadBvhAvatar(clip.string(), bo);
+    for (eval::TrackerSet set : job.sets) {
+      Row row;
+      row.clip = clip.filename().string();
+      if (bar) progressBar(done, total, row.clip + " @" + eval::trackerSetName(set));
+      const fs::path dir = job.folder ? job.out / clip.stem() / (std::string("trackers_") + eval::trackerSetName(set)) : job.out;
+      if (!avatar) row.error = avatar.error(), row.trackers = eval::trackerSetName(set);
+      else evaluateOne(*avatar, job, set, dir, row, !job.folder);
+      if (!row.error.empty()) {
+        ++failures;
+        if (!job.folder) return fail(row.error, 1);
+      }
+      rows.push_back(std::move(row));
+      ++done;
+    }
+  }
+  if (bar) progressBar(done, total, "done"), std::printf("\n");
+  if (!job.folder) return 0;
+  const std::string t = table(rows);
+  std::printf("%s", t.c_str());
+  std::ofstream(job.out / "summary.md") << t;
+  std::printf("wrote %s (and one folder of metrics per clip and tracker set)\n", (job.out / "summary.md").c_str());
+  if (failures) std::fprintf(stderr, "error: %d of %zu clip runs were not scored (see the table)\n", failures, total);
+  return failures ? 1 : 0;
+}
+
+int runEval(app::Argv argv) {
+  app::Args args("embody eval",
+                 "Scores the body against motion capture: the clip's own skeleton is the avatar, only the chosen trackers "
+                 "reach the runtime (filter, loss guard, stepping, IK at a fixed iteration count), every joint is compared "
+                 "with the clip's. Coupled spine, uncoupled spine and a naive baseline side by side. Writes metrics.json, "
+                 "solved.bvh, frames.csv, joints.csv and gnuplot PNGs into --out; a folder gives one table.");
+  args.option("motion", "CLIP.bvh|DIR", "a BVH clip, or a folder: every *.bvh in it");
+  args.option("trackers", "SET", "3 (HMD + controllers), 4 (+ pelvis), 6 (+ feet), full (+ a marker on every joint); "
+              "a folder runs 3, 4, 6 and full unless given", "3");
+  args.option("fps", "HZ", "evaluation rate (default: the clip's own)");
+  args.option("ik-iterations", "N", "IK iterations per frame (fixed: the score repeats to the bit)", "10");
+  args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (default: fit the clip to 1.75 m)");
+  args.option("out", "DIR", "output folder", "out/eval");
+  args.flag("no-plots", "do not run gnuplot (the .gp scripts are still written)");
+  args.flag("no-sheet", "no contact sheet (it needs a Vulkan device: the solution solid, the clip as an orange ghost skeleton)");
+  args.option("device", "SELECTOR", "Vulkan device for the contact sheet: auto, an index, 'lavapipe', or part of its name", "auto");
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
+
+  EvalJob job;
+  try {
+    if (!args.has("motion")) throw std::invalid_argument("--motion CLIP.bvh|DIR is required");
+    if (args.has("fps")) job.options.fps = args.number("fps");
+    if (args.has("fps") && !(job.options.fps >= 1.0 && job.options.fps <= 1000.0)) throw std::invalid_argument("--fps must be 1 .. 1000");
+    job.options.ikIterations = args.integer("ik-iterations");
+    if (job.options.ikIterations < 1 || job.options.ikIterations > 1000) throw std::invalid_argument("--ik-iterations must be 1 .. 1000");
+    if (args.has("bvh-scale")) job.bvhScale = args.number("bvh-scale");
+    if (args.has("bvh-scale") && !(job.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");
+  } catch (const std::invalid_argument& e) {
+    return fail(e.what(), 2);
+  }
+  const std::string sets = args.get("trackers");
+  const bool given = std::find(argv.begin(), argv.end(), "--trackers") != argv.end() ||
+                     std::any_of(argv.begin(), argv.end(), [](const std::string& a) { return a.rfind("--trackers=", 0) == 0; });
+  std::error_code dirError;
+  if (fs::is_directory(args.get("motion"), dirError) && !given) {
+    job.sets = {eval::TrackerSet::Three, eval::TrackerSet::Four, eval::TrackerSet::Six, eval::TrackerSet::Full};
+  } else {
+    eval::TrackerSet set;
+    if (!eval::parseTrackerSet(sets, set)) return fail("--trackers must be 3, 4, 6 or full (got '" + sets + "')", 2);
+    job.sets = {set};
+  }
+  const fs::path motion = args.get("motion");
+  std::error_code ec;
+  job.folder = fs::is_directory(motion, ec);
+  if (job.folder) {
+    for (const auto& entry : fs::directory_iterator(motion, ec)) {
+      std::string ext = entry.path().extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+      if (entry.is_regular_file() && ext == ".bvh") job.clips.push_back(entry.path());
+    }
+    std::sort(job.clips.begin(), job.clips.end());
+    if (job.clips.empty()) return fail(motion.string() + ": no .bvh files in this folder", 1);
+  } else {
+    if (!fs::exists(motion, ec)) return fail(motion.string() + ": no such file or folder", 1);
+    job.clips.push_back(motion);
+  }
+  job.out = args.get("out");
+  job.plots = !args.has("no-plots");
+  job.sheet = !args.has("no-sheet");
+  job.device = args.get("device");
+  fs::create_directories(job.out, ec);
+  if (ec) return fail("cannot create " + job.out.string() + ": " + ec.message(), 1);
+  return runJob(job);
+}
+
+}  // namespace
+
+EMBODY_COMMAND("eval", "score the body against motion capture: a BVH clip's trackers through the runtime, every joint vs the clip", runEval);

@@ -1,0 +1,216 @@
+// `embody eval` and `embody render --export` end to end: reports, determinism, the clip's own
+// hierarchy in solved.bvh, full markers reproducing the clip, glTF export through the Khronos
+// validator, and one clear line with exit 2 or 1 on bad input.
+#include <catch2/catch.hpp>
+#include <cctype>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "cli/cli_support.h"
+#include "test_paths.h"
+
+using embody::test::runEmbody;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path outDir(const std::string& name) {
+  const fs::path d = fs::path(embody::test::kBinaryDir) / "test-output" / "cli" / name;
+  fs::remove_all(d);
+  return d;
+}
+
+std::string fileText(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+nlohmann::json readJson(const fs::path& p) {
+  std::ifstream in(p);
+  REQUIRE(in.good());
+  return nlohmann::json::parse(in);
+}
+
+// The HIERARCHY lines that name joints and channels, and the offsets as numbers.
+std::vector<std::string> hierarchy(const std::string& bvh) {
+  std::vector<std::string> out;
+  std::istringstream in(bvh.substr(0, bvh.find("MOTION")));
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream words(line);
+    std::string w, rest;
+    words >> w;
+    if (w == "OFFSET") {
+      double x, y, z;
+      words >> x >> y >> z;
+      x += 0.0, y += 0.0, z += 0.0;  // -0 and 0 are the same offset
+      std::ostringstream o;
+      o << "OFFSET " << x << " " << y << " " << z;
+      out.push_back(o.str());
+    } else if (!w.empty() && w != "{" && w != "}") {
+      std::getline(words, rest);
+      while (!rest.empty() && std::isspace(static_cast<unsigned char>(rest.back()))) rest.pop_back();
+      out.push_back(w + rest);
+    }
+  }
+  return out;
+}
+
+double frameTime(const std::string& bvh) {
+  const size_t at = bvh.find("Frame Time:");
+  return at == std::string::npos ? -1.0 : std::stod(bvh.substr(at + 11));
+}
+
+std::string evalArgs(const std::string& clip, const std::string& trackers, const fs::path& out) {
+  return "eval --motion " + clip + " --trackers " + trackers + " --fps 30 --ik-iterations 10 --no-plots --no-sheet --out " +
+         out.string();
+}
+
+}  // namespace
+
+TEST_CASE("embody eval: metrics.json for three methods, solved.bvh on the clip's hierarchy, the same bytes twice",
+          "[cli][eval]") {
+  EMBODY_REQUIRE_SHARED_ASSET(clip, "cmu_12_01_walk.bvh");
+  const std::array<fs::path, 2> outs{outDir("eval_walk_a"), outDir("eval_walk_b")};
+  for (const auto& out : outs) {
+    auto r = runEmbody(evalArgs(clip, "3", out), true);
+    INFO(r.output);
+    REQUIRE(r.exitCode == 0);
+    CHECK(r.output.find("coupled") != std::string::npos);
+  }
+  const auto j = readJson(outs[0] / "metrics.json");
+  CHECK(j["trackers"] == "3");
+  CHECK(j["frames"].get<int>() > 100);
+  for (const char* m : {"coupled", "uncoupled", "naive"}) {
+    INFO(m);
+    const auto& mj = j["methods"][m];
+    const double all = mj["mpjpe_cm"]["all"]["mean"].get<double>();
+    CHECK(all > 0.0);
+    CHECK(all < 40.0);
+    CHECK(mj["mpjpe_cm"]["all"]["p95"].get<double>() >= all);
+    CHECK(mj["mpjre_deg"].get<double>() >= 0.0);
+    CHECK(mj["jitter_m_s3"].get<double>() >= 0.0);
+  }
+  // The hands follow the controllers: closer than the body's mean error.
+  CHECK(j["methods"]["coupled"]["mpjpe_cm"]["hands"]["mean"].get<double>() <
+        0.6 * j["methods"]["coupled"]["mpjpe_cm"]["all"]["mean"].get<double>());
+  // The same command gives the same figures and the same solved motion, to the bit.
+  auto strip = [](nlohmann::json m) {
+    for (auto& [k, v] : m["methods"].items()) v.erase("seconds");
+    return m.dump();
+  };
+  CHECK(strip(j) == strip(readJson(outs[1] / "metrics.json")));
+  const std::string solved = fileText(outs[0] / "solved.bvh");
+  CHECK(solved == fileText(outs[1] / "solved.bvh"));
+  CHECK(fileText(outs[0] / "frames.csv") == fileText(outs[1] / "frames.csv"));
+  // solved.bvh: the clip's hierarchy (names, offsets, channel order), frames at the eval rate.
+  CHECK(hierarchy(solved) == hierarchy(fileText(clip)));
+  CHECK(frameTime(solved) == Approx(1.0 / 30.0));
+  CHECK(fs::exists(outs[0] / "joints.csv"));
+  CHECK(fs::exists(outs[0] / "errors.gp"));
+}
+
+TEST_CASE("embody eval: plots and the contact sheet", "[cli][eval]") {
+  EMBODY_REQUIRE_SHARED_ASSET(clip, "cmu_12_01_walk.bvh");
+  const fs::path out = outDir("eval_walk_sheet");
+  auto r = runEmbody("eval --motion " + clip + " --fps 15 --ik-iterations 2 --device lavapipe --out " + out.string(), true);
+  INFO(r.output);
+  REQUIRE(r.exitCode == 0);
+  CHECK(fs::file_size(out / "contact_sheet.png") > 10000);
+  if (std::system("command -v gnuplot > /dev/null 2>&1") == 0) {
+    CHECK(fs::file_size(out / "errors.png") > 5000);
+    CHECK(fs::file_size(out / "joints.png") > 5000);
+  }
+}
+
+TEST_CASE("embody eval --trackers full: the clip driven on its own skeleton", "[cli][eval]") {
+  // The marked joints the body can reach land on the clip's: head and feet within 1 cm. The whole
+  // body does NOT reach the 1 cm goal yet (docs/eval.md): CMU's collars turn further than the
+  // body model's clavicle swing (+-20 deg), leaving the upper arms 10-12 cm off; this guards the
+  // figure from getting worse.
+  EMBODY_REQUIRE_SHARED_ASSET(clip, "cmu_12_01_walk.bvh");
+  const fs::path out = outDir("eval_walk_full");
+  auto r = runEmbody(evalArgs(clip, "full", out), true);
+  INFO(r.output);
+  REQUIRE(r.exitCode == 0);
+  const auto j = readJson(out / "metrics.json");
+  for (const char* m : {"coupled", "uncoupled"}) {
+    INFO(m);
+    const auto& e = j["methods"][m]["mpjpe_cm"];
+    CHECK(e["head"]["mean"].get<double>() <= 1.0);
+    CHECK(e["feet"]["mean"].get<double>() <= 1.0);
+    CHECK(e["all"]["mean"].get<double>() <= 3.5);
+    CHECK(e["all"]["mean"].get<double>() < j["methods"]["naive"]["mpjpe_cm"]["all"]["mean"].get<double>() / 3.0);
+  }
+}
+
+TEST_CASE("embody eval: bad input gives one clear line and exit 2 or 1", "[cli][eval]") {
+  const fs::path out = outDir("eval_bad");
+  fs::create_directories(out);
+  auto r = runEmbody("eval --motion x.bvh --trackers 5 --out " + out.string(), true);
+  CHECK(r.exitCode == 2);
+  CHECK(r.output.find("--trackers must be") != std::string::npos);
+  r = runEmbody("eval --out " + out.string(), true);
+  CHECK(r.exitCode == 2);
+  r = runEmbody("eval --motion " + (out / "missing.bvh").string() + " --out " + out.string(), true);
+  CHECK(r.exitCode == 1);
+  // A stick that is no humanoid, and a clip without frames.
+  std::ofstream(out / "stick.bvh") << "HIERARCHY\nROOT A\n{\n OFFSET 0 0 0\n CHANNELS 3 Xrotation Yrotation Zrotation\n"
+                                      " End Site\n {\n  OFFSET 0 1 0\n }\n}\nMOTION\nFrames: 2\nFrame Time: 0.1\n0 0 0\n0 0 0\n";
+  std::ofstream(out / "empty.bvh") << "HIERARCHY\nROOT A\n{\n OFFSET 0 0 0\n CHANNELS 3 Xrotation Yrotation Zrotation\n"
+                                      " End Site\n {\n  OFFSET 0 1 0\n }\n}\nMOTION\nFrames: 0\nFrame Time: 0.1\n";
+  for (const char* bad : {"stick.bvh", "empty.bvh"}) {
+    r = runEmbody("eval --motion " + (out / bad).string() + " --no-plots --out " + (out / "o").string(), true);
+    INFO(r.output);
+    CHECK(r.exitCode == 1);
+    CHECK(r.output.rfind("error: ", 0) == 0);
+    CHECK(std::count(r.output.begin(), r.output.end(), '\n') == 1);
+    CHECK_FALSE(fs::exists(out / "o" / "metrics.json"));
+  }
+}
+
+TEST_CASE("embody render --avatar CLIP.bvh --export: the solved motion on the clip's hierarchy and as glTF",
+          "[cli][render][eval]") {
+  EMBODY_REQUIRE_SHARED_ASSET(clip, "cmu_12_01_walk.bvh");
+  const fs::path out = outDir("render_bvh_avatar");
+  fs::create_directories(out);
+  auto r = runEmbody("render --avatar " + clip + " --motion " + clip + " --frames 6 --fps 120 --size 64x64 --ik-iterations 4 "
+                     "--device lavapipe --validate --export " + (out / "solved.bvh").string() + " --out " + out.string(), true);
+  INFO(r.output);
+  REQUIRE(r.exitCode == 0);
+  CHECK(r.output.find("validation messages: 0") != std::string::npos);
+  const std::string solved = fileText(out / "solved.bvh");
+  CHECK(hierarchy(solved) == hierarchy(fileText(clip)));
+  CHECK(frameTime(solved) == Approx(frameTime(fileText(clip))));
+  CHECK(solved.find("Frames: 6") != std::string::npos);
+
+  r = runEmbody("render --avatar default --motion synthetic:figure8 --frames 5 --size 64x64 --ik-iterations 4 "
+                "--device lavapipe --export " + (out / "figure8.glb").string() + " --out " + out.string(), true);
+  INFO(r.output);
+  REQUIRE(r.exitCode == 0);
+  REQUIRE(fs::file_size(out / "figure8.glb") > 1000);
+  r = runEmbody("render --avatar " + clip + " --motion " + clip + " --frames 4 --size 64x64 --ik-iterations 4 --device lavapipe "
+                "--export " + (out / "walk.glb").string() + " --out " + out.string(), true);
+  INFO(r.output);
+  REQUIRE(r.exitCode == 0);
+  r = runEmbody("render --motion synthetic:figure8 --frames 5 --export " + (out / "x.fbx").string() + " --out " + out.string(), true);
+  CHECK(r.exitCode == 2);
+
+  int rc = std::system("node --version > /dev/null 2>&1");
+  const fs::path src = embody::test::kSourceDir, tools = src / ".tools";
+  if (rc != 0 || !fs::exists(tools / "node_modules" / "gltf-validator" / "package.json")) {
+    WARN("SKIPPED: node or gltf-validator missing (scripts/install-deps.sh installs them)");
+    return;
+  }
+  for (const char* glb : {"figure8.glb", "walk.glb"}) {
+    const std::string cmd = "node '" + (src / "scripts" / "validate_gltf.js").string() + "' '" + (out / glb).string() + "' '" +
+                            tools.string() + "' > '" + (out / "report.json").string() + "' 2>&1";
+    rc = std::system(cmd.c_str());
+    const auto report = nlohmann::json::parse(fileText(out / "report.json"), nullptr, false);
+    INFO(fileText(out / "report.json"));
+    REQUIRE_FALSE(report.is_discarded());
+    CHECK(report["numErrors"].get<int>() == 0);
+  }
+}

@@ -1,0 +1,297 @@
+// A BVH clip as an avatar, the clip's joints resampled, and solved motion written back onto the
+// clip's hierarchy (tracking/bvh_avatar.h, tracking/bvh_export.h, avatar/bvh/bvh_writer.h).
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "avatar/bvh/bvh_writer.h"
+#include "test_paths.h"
+#include "tracking/bvh_avatar.h"
+#include "tracking/bvh_export.h"
+
+using namespace embody;
+
+namespace {
+
+// A small humanoid in CMU-like names, Z-up-free conventions mixed: ZXY on most joints, XYZ and
+// YZX on others, a position channel on a non-root joint. Frame 1 moves the root 10 units along X
+// and bends the left knee and right elbow.
+const char* kClip = R"(HIERARCHY
+ROOT Hips
+{
+  OFFSET 0 100 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT LeftUpLeg
+  {
+    OFFSET 10 0 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    JOINT LeftLeg
+    {
+      OFFSET 0 -45 0
+      CHANNELS 3 Xrotation Yrotation Zrotation
+      JOINT LeftFoot
+      {
+        OFFSET 0 -45 0
+        CHANNELS 3 Zrotation Xrotation Yrotation
+        End Site
+        {
+          OFFSET 0 -5 12
+        }
+      }
+    }
+  }
+  JOINT RightUpLeg
+  {
+    OFFSET -10 0 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    JOINT RightLeg
+    {
+      OFFSET 0 -45 0
+      CHANNELS 3 Zrotation Xrotation Yrotation
+      JOINT RightFoot
+      {
+        OFFSET 0 -45 0
+        CHANNELS 3 Zrotation Xrotation Yrotation
+        End Site
+        {
+          OFFSET 0 -5 12
+        }
+      }
+    }
+  }
+  JOINT Spine
+  {
+    OFFSET 0 20 0
+    CHANNELS 3 Yrotation Zrotation Xrotation
+    JOINT Spine1
+    {
+      OFFSET 0 20 0
+      CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+      JOINT Neck
+      {
+        OFFSET 0 15 0
+        CHANNELS 3 Zrotation Xrotation Yrotation
+        JOINT Head
+        {
+          OFFSET 0 10 0
+          CHANNELS 3 Zrotation Xrotation Yrotation
+          End Site
+          {
+            OFFSET 0 15 0
+          }
+        }
+      }
+      JOINT LeftArm
+      {
+        OFFSET 18 10 0
+        CHANNELS 3 Zrotation Xrotation Yrotation
+        JOINT LeftForeArm
+        {
+          OFFSET 28 0 0
+          CHANNELS 3 Zrotation Xrotation Yrotation
+          JOINT LeftHand
+          {
+            OFFSET 25 0 0
+            CHANNELS 3 Zrotation Xrotation Yrotation
+            End Site
+            {
+              OFFSET 8 0 0
+            }
+          }
+        }
+      }
+      JOINT RightArm
+      {
+        OFFSET -18 10 0
+        CHANNELS 3 Zrotation Xrotation Yrotation
+        JOINT RightForeArm
+        {
+          OFFSET -28 0 0
+          CHANNELS 3 Zrotation Xrotation Yrotation
+          JOINT RightHand
+          {
+            OFFSET -25 0 0
+            CHANNELS 3 Zrotation Xrotation Yrotation
+            End Site
+            {
+              OFFSET -8 0 0
+            }
+          }
+        }
+      }
+    }
+  }
+}
+MOTION
+Frames: 3
+Frame Time: 0.0333333
+)";
+
+// Sets one channel of a frame by joint name and channel.
+void set(avatar::BvhClip& c, size_t frame, const char* joint, avatar::BvhChannel channel, float value) {
+  const avatar::BvhJoint& j = c.joints[size_t(c.find(joint))];
+  for (size_t k = 0; k < j.channels.size(); ++k)
+    if (j.channels[k] == channel) c.values[frame * size_t(c.channelCount) + size_t(j.firstChannel) + k] = value;
+}
+
+avatar::BvhClip clip() {
+  std::string text = kClip;
+  avatar::BvhClip c;
+  // Three frames of zeros, then the motion set channel by channel.
+  int channels = 0;
+  for (size_t p = text.find("CHANNELS"); p != std::string::npos; p = text.find("CHANNELS", p + 1))
+    channels += text[p + 9] - '0';
+  for (int f = 0; f < 3; ++f) {
+    for (int k = 0; k < channels; ++k) text += k ? " 0" : "0";
+    text += "\n";
+  }
+  auto parsed = avatar::parseBvh(text, "test.bvh");
+  REQUIRE(parsed);
+  c = std::move(parsed).value();
+  using C = avatar::BvhChannel;
+  for (size_t f = 0; f < 3; ++f) {
+    const float x = float(f);
+    set(c, f, "Hips", C::Xposition, 10 * x);
+    set(c, f, "Hips", C::Yposition, 95);
+    set(c, f, "Hips", C::Zrotation, 5 * x), set(c, f, "Hips", C::Xrotation, 3 * x), set(c, f, "Hips", C::Yrotation, 20 * x);
+    set(c, f, "LeftUpLeg", C::Xrotation, -10 * x);
+    set(c, f, "LeftLeg", C::Xrotation, 40 * x), set(c, f, "LeftLeg", C::Yrotation, 5 * x), set(c, f, "LeftLeg", C::Zrotation, 3 * x);
+    set(c, f, "RightUpLeg", C::Xrotation, 10 * x);
+    set(c, f, "Spine", C::Yrotation, 10 * x), set(c, f, "Spine", C::Zrotation, 5 * x), set(c, f, "Spine", C::Xrotation, -7 * x);
+    set(c, f, "Spine1", C::Xposition, 0.5f * x), set(c, f, "Spine1", C::Zrotation, 4 * x), set(c, f, "Spine1", C::Xrotation, -6 * x);
+    set(c, f, "Neck", C::Yrotation, 10 * x);
+    set(c, f, "LeftArm", C::Zrotation, 3 * x), set(c, f, "LeftArm", C::Yrotation, -12 * x);
+    set(c, f, "RightForeArm", C::Yrotation, 30 * x);
+  }
+  return c;
+}
+
+void requireSameGlobals(const avatar::BvhClip& a, const avatar::BvhClip& b, double tolerance) {
+  REQUIRE(a.frameCount == b.frameCount);
+  std::vector<avatar::BvhGlobal> ga, gb;
+  for (size_t f = 0; f < a.frameCount; ++f) {
+    avatar::bvhGlobals(a, a.frame(f), ga);
+    avatar::bvhGlobals(b, b.frame(f), gb);
+    for (size_t j = 0; j < ga.size(); ++j) {
+      INFO("frame " << f << " joint " << a.joints[j].name);
+      CHECK(glm::length(ga[j].position - gb[j].position) < tolerance);
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("BVH writer: a parsed clip written and parsed again is the same clip", "[eval][bvh]") {
+  const avatar::BvhClip a = clip();
+  auto b = avatar::parseBvh(avatar::formatBvh(a), "again.bvh");
+  REQUIRE(b);
+  REQUIRE(b->joints.size() == a.joints.size());
+  for (size_t j = 0; j < a.joints.size(); ++j) {
+    CHECK(b->joints[j].name == a.joints[j].name);
+    CHECK(b->joints[j].offset == a.joints[j].offset);
+    CHECK(b->joints[j].channels == a.joints[j].channels);
+  }
+  CHECK(b->frameTime == a.frameTime);
+  CHECK(b->values == a.values);
+}
+
+TEST_CASE("BVH writer: Euler angles in every channel order compose back to the rotation", "[eval][bvh]") {
+  using C = avatar::BvhChannel;
+  const C orders[6][3] = {{C::Xrotation, C::Yrotation, C::Zrotation}, {C::Xrotation, C::Zrotation, C::Yrotation},
+                          {C::Yrotation, C::Xrotation, C::Zrotation}, {C::Yrotation, C::Zrotation, C::Xrotation},
+                          {C::Zrotation, C::Xrotation, C::Yrotation}, {C::Zrotation, C::Yrotation, C::Xrotation}};
+  const glm::dquat qs[] = {glm::normalize(glm::dquat(0.9, 0.2, -0.3, 0.25)), glm::angleAxis(glm::radians(90.0), glm::dvec3(0, 1, 0)),
+                           glm::angleAxis(glm::radians(90.0), glm::dvec3(1, 0, 0)), glm::dquat(1, 0, 0, 0)};
+  for (const auto& order : orders)
+    for (const auto& q : qs) {
+      double deg[3];
+      avatar::eulerForChannels(q, order, deg);
+      glm::dquat r(1, 0, 0, 0);
+      for (int k = 0; k < 3; ++k) {
+        glm::dvec3 axis(0.0);
+        axis[int(order[k]) - int(C::Xrotation)] = 1.0;
+        r = r * glm::angleAxis(glm::radians(deg[k]), axis);
+      }
+      CHECK(std::abs(glm::dot(r, q)) == Approx(1.0).margin(1e-9));
+    }
+}
+
+TEST_CASE("BVH avatar: the clip's skeleton in tracking space, mapped, with a capsule mesh", "[eval][bvh]") {
+  auto a = tracking::buildBvhAvatar(clip(), {});
+  REQUIRE(a);
+  CHECK(a->asset.skeleton.joints.size() == a->clip.joints.size());
+  CHECK(a->asset.humanoid.usable());
+  CHECK(a->asset.humanoid.joint(avatar::HumanBone::leftHand) == a->clip.find("LeftHand"));
+  CHECK(a->asset.mesh.triangleCount() > 100);
+  // Offsets scaled like the motion: the head joint 155 units above the ankle.
+  std::vector<glm::mat4> g;
+  avatar::computeGlobals(a->asset.skeleton, avatar::SkeletonPose::rest(a->asset.skeleton), g);
+  const int head = a->clip.find("Head"), foot = a->clip.find("LeftFoot");
+  CHECK(g[size_t(head)][3].y - g[size_t(foot)][3].y == Approx(155.0 * a->mapping.scale).margin(1e-4));
+  // Tracking space faces -Z with +X to the right: the left hand lies at -X.
+  CHECK(g[size_t(a->clip.find("LeftHand"))][3].x < g[size_t(a->clip.find("RightHand"))][3].x);
+}
+
+TEST_CASE("BVH avatar: a clip that is not a standing body is refused with one line", "[eval][bvh]") {
+  auto c = avatar::parseBvh("HIERARCHY\nROOT A\n{\n OFFSET 0 0 0\n CHANNELS 3 Xrotation Yrotation Zrotation\n JOINT B\n {\n"
+                            "  OFFSET 0 1 0\n  CHANNELS 3 Xrotation Yrotation Zrotation\n  End Site\n  {\n   OFFSET 0 1 0\n  }\n }\n}\n"
+                            "MOTION\nFrames: 2\nFrame Time: 0.1\n0 0 0 0 0 0\n0 0 0 0 0 0\n", "stick.bvh");
+  REQUIRE(c);
+  auto a = tracking::buildBvhAvatar(std::move(c).value(), {});
+  REQUIRE_FALSE(a);
+  CHECK(a.error().find('\n') == std::string::npos);
+}
+
+TEST_CASE("BVH avatar: the clip's joints resampled between frames", "[eval][bvh]") {
+  auto a = tracking::buildBvhAvatar(clip(), {});
+  REQUIRE(a);
+  std::vector<avatar::BvhGlobal> g0, g1, gh;
+  const double dt = a->clip.frameTime;
+  tracking::bvhJointsAt(a->clip, a->mapping, 0.0, g0);
+  tracking::bvhJointsAt(a->clip, a->mapping, dt, g1);
+  tracking::bvhJointsAt(a->clip, a->mapping, 0.5 * dt, gh);
+  // The root moves 10 units along file X between frames 0 and 1: half way at half a frame, and
+  // the trace's hips tracker sits on the same point.
+  CHECK(glm::length(gh[0].position - 0.5 * (g0[0].position + g1[0].position)) < 1e-9);
+  CHECK(glm::length(g1[0].position - g0[0].position) == Approx(10.0 * a->mapping.scale));
+  const auto& hips = a->trace.samples[1][tracking::TrackerId::Hips];
+  CHECK(glm::length(glm::dvec3(hips.position) - g1[0].position) < 1e-5);
+}
+
+TEST_CASE("BVH export: the clip's own poses written on its hierarchy give back the clip", "[eval][bvh]") {
+  auto a = tracking::buildBvhAvatar(clip(), {});
+  REQUIRE(a);
+  auto out = tracking::SolvedMotionBvh::forBvhAvatar(*a);
+  avatar::SkeletonPose pose;
+  for (size_t f = 0; f < a->clip.frameCount; ++f) {
+    tracking::bvhPoseAt(*a, double(f) * a->clip.frameTime, pose);
+    out.add(pose);
+  }
+  const avatar::BvhClip& e = out.clip();
+  for (size_t j = 0; j < e.joints.size(); ++j) {
+    CHECK(e.joints[j].name == a->clip.joints[j].name);
+    CHECK(e.joints[j].offset == a->clip.joints[j].offset);
+    CHECK(e.joints[j].channels == a->clip.joints[j].channels);
+  }
+  CHECK(e.frameTime == a->clip.frameTime);
+  auto reparsed = avatar::parseBvh(avatar::formatBvh(e), "exported.bvh");
+  REQUIRE(reparsed);
+  requireSameGlobals(*reparsed, a->clip, 1e-3);  // file units (cm here)
+}
+
+TEST_CASE("BVH export: the CMU walk's own poses round-trip through the avatar", "[eval][bvh]") {
+  EMBODY_REQUIRE_SHARED_ASSET(path, "cmu_12_01_walk.bvh");
+  auto a = tracking::loadBvhAvatar(path, {});
+  REQUIRE(a);
+  auto out = tracking::SolvedMotionBvh::forBvhAvatar(*a);
+  avatar::SkeletonPose pose;
+  const size_t frames = std::min<size_t>(a->clip.frameCount - a->mapping.firstFrame, 40);
+  for (size_t f = 0; f < frames; ++f) {
+    tracking::bvhPoseAt(*a, double(f) * a->clip.frameTime, pose);
+    out.add(pose);
+  }
+  avatar::BvhClip expected = a->clip;
+  expected.frameCount = frames;
+  expected.values.assign(a->clip.values.begin() + std::ptrdiff_t(a->mapping.firstFrame * size_t(a->clip.channelCount)),
+                         a->clip.values.begin() + std::ptrdiff_t((a->mapping.firstFrame + frames) * size_t(a->clip.channelCount)));
+  requireSameGlobals(out.clip(), expected, 1e-2);
+}

@@ -1,0 +1,128 @@
+#include "tracking/bvh_avatar.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "avatar/avatar_loader.h"
+#include "avatar/procedural/capsule_mesh.h"
+
+namespace embody::tracking {
+
+namespace {
+
+using avatar::BvhGlobal;
+using avatar::HumanBone;
+
+// The clip's joints at one file frame, in tracking space.
+void jointsAtFrame(const avatar::BvhClip& clip, const BvhMapping& m, size_t frame, std::vector<BvhGlobal>& out) {
+  avatar::bvhGlobals(clip, clip.frame(frame), out);
+  const glm::dquat q = glm::quat_cast(m.toXr);
+  for (auto& g : out) {
+    g.position = m.toXr * g.position * m.scale + m.shift;
+    g.rotation = glm::normalize(q * g.rotation * glm::conjugate(q));
+  }
+}
+
+// The rest pose must be a standing body: a mapper fed anything else (CC_Base exports, whose
+// zero-channel pose points the legs up) would give an avatar that scores garbage.
+Status checkStanding(const avatar::AvatarAsset& asset) {
+  const avatar::HumanoidMap& map = asset.humanoid;
+  if (!map.missingRequired.empty()) {
+    std::string missing;
+    for (auto b : map.missingRequired) missing += (missing.empty() ? "" : ", ") + std::string(avatar::humanBoneName(b));
+    return Error{"the clip's skeleton cannot be mapped to a humanoid (missing: " + missing + ")"};
+  }
+  std::vector<glm::mat4> g;
+  avatar::computeGlobals(asset.skeleton, avatar::SkeletonPose::rest(asset.skeleton), g);
+  auto y = [&](HumanBone b) { return double(g[size_t(map.joint(b))][3].y); };
+  const double hips = y(HumanBone::hips), head = y(HumanBone::head);
+  const double height = head - std::min(y(HumanBone::leftFoot), y(HumanBone::rightFoot));
+  if (!(head > hips && height > 0.0) || y(HumanBone::leftFoot) > hips - 0.2 * height ||
+      y(HumanBone::rightFoot) > hips - 0.2 * height)
+    return Error{"the clip's rest pose (every channel zero) is not a standing body (head above the hips, feet "
+                 "below them); its convention is not supported as an avatar yet"};
+  return Status::success();
+}
+
+}  // namespace
+
+Result<BvhAvatar> buildBvhAvatar(avatar::BvhClip clip, const BvhTrackerOptions& options) {
+  if (clip.joints.empty() || clip.frameCount == 0) return Error{"the BVH clip has no joints or no frames"};
+  BvhAvatar out;
+  auto trace = bvhToTrace(clip, options, &out.mapping);
+  if (!trace) return Error{trace.error()};
+  const BvhMapping& m = out.mapping;
+
+  // Skeleton: the clip's joints, rest rotations identity, offsets turned into tracking axes.
+  avatar::AvatarAsset& asset = out.asset;
+  asset.format = avatar::AvatarFormat::Procedural;
+  // Standing on the floor over the origin: the rest pose's lowest joint at y = 0 (the zero-channel
+  // root sits wherever the file put it, often at the floor with the legs below it).
+  std::vector<BvhGlobal> rest;
+  avatar::bvhGlobals(clip, {}, rest);
+  double lowest = 1e300;
+  for (const auto& g : rest) lowest = std::min(lowest, (m.toXr * g.position * m.scale).y);
+  for (const auto& j : clip.joints) {
+    avatar::Joint joint;
+    joint.name = j.name;
+    joint.parent = j.parent;
+    glm::dvec3 t = m.toXr * j.offset * m.scale;
+    if (j.parent < 0) t = glm::dvec3(0.0, t.y - lowest, 0.0);
+    joint.rest.translation = glm::vec3(t);
+    asset.skeleton.joints.push_back(std::move(joint));
+  }
+  if (const std::string bad = asset.skeleton.validate(); !bad.empty()) return Error{"BVH skeleton: " + bad};
+  avatar::buildCapsuleMesh(asset, float(m.restHeightUnits * m.scale));
+  if (auto s = avatar::prepareAvatar(asset, ""); !s) return Error{s.error()};
+  if (auto s = checkStanding(asset); !s) return Error{s.error()};
+  out.trace = std::move(trace).value();
+  out.clip = std::move(clip);
+  return out;
+}
+
+Result<BvhAvatar> loadBvhAvatar(const std::string& path, const BvhTrackerOptions& options) {
+  auto clip = avatar::loadBvh(path);
+  if (!clip) return Error{clip.error()};
+  auto built = buildBvhAvatar(std::move(clip).value(), options);
+  if (!built) return Error{path + ": " + built.error()};
+  built->asset.sourcePath = path;
+  return built;
+}
+
+void bvhJointsAt(const avatar::BvhClip& clip, const BvhMapping& m, double t, std::vector<BvhGlobal>& out) {
+  // Frame index in the file: the trace starts at m.firstFrame; clamp to the clip.
+  const double last = double(clip.frameCount - 1);
+  const double f = std::clamp(double(m.firstFrame) + (clip.frameTime > 0.0 ? t / clip.frameTime : 0.0), 0.0, last);
+  const auto f0 = size_t(std::floor(f));
+  const size_t f1 = std::min(f0 + 1, clip.frameCount - 1);
+  const double a = f - double(f0);
+  jointsAtFrame(clip, m, f0, out);
+  if (a < 1e-12 || f1 == f0) return;
+  thread_local std::vector<BvhGlobal> next;
+  jointsAtFrame(clip, m, f1, next);
+  for (size_t j = 0; j < out.size(); ++j) {
+    out[j].position = glm::mix(out[j].position, next[j].position, a);
+    out[j].rotation = glm::slerp(out[j].rotation, next[j].rotation, a);
+  }
+}
+
+void bvhPoseAt(const BvhAvatar& avatar, double t, avatar::SkeletonPose& pose) {
+  thread_local std::vector<BvhGlobal> g;
+  bvhJointsAt(avatar.clip, avatar.mapping, t, g);
+  const auto& joints = avatar.asset.skeleton.joints;
+  pose = avatar::SkeletonPose::rest(avatar.asset.skeleton);
+  for (size_t j = 0; j < joints.size(); ++j) {
+    const int p = joints[j].parent;
+    glm::dquat r = g[j].rotation;
+    glm::dvec3 x = g[j].position;
+    if (p >= 0) {
+      const glm::dquat inv = glm::conjugate(g[size_t(p)].rotation);
+      r = inv * r;
+      x = inv * (x - g[size_t(p)].position);
+    }
+    pose.local[j].rotation = glm::normalize(glm::quat(r));
+    pose.local[j].translation = glm::vec3(x);
+  }
+}
+
+}  // namespace embody::tracking

@@ -1,0 +1,43 @@
+#pragma once
+// Any BVH clip as an avatar (`--avatar CLIP.bvh`, `embody eval`): the skeleton is the clip's
+// hierarchy (End Sites included, named "<parent>_End"; skeleton joint i = clip joint i), the
+// rest pose its offsets with every channel zero, in tracking space as the clip's trackers are
+// (tracking/bvh_source.h: metres, +Y up, facing -Z; the rest pose stands on the floor, y = 0, over
+// the origin), mapped to the humanoid like any avatar (names, else topology), with a
+// generated mesh: one capsule per bone, skinned to the bone's joint, so it renders.
+//
+// Because the avatar and the trackers share one space and one scale, the clip's own joints can
+// be set beside the solved body joint by joint (bvhJointsAt), and a solved pose can be written
+// back onto the clip's hierarchy (avatar/bvh/bvh_writer.h).
+#include <span>
+#include <string>
+#include <vector>
+
+#include "avatar/avatar_asset.h"
+#include "avatar/bvh/bvh.h"
+#include "tracking/bvh_source.h"
+
+namespace embody::tracking {
+
+struct BvhAvatar {
+  avatar::BvhClip clip;
+  BvhMapping mapping;  // file -> tracking space, trackers, rest references
+  Trace trace;         // the clip's trackers, as `--motion CLIP.bvh` replays them
+  avatar::AvatarAsset asset;
+};
+
+// Fails (one line) when the clip has no frames, or its rest pose is not a standing humanoid the
+// mapper can read (head above the hips, feet below them, two arms).
+Result<BvhAvatar> buildBvhAvatar(avatar::BvhClip clip, const BvhTrackerOptions& options);
+Result<BvhAvatar> loadBvhAvatar(const std::string& path, const BvhTrackerOptions& options);
+
+// The clip's joints at time t (seconds from the trace's first sample, as the BVH pose source
+// replays it: linear positions, slerped rotations between frames) in tracking space: world
+// positions (metres) and world rotations (identity in the rest pose). `out` is resized.
+void bvhJointsAt(const avatar::BvhClip& clip, const BvhMapping& mapping, double t, std::vector<avatar::BvhGlobal>& out);
+
+// The avatar's local pose for the clip's joints (rest rotations are identity, so a local
+// rotation is the clip's, turned into tracking axes).
+void bvhPoseAt(const BvhAvatar& avatar, double t, avatar::SkeletonPose& pose);
+
+}  // namespace embody::tracking
