@@ -7,7 +7,7 @@ CMAKE_ARGS ?=
 CTEST_ARGS ?=
 WERROR     := $(if $(CI),-DEMBODY_WERROR=ON,)
 
-.PHONY: all deps build demo test bench sanitize tsan format clean
+.PHONY: all deps build demo test bench sanitize tsan fuzz soak format clean
 
 all: build
 
@@ -57,8 +57,24 @@ tsan: deps
 	cmake --build build-tsan -j $(JOBS)
 	cd build-tsan && TSAN_OPTIONS=halt_on_error=1:suppressions=$(CURDIR)/scripts/tsan.supp ctest --output-on-failure -j $(JOBS) -L unit $(CTEST_ARGS)
 
+# libFuzzer (clang, build-fuzz/) on every parser of outside data, FUZZ_SECONDS per target, from the
+# kept corpus in fuzz/corpus; results in out/fuzz/summary.md (docs/reliability.md). CI's smoke is
+# the gcc replay in `make test` (ctest -R '^fuzz:').
+FUZZ_SECONDS ?= 60
+FUZZ_TARGETS ?= gltf vrm bone_map bvh trace spine profile
+fuzz: deps
+	CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMBODY_FUZZ=ON \
+	  -DEMBODY_BUILD_TESTS=OFF -DEMBODY_BUILD_BENCH=OFF $(WERROR)
+	cmake --build build-fuzz -j $(JOBS) --target $(addprefix embody_fuzz_,$(FUZZ_TARGETS))
+	@bash scripts/fuzz.sh build-fuzz $(FUZZ_SECONDS) $(FUZZ_TARGETS)
+
+# The soak: the runtime under injected faults for SOAK_SECONDS (docs/reliability.md).
+SOAK_SECONDS ?= 1800
+soak: build
+	mkdir -p out && $(BUILD)/bench/embody_soak --seconds $(SOAK_SECONDS) --json out/soak.json
+
 format:
 	git ls-files '*.cpp' '*.h' '*.vert' '*.frag' '*.comp' | xargs clang-format -i
 
 clean:
-	rm -rf $(BUILD) build-sanitize build-tsan out
+	rm -rf $(BUILD) build-sanitize build-tsan build-fuzz out

@@ -55,8 +55,9 @@ std::string Args::usage() const {
 Args::Outcome Args::parse(Argv argv) {
   values_.clear();
   size_t nextPositional = 0;
+  // One line, as for every bad value (app/job_options.h: usageError); --help has the rest.
   auto fail = [&](const std::string& msg) {
-    std::fprintf(stderr, "error: %s\n\n%s", msg.c_str(), usage().c_str());
+    std::fprintf(stderr, "error: %s (see '%s --help')\n", msg.c_str(), prefix_.c_str());
     return Outcome::Error;
   };
   for (size_t i = 0; i < argv.size(); ++i) {
@@ -131,6 +132,16 @@ int Args::integer(const std::string& name) const {
   if (used != v.size() || v.empty() || n < -2147483647LL || n > 2147483647LL)
     throw std::invalid_argument("--" + name + " expects an integer, got '" + v + "'");
   return static_cast<int>(n);
+}
+
+int usageError(const std::string& message) {
+  std::fprintf(stderr, "error: %s\n", message.c_str());
+  return 2;
+}
+
+int runtimeError(const std::string& message) {
+  std::fprintf(stderr, "error: %s\n", message.c_str());
+  return 1;
 }
 
 }  // namespace embody::app

@@ -20,7 +20,7 @@ class Args {
   Args& positional(const std::string& name, const std::string& help, bool required = true);
 
   enum class Outcome { Ok, Help, Error };
-  // Parses; on --help prints the usage to stdout, on an error prints it with the usage to stderr.
+  // Parses; on --help prints the usage to stdout, on an error one line naming the option to stderr.
   Outcome parse(Argv argv);
   // Exit code for a non-Ok outcome: 0 after --help, 2 after a usage error.
   static int exitCode(Outcome o) { return o == Outcome::Help ? 0 : 2; }
@@ -47,5 +47,10 @@ class Args {
   std::map<std::string, std::string> values_;
   const Spec* find(const std::string& name) const;
 };
+
+// Print "error: MESSAGE" on one line and return the exit code: 2 for a bad option value (a
+// usage error), 1 for a runtime error (a broken file, no device, a failed write).
+int usageError(const std::string& message);
+int runtimeError(const std::string& message);
 
 }  // namespace embody::app

@@ -6,9 +6,11 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <stdexcept>
 
 #include "app/args.h"
 #include "app/avatar_arg.h"
+#include "app/job_options.h"
 #include "avatar/avatar_loader.h"
 #include "avatar/body/body_model.h"
 #include "avatar/body/calibration.h"
@@ -137,7 +139,7 @@ void printText(const nlohmann::json& j) {
   for (const auto& w : j["warnings"]) std::printf("  warning: %s\n", s(w).c_str());
 }
 
-int runInfo(app::Argv argv) {
+app::Args infoArgs() {
   app::Args args("embody avatar info",
                  "Loads an avatar (.gltf, .glb, .vrm, or 'default' for the built-in mannequin) and "
                  "reports its format, humanoid bone mapping, spine vertebrae and first-person mode.");
@@ -152,20 +154,27 @@ int runInfo(app::Argv argv) {
               "auto");
   args.option("user-height", "METRES", "scale the body model to this user height");
   args.option("profile", "FILE", "calibration profile to read (written by 'embody avatar calibrate')");
+  return args;
+}
+
+// A height or span option within calibration's limits; throws std::invalid_argument naming it.
+std::optional<double> metresOption(const app::Args& args, const std::string& name) {
+  if (!args.has(name)) return std::nullopt;
+  const double m = args.number(name);
+  if (!plausibleBodyHeight(m)) throw std::invalid_argument("--" + name + " must be 0.5 .. 2.6 m");
+  return m;
+}
+
+int runInfo(app::Argv argv) {
+  app::Args args = infoArgs();
   if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
   BodyModelOptions bodyOptions;
-  if (!parseSpineMode(args.get("spine"), bodyOptions.spine)) {
-    std::fprintf(stderr, "error: --spine must be full, simplified or auto\n\n%s", args.usage().c_str());
-    return 2;
-  }
+  if (!parseSpineMode(args.get("spine"), bodyOptions.spine)) return app::usageError("--spine must be auto, full or simplified");
   std::optional<double> userHeight;
-  if (args.has("user-height")) {
-    try {
-      userHeight = args.number("user-height");
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "error: %s\n", e.what());
-      return 2;
-    }
+  try {
+    userHeight = metresOption(args, "user-height");
+  } catch (const std::invalid_argument& e) {
+    return app::usageError(e.what());
   }
   GltfLoadReport report;
   Result<AvatarAsset> asset = Error{""};
@@ -216,7 +225,7 @@ int runInfo(app::Argv argv) {
   return 0;
 }
 
-int runCalibrate(app::Argv argv) {
+app::Args calibrateArgs() {
   app::Args args("embody avatar calibrate",
                  "Scales the avatar to the user and writes the calibration profile (JSON).");
   args.positional("FILE", "avatar file, or 'default'");
@@ -226,20 +235,25 @@ int runCalibrate(app::Argv argv) {
   args.option("arm-span", "METRES", "fingertip to fingertip (stored, not applied)");
   args.option("profile", "FILE", "where to write the profile");
   args.option("bone-map", "FILE", "JSON bone map, as for info");
+  return args;
+}
+
+int runCalibrate(app::Argv argv) {
+  app::Args args = calibrateArgs();
   if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
-  if (!args.has("profile") || (!args.has("user-height") && !args.has("eye-height"))) {
-    std::fprintf(stderr, "error: need --profile and --user-height or --eye-height\n\n%s",
-                 args.usage().c_str());
-    return 2;
-  }
+  if (!args.has("profile")) return app::usageError("--profile FILE is required");
+  if (!args.has("user-height") && !args.has("eye-height")) return app::usageError("--user-height or --eye-height is required");
   CalibrationInput in;
   try {
-    if (args.has("user-height")) in.userHeight = args.number("user-height");
-    if (args.has("eye-height")) in.eyeHeight = args.number("eye-height");
-    if (args.has("arm-span")) in.armSpan = args.number("arm-span");
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 2;
+    in.userHeight = metresOption(args, "user-height");
+    in.armSpan = metresOption(args, "arm-span");
+    if (args.has("eye-height")) {
+      in.eyeHeight = args.number("eye-height");
+      if (!plausibleBodyHeight(*in.eyeHeight / kEyeHeightRatio))
+        throw std::invalid_argument("--eye-height must be that of a 0.5 .. 2.6 m person");
+    }
+  } catch (const std::invalid_argument& e) {
+    return app::usageError(e.what());
   }
   Result<AvatarAsset> asset = Error{""};
   if (args.get("FILE") == "default") {
@@ -265,13 +279,18 @@ int runCalibrate(app::Argv argv) {
   return 0;
 }
 
-int runExportDefault(app::Argv argv) {
+app::Args exportDefaultArgs() {
   app::Args args("embody avatar export-default",
                  "Writes the built-in mannequin as a standard glTF 2.0 binary (GLB).");
   args.positional("FILE", "output .glb path");
   args.flag("fingers",
             "add finger bones (thumb/index/middle/ring/pinky 1..3 per hand, the 30 humanoid finger bones) "
             "and skinned fingers, for hand tracking");
+  return args;
+}
+
+int runExportDefault(app::Argv argv) {
+  app::Args args = exportDefaultArgs();
   if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
   const AvatarAsset a = buildDefaultAvatar(DefaultAvatarOptions{.fingers = args.has("fingers")});
   if (auto s = writeGlbFile(a, args.get("FILE")); !s.ok()) {
@@ -284,26 +303,16 @@ int runExportDefault(app::Argv argv) {
 }
 
 int runAvatar(app::Argv argv) {
-  static const char* usage =
-      "usage: embody avatar info FILE|default [--json] [--fingers] [--bone-map FILE] [--spine "
-      "full|simplified|auto]\n"
-      "                          [--user-height M] [--profile FILE]\n"
-      "       embody avatar calibrate FILE|default (--user-height M | --eye-height M) [--arm-span M] "
-      "--profile OUT\n"
-      "       embody avatar export-default FILE.glb [--fingers]\n";
-  if (argv.empty()) {
-    std::fprintf(stderr, "error: missing action\n\n%s", usage);
-    return 2;
-  }
-  if (argv[0] == "--help" || argv[0] == "-h") {
-    std::fputs(usage, stdout);
+  if (argv.empty()) return app::usageError("missing action: info, calibrate or export-default (see 'embody avatar --help')");
+  if (argv[0] == "--help" || argv[0] == "-h") {  // every action's usage, with its options
+    std::printf("embody avatar ACTION: info, calibrate or export-default\n\n%s\n%s\n%s", infoArgs().usage().c_str(),
+                calibrateArgs().usage().c_str(), exportDefaultArgs().usage().c_str());
     return 0;
   }
   if (argv[0] == "info") return runInfo(argv.subspan(1));
   if (argv[0] == "export-default") return runExportDefault(argv.subspan(1));
   if (argv[0] == "calibrate") return runCalibrate(argv.subspan(1));
-  std::fprintf(stderr, "error: unknown action '%s'\n\n%s", argv[0].c_str(), usage);
-  return 2;
+  return app::usageError("unknown action '" + argv[0] + "': info, calibrate or export-default");
 }
 
 }  // namespace

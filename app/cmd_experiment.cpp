@@ -186,12 +186,12 @@ int runIsolatedSpine(const app::Args& args) {
   o.axis_coupling = args.has("axis-coupling");
   auto desc = ik::spine::loadSpineModel(args.get("model"));
   if (!desc) {
-    std::fprintf(stderr, "embody experiment: error: %s\n", desc.error().c_str());
+    std::fprintf(stderr, "error: %s\n", desc.error().c_str());
     return 1;
   }
   auto result = ik::spine::runIsolatedSpineExperiment(*desc, o);
   if (!result) {
-    std::fprintf(stderr, "embody experiment: error: %s\n", result.error().c_str());
+    std::fprintf(stderr, "error: %s\n", result.error().c_str());
     return 1;
   }
   std::vector<double> slacks;
@@ -204,7 +204,7 @@ int runIsolatedSpine(const app::Args& args) {
   std::error_code ec;
   fs::create_directories(out, ec);
   if (ec) {
-    std::fprintf(stderr, "embody experiment: error: cannot create %s: %s\n", out.string().c_str(), ec.message().c_str());
+    std::fprintf(stderr, "error: cannot create %s: %s\n", out.string().c_str(), ec.message().c_str());
     return 1;
   }
   std::string error;
@@ -228,7 +228,7 @@ int runIsolatedSpine(const app::Args& args) {
                         !writeFile(out / "plots.gp", kIsolatedSpinePlots)))
     error = "cannot write in " + out.string();
   if (!error.empty()) {
-    std::fprintf(stderr, "embody experiment: error: %s\n", error.c_str());
+    std::fprintf(stderr, "error: %s\n", error.c_str());
     return 1;
   }
   for (const char* v : {"coupled", "uncoupled"}) {
@@ -244,13 +244,13 @@ int runIsolatedSpine(const app::Args& args) {
     return 0;
   }
   if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
-    std::fprintf(stderr, "embody experiment: error: gnuplot not found (install gnuplot-nox); CSV, summary.json and "
+    std::fprintf(stderr, "error: gnuplot not found (install gnuplot-nox); CSV, summary.json and "
                          "plots.gp are in %s\n", out.string().c_str());
     return 1;
   }
   const std::string cmd = "cd " + shellQuote(out.string()) + " && gnuplot plots.gp";
   if (std::system(cmd.c_str()) != 0) {
-    std::fprintf(stderr, "embody experiment: error: gnuplot failed on %s/plots.gp\n", out.string().c_str());
+    std::fprintf(stderr, "error: gnuplot failed on %s/plots.gp\n", out.string().c_str());
     return 1;
   }
   for (const ik::spine::SlackSweepPoint& p : *sweep)
@@ -274,13 +274,10 @@ int runExperiment(app::Argv argv) {
   args.flag("no-plots", "write CSV and summary.json only");
   if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
   if (args.get("name") != "isolated-spine") {
-    std::fprintf(stderr, "error: unknown experiment '%s' (expected: isolated-spine)\n\n%s", args.get("name").c_str(),
-                 args.usage().c_str());
-    return 2;
+    return app::usageError("unknown experiment '" + args.get("name") + "' (expected: isolated-spine)");
   }
   if (args.get("out").empty()) {
-    std::fprintf(stderr, "error: --out DIR is required\n\n%s", args.usage().c_str());
-    return 2;
+    return app::usageError("--out DIR is required");
   }
   return runIsolatedSpine(args);
 }

@@ -1,6 +1,7 @@
 // embody motion: inspect and record pose sources (synthetic motions, JSON Lines traces, BVH).
 //   embody motion list
-//   embody motion info SOURCE [--json] [--user-height M] [--bvh-scale S]
+//   embody motion info SOURCE [--json] [--user-height M] [--bvh-scale S] [--bvh-up AXIS] [--bvh-forward AXIS]
+//                     [--bone-map FILE]
 //   embody motion record --motion SOURCE --out FILE.jsonl [--frames N] [--fps F] [--three-point] [--filter]
 //                        [--lose left,right@2-3]
 #include <algorithm>
@@ -11,6 +12,8 @@
 #include <stdexcept>
 
 #include "app/args.h"
+#include "app/bvh_options.h"
+#include "app/job_options.h"
 #include "runtime/task_layout.h"
 #include "tracking/one_euro_filter.h"
 #include "tracking/synthetic_source.h"
@@ -24,13 +27,15 @@ using namespace embody::tracking;
 void sourceOptions(app::Args& args) {
   args.option("user-height", "METRES", "the user's height: synthetic motions are built for it, BVH fitted to it", "1.75");
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (e.g. 0.0564 for CMU); default: fit the rest skeleton to --user-height");
+  app::declareBvhOptions(args);
+  args.option("bone-map", "FILE", "the same as --bvh-bone-map (motion commands have no avatar)");
   args.flag("three-point", "keep only the head and hands (an HMD with two controllers)");
   args.option("lose", "TRACKERS@FROM-TO", "make trackers invalid in a time window, e.g. left,right@2.0-3.0");
 }
 
 // Opens the source with the shared options; the error is printed, exit code in `code`.
 std::unique_ptr<PoseSource> openSource(const app::Args& args, const std::string& spec, const SourceOptions& opts,
-                                       const char* command, int& code) {
+                                       int& code) {
   std::optional<TrackingLossSpec> loss;
   if (args.has("lose")) {
     auto l = parseTrackingLoss(args.get("lose"));
@@ -43,7 +48,7 @@ std::unique_ptr<PoseSource> openSource(const app::Args& args, const std::string&
   }
   auto src = openPoseSource(spec, opts);
   if (!src) {
-    std::fprintf(stderr, "%s: error: %s\n", command, src.error().c_str());
+    std::fprintf(stderr, "error: %s\n", src.error().c_str());
     code = 1;
     return nullptr;
   }
@@ -62,6 +67,11 @@ SourceOptions readSourceOptions(const app::Args& args) {
     if (!(o.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");
   }
   if (args.has("three-point")) o.trackers = TrackerMask::threePoint();
+  app::BvhOverrides bvh = app::readBvhOptions(args);
+  if (bvh.boneMapFile.empty()) bvh.boneMapFile = args.get("bone-map");
+  auto body = app::bvhBodyOptions(bvh);
+  if (!body) throw std::runtime_error(body.error());
+  o.bvh = std::move(*body);
   return o;
 }
 
@@ -92,9 +102,12 @@ int info(app::Argv argv) {
   } catch (const std::invalid_argument& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;
+  } catch (const std::runtime_error& e) {  // an unreadable bone map file
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
   }
   int code = 0;
-  auto src = openSource(args, args.get("SOURCE"), opts, "embody motion info", code);
+  auto src = openSource(args, args.get("SOURCE"), opts, code);
   if (!src) return code;
   PoseSource& s = *src;
   // Walk the motion at 90 Hz (or its native rate) and summarise each tracker.
@@ -191,7 +204,7 @@ int record(app::Argv argv) {
   args.option("motion", "SOURCE", "synthetic:NAME, FILE.bvh or FILE.jsonl");
   args.option("out", "FILE.jsonl", "the trace to write");
   args.option("frames", "N", "samples to write (default: the whole motion, one period for synthetic ones)");
-  args.option("fps", "HZ", "sample rate", "90");
+  args.option("fps", "HZ", "sample rate (1 .. 1000)", "90");
   args.flag("filter", "apply the One Euro filter (as the runtime does) before writing");
   sourceOptions(args);
   if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
@@ -201,25 +214,25 @@ int record(app::Argv argv) {
   try {
     if (!args.has("motion") || !args.has("out")) throw std::invalid_argument("--motion and --out are required");
     opts = readSourceOptions(args);
-    fps = args.number("fps");
-    if (!(fps > 0.0 && fps <= 10000.0)) throw std::invalid_argument("--fps must be in (0, 10000]");
+    fps = app::readFps(args);  // the limits every command applies (app/job_options.h)
     if (args.has("frames")) {
       frames = args.integer("frames");
       if (frames < 1) throw std::invalid_argument("--frames must be at least 1");
     }
   } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "error: %s\n\n%s", e.what(), args.usage().c_str());
-    return 2;
+    return app::usageError(e.what());
+  } catch (const std::runtime_error& e) {  // an unreadable bone map file
+    return app::runtimeError(e.what());
   }
   int code = 0;
-  auto src = openSource(args, args.get("motion"), opts, "embody motion record", code);
+  auto src = openSource(args, args.get("motion"), opts, code);
   if (!src) return code;
   PoseSource& s = *src;
   if (frames < 0) frames = static_cast<int>(std::floor(s.duration() * fps + 1e-6)) + (s.periodic() ? 0 : 1);
   frames = std::max(frames, 1);
   TraceWriter w;
   if (auto st = w.open(args.get("out"), s.trackers(), s.name(), opts.userHeight); !st) {
-    std::fprintf(stderr, "embody motion record: error: %s\n", st.error().c_str());
+    std::fprintf(stderr, "error: %s\n", st.error().c_str());
     return 1;
   }
   PoseFilter filter;
@@ -227,12 +240,12 @@ int record(app::Argv argv) {
     PoseSample p = s.sample(static_cast<double>(i) / fps);
     if (args.has("filter")) p = filter.apply(p);
     if (auto st = w.write(p); !st) {
-      std::fprintf(stderr, "embody motion record: error: %s\n", st.error().c_str());
+      std::fprintf(stderr, "error: %s\n", st.error().c_str());
       return 1;
     }
   }
   if (auto st = w.close(); !st) {
-    std::fprintf(stderr, "embody motion record: error: %s\n", st.error().c_str());
+    std::fprintf(stderr, "error: %s\n", st.error().c_str());
     return 1;
   }
   std::printf("wrote %d samples (%.3f s at %g Hz, trackers %s) to %s\n", frames, (frames - 1) / fps, fps,
@@ -248,10 +261,7 @@ int runMotion(app::Argv argv) {
       "  record --motion SOURCE --out FILE.jsonl [--frames N] [--fps F]\n"
       "                             record any source as a JSON Lines trace\n\n"
       "SOURCE is synthetic:NAME, FILE.bvh or FILE.jsonl. Run 'embody motion info --help' for options.\n";
-  if (argv.empty()) {
-    std::fputs(usage.c_str(), stderr);
-    return 2;
-  }
+  if (argv.empty()) return app::usageError("missing subcommand: list, info or record (see 'embody motion --help')");
   const std::string& sub = argv[0];
   if (sub == "--help" || sub == "-h") {
     std::fputs(usage.c_str(), stdout);
@@ -260,8 +270,7 @@ int runMotion(app::Argv argv) {
   if (sub == "list") return list();
   if (sub == "info") return info(argv.subspan(1));
   if (sub == "record") return record(argv.subspan(1));
-  std::fprintf(stderr, "error: unknown subcommand '%s'\n\n%s", sub.c_str(), usage.c_str());
-  return 2;
+  return app::usageError("unknown subcommand '" + sub + "': list, info or record (see 'embody motion --help')");
 }
 
 }  // namespace

@@ -21,65 +21,20 @@ const char* jointsOf(const ik::spine::Site& s, bool coupled) {
   return s.swing && s.revolute ? "swing+revolute" : s.swing ? "swing" : "revolute";
 }
 
-int runSpine(app::Argv argv) {
-  app::Args args("embody spine",
-                 "Describes a spine model: its vertebrae and joint sites, joints by type, dofs before and after "
-                 "coupling, and the equality and inequality rows (Raunhardt & Boulic 2008).");
-  args.positional("action", "describe");
-  args.option("model", "full|simplified|FILE", "the built-in full (24 sites) or simplified (8 sites) model, or a JSON file",
-              "full");
-  args.flag("uncoupled", "every site a ball joint with its own limits, no coupling rows");
-  args.flag("axis-coupling", "add the cross-axis rows (torsion follows lateral bending)");
-  args.flag("check-all-limits", "limits on every joint, not only the first of each region");
-  args.option("height", "METRES", "body height the spine is scaled to", "1.75");
-  args.flag("json", "print one JSON object instead of text");
-  args.flag("dump", "print the model's JSON description (a starting point for your own file) and stop");
-  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
-  if (args.get("action") != "describe") {
-    std::fprintf(stderr, "error: unknown action '%s' (expected: describe)\n\n%s", args.get("action").c_str(),
-                 args.usage().c_str());
-    return 2;
-  }
-  double height = 0;
-  try {
-    height = args.number("height");
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 2;
-  }
-
-  auto desc = ik::spine::loadSpineModel(args.get("model"));
-  if (!desc) {
-    std::fprintf(stderr, "embody spine: error: %s\n", desc.error().c_str());
-    return 1;
-  }
-  if (args.has("dump")) {
-    std::printf("%s\n", ik::spine::toJson(*desc).dump(2).c_str());
-    return 0;
-  }
-  ik::spine::SpineOptions options;
-  options.coupled = !args.has("uncoupled");
-  options.axis_coupling = args.has("axis-coupling");
-  options.check_all_limits = args.has("check-all-limits");
-  auto model = ik::spine::buildIsolatedSpine(*desc, options, height);
-  if (!model) {
-    std::fprintf(stderr, "embody spine: error: %s\n", model.error().c_str());
-    return 1;
-  }
-  const ik::spine::SpineSummary s = ik::spine::summarize(*desc, *model);
-
+// The model as one JSON object (what --json prints and the text is made from).
+nlohmann::json describe(const ik::spine::SpineDescription& desc, const ik::spine::IsolatedSpine& model,
+                        const ik::spine::SpineSummary& s, const ik::spine::SpineOptions& options, double height) {
   // Which joints carry limits (the first of each region, or all).
   auto limited = [&](ik::JointId j) {
     if (j < 0) return false;
-    const auto& d = model->model.joints[j].desc;
+    const auto& d = model.model.joints[j].desc;
     if (!d.upper.empty() && std::isfinite(d.upper[0])) return true;
-    for (const auto& row : model->model.inequalities)
+    for (const auto& row : model.model.inequalities)
       if (row.terms.size() == 1 && row.terms[0].dof.joint == j) return true;
     return false;
   };
-
   nlohmann::json j;
-  j["model"] = desc->name;
+  j["model"] = desc.name;
   j["coupled"] = options.coupled;
   j["axis_coupling"] = options.axis_coupling;
   j["check_all_limits"] = options.check_all_limits;
@@ -96,14 +51,14 @@ int runSpine(app::Argv argv) {
   j["inequalities"] = s.inequalities;
   j["band_inequalities"] = s.band_inequalities;
   j["limit_inequalities"] = s.limit_inequalities;
-  j["band_slack_deg"] = desc->band_slack / kDeg;
+  j["band_slack_deg"] = desc.band_slack / kDeg;
   j["site_list"] = nlohmann::json::array();
-  for (size_t k = 0; k < desc->sites.size(); ++k) {
-    const ik::spine::Site& site = desc->sites[k];
-    const auto& sj = model->joints.sites[k];
-    const Eigen::Vector3d r = model->joints.ranges[k] / kDeg;
+  for (size_t k = 0; k < desc.sites.size(); ++k) {
+    const ik::spine::Site& site = desc.sites[k];
+    const auto& sj = model.joints.sites[k];
+    const Eigen::Vector3d r = model.joints.ranges[k] / kDeg;
     nlohmann::json vs = nlohmann::json::array();
-    for (int v = site.first; v < site.first + site.count; ++v) vs.push_back(desc->vertebrae[v].name);
+    for (int v = site.first; v < site.first + site.count; ++v) vs.push_back(desc.vertebrae[v].name);
     j["site_list"].push_back({{"name", site.name},
                               {"region", ik::spine::toString(site.region)},
                               {"vertebrae", vs},
@@ -111,12 +66,12 @@ int runSpine(app::Argv argv) {
                               {"range_deg", {{"flexion_extension", r[0]}, {"bending", r[1]}, {"torsion", r[2]}}},
                               {"limited", limited(sj.swing) || limited(sj.revolute) || limited(sj.ball)}});
   }
-  if (args.has("json")) {
-    std::printf("%s\n", j.dump(2).c_str());
-    return 0;
-  }
+  return j;
+}
 
-  std::printf("spine model '%s' (%s%s%s), height %.2f m\n", desc->name.c_str(), options.coupled ? "coupled" : "uncoupled",
+void printText(const nlohmann::json& j, const ik::spine::SpineDescription& desc, const ik::spine::SpineSummary& s,
+               const ik::spine::SpineOptions& options, double height) {
+  std::printf("spine model '%s' (%s%s%s), height %.2f m\n", desc.name.c_str(), options.coupled ? "coupled" : "uncoupled",
               options.axis_coupling && options.coupled ? ", axis coupling" : "",
               options.check_all_limits ? ", all limits" : "", height);
   std::printf("  %d vertebrae on %d joint sites\n\n", s.vertebrae, s.sites);
@@ -134,8 +89,58 @@ int runSpine(app::Argv argv) {
   std::printf("\njoints: %d swing, %d revolute, %d ball\n", s.swing_joints, s.revolute_joints, s.ball_joints);
   std::printf("dofs:   %d before coupling, %d free after\n", s.dof_total, s.dof_free);
   std::printf("rows:   %d equalities (%d cross-axis), %d inequalities (%d inter-region band, slack %.1f deg; %d joint limit)\n",
-              s.equalities, s.axis_equalities, s.inequalities, s.band_inequalities, desc->band_slack / kDeg,
+              s.equalities, s.axis_equalities, s.inequalities, s.band_inequalities, desc.band_slack / kDeg,
               s.limit_inequalities);
+}
+
+int runSpine(app::Argv argv) {
+  app::Args args("embody spine",
+                 "Describes a spine model: its vertebrae and joint sites, joints by type, dofs before and after "
+                 "coupling, and the equality and inequality rows (Raunhardt & Boulic 2008).");
+  args.positional("action", "describe");
+  args.option("model", "full|simplified|FILE", "the built-in full (24 sites) or simplified (8 sites) model, or a JSON file",
+              "full");
+  args.flag("uncoupled", "every site a ball joint with its own limits, no coupling rows");
+  args.flag("axis-coupling", "add the cross-axis rows (torsion follows lateral bending)");
+  args.flag("check-all-limits", "limits on every joint, not only the first of each region");
+  args.option("height", "METRES", "body height the spine is scaled to", "1.75");
+  args.flag("json", "print one JSON object instead of text");
+  args.flag("dump", "print the model's JSON description (a starting point for your own file) and stop");
+  if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
+  if (args.get("action") != "describe") {
+    return app::usageError("unknown action '" + args.get("action") + "' (expected: describe)");
+  }
+  double height = 0;
+  try {
+    height = args.number("height");
+  } catch (const std::invalid_argument& e) {
+    return app::usageError(e.what());
+  }
+
+  auto desc = ik::spine::loadSpineModel(args.get("model"));
+  if (!desc) {
+    std::fprintf(stderr, "error: %s\n", desc.error().c_str());
+    return 1;
+  }
+  if (args.has("dump")) {
+    std::printf("%s\n", ik::spine::toJson(*desc).dump(2).c_str());
+    return 0;
+  }
+  ik::spine::SpineOptions options;
+  options.coupled = !args.has("uncoupled");
+  options.axis_coupling = args.has("axis-coupling");
+  options.check_all_limits = args.has("check-all-limits");
+  auto model = ik::spine::buildIsolatedSpine(*desc, options, height);
+  if (!model) {
+    std::fprintf(stderr, "error: %s\n", model.error().c_str());
+    return 1;
+  }
+  const ik::spine::SpineSummary s = ik::spine::summarize(*desc, *model);
+  const nlohmann::json j = describe(*desc, *model, s, options, height);
+  if (args.has("json"))
+    std::printf("%s\n", j.dump(2).c_str());
+  else
+    printText(j, *desc, s, options, height);
   return 0;
 }
 

@@ -10,6 +10,8 @@
 
 #include "app/avatar_arg.h"
 #include "app/args.h"
+#include "app/job_options.h"
+#include "avatar/body/calibration.h"
 #include "runtime/frame_stats.h"
 #include "runtime/seated_stats.h"
 #include "runtime/tracked_avatar_body.h"
@@ -41,22 +43,25 @@ constexpr int kSessionAttempts = 3;
 struct XrCommand {
   xr::XrLoopOptions loop;
   runtime::SeatOptions seat;
+  app::JobOptions shared;  // avatar, bone map, spine, user height, profile, IK budget
   std::string bodyMode, avatarArg, recordPath, statsPath;
   double budgetMs = 1.0;
 };
 
+// The options shared with render/mirror/demo (app/job_options.h).
+constexpr unsigned kSharedOptions = app::kAvatarOptions | app::kBodyOptions | app::kBudgetOptions;
+
 void declareOptions(app::Args& args) {
-  args.option("avatar", "FILE|default",
-              "a .gltf/.glb/.vrm file, or 'default' (the built-in humanoid avatar)", "default");
+  app::addJobOptions(args, kSharedOptions);
   args.option("frames", "N", "end the session after N submitted frames (0: until the runtime ends it)", "0");
-  args.option("height", "METRES", "your standing eye height (skips the calibration from the HMD height)");
+  args.option("height", "METRES", "your standing eye height (skips the calibration from the HMD height; or give "
+              "--user-height / --profile)");
   args.option("stats", "FILE", "write a JSON report of the run (states, frames, tracking, IK thread, validation)");
   args.option("body", "ik|rest",
               "ik: the body follows head and hands (AvatarBodySolver on the IK thread); rest: the rest pose "
               "placed under the head",
               "ik");
   args.option("record", "FILE.jsonl", "record the head and wrist trackers as a trace (replay with embody render --motion)");
-  args.option("ik-budget-ms", "MS", "IK time budget per frame: the render thread takes the body at this deadline", "1");
   args.flag("seated",
             "seated mode: the avatar sits on a seat placed under your head at the first frame (again on recenter), "
             "feet on the floor; the spine and arms follow your head and hands");
@@ -73,6 +78,7 @@ void declareOptions(app::Args& args) {
 
 // Numbers and their ranges; throws std::invalid_argument with the message for the user.
 void readNumbers(const app::Args& args, XrCommand& c) {
+  app::readJobOptions(args, kSharedOptions, c.shared);
   const int frames = args.integer("frames");
   if (frames < 0) throw std::invalid_argument("--frames must be 0 or more");
   c.loop.frames = static_cast<uint64_t>(frames);
@@ -80,6 +86,8 @@ void readNumbers(const app::Args& args, XrCommand& c) {
     c.loop.placement.userEyeHeight = static_cast<float>(args.number("height"));
     if (!(c.loop.placement.userEyeHeight > 0.5f && c.loop.placement.userEyeHeight < 2.5f))
       throw std::invalid_argument("--height must be between 0.5 and 2.5 metres");
+    if (args.has("user-height") || args.has("profile"))
+      throw std::invalid_argument("--height (eye height) excludes --user-height and --profile");
   }
   c.seat.enabled = c.loop.placement.seated = args.has("seated");
   if (args.has("seat-height")) {
@@ -87,8 +95,7 @@ void readNumbers(const app::Args& args, XrCommand& c) {
     if (!c.seat.enabled || !(c.seat.seatHeight >= 0.2f && c.seat.seatHeight <= 1.2f))
       throw std::invalid_argument("--seat-height needs --seated and must be between 0.2 and 1.2 metres");
   }
-  c.budgetMs = args.number("ik-budget-ms");
-  if (!(c.budgetMs > 0.0 && c.budgetMs <= 100.0)) throw std::invalid_argument("--ik-budget-ms must be > 0 and <= 100");
+  c.budgetMs = c.shared.budgetMs;
   c.bodyMode = args.get("body");
   if (c.bodyMode != "ik" && c.bodyMode != "rest") throw std::invalid_argument("--body must be ik or rest");
 }
@@ -106,16 +113,22 @@ std::optional<int> parseCommand(app::Argv argv, XrCommand& c) {
   try {
     readNumbers(args, c);
   } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 2;
+    return app::usageError(e.what());
   }
+  if (c.shared.userHeight == 0.0f && !c.shared.profile.empty()) {  // a bad file is a runtime error (1)
+    auto profile = avatar::loadProfile(c.shared.profile);
+    if (!profile) return app::runtimeError("profile " + c.shared.profile + ": " + profile.error());
+    c.shared.userHeight = float(profile->userHeight);
+  }
+  // The standing eye height the placement and the solver take (avatar::kEyeHeightRatio).
+  if (c.shared.userHeight > 0.0f) c.loop.placement.userEyeHeight = c.shared.userHeight * float(avatar::kEyeHeightRatio);
   c.loop.recenterAtStart = args.has("recenter");
   c.loop.vulkanValidation = args.has("validate");
   c.loop.verbose = args.has("verbose");
   c.loop.mirror = args.has("mirror");
   c.loop.lateLatch = !args.has("no-late-latch");
   c.loop.ikBudgetSeconds = c.budgetMs * 1e-3;
-  c.avatarArg = args.get("avatar");
+  c.avatarArg = c.shared.avatar;
   c.recordPath = args.get("record");
   c.statsPath = args.get("stats");
   return std::nullopt;
@@ -140,10 +153,12 @@ Result<bool> attachBody(const XrCommand& c, const avatar::AvatarAsset& asset, Bo
   runtime::TrackedBodyOptions bo;
   bo.body.trackers = tracking::TrackerMask::threePoint();
   bo.body.seat = c.seat;
+  bo.body.spine = c.shared.spine;
+  bo.body.coupledSpine = c.shared.coupledSpine;
   // The solver takes a body height (0: from the first head sample, standing); seated, the solver
   // assumes 1.75 m unless --height gives the standing eye height.
   const float eye = c.loop.placement.userEyeHeight;
-  bo.body.userHeight = eye > 0.0f ? eye / 0.936f : 0.0f;
+  bo.body.userHeight = eye > 0.0f ? eye / float(avatar::kEyeHeightRatio) : 0.0f;
   bo.stage.budgetSeconds = c.budgetMs * 1e-3;
   auto created = runtime::TrackedAvatarBody::create(asset, bo);
   if (!created) return Error{"avatar " + c.avatarArg + ": " + created.error()};
@@ -296,7 +311,7 @@ bool writeStats(const XrCommand& c, const xr::XrLoopReport& r, const BodyHook& h
 int runXr(app::Argv argv) {
   XrCommand c;
   if (auto code = parseCommand(argv, c)) return *code;
-  auto loaded = app::loadAvatarArg(c.avatarArg);
+  auto loaded = app::loadAvatarArg(c.avatarArg, c.shared.boneMap);
   if (!loaded) {
     std::fprintf(stderr, "error: %s\n", loaded.error().c_str());
     return 1;

@@ -25,6 +25,9 @@ Result<JobInputs> openJobInputs(const RenderJob& job) {
   }
   in.sourceOptions.userHeight = in.userHeight > 0.0f ? in.userHeight : 1.75f;
   in.sourceOptions.bvhScale = job.bvhScale;
+  auto bvh = bvhBodyOptions(job.bvh);
+  if (!bvh) return Error{bvh.error()};
+  in.sourceOptions.bvh = std::move(*bvh);
   if (job.threePoint) in.sourceOptions.trackers = tracking::TrackerMask::threePoint();
   auto opened = tracking::openPoseSource(job.motion, in.sourceOptions);
   if (!opened) return Error{opened.error()};
@@ -32,9 +35,9 @@ Result<JobInputs> openJobInputs(const RenderJob& job) {
   return in;
 }
 
-runtime::AvatarBodyOptions bodyOptionsFor(const RenderJob& job, avatar::SpineMode spine, const JobInputs& in) {
+runtime::AvatarBodyOptions bodyOptionsFor(const RenderJob& job, const JobInputs& in) {
   runtime::AvatarBodyOptions bo;
-  bo.spine = spine;
+  bo.spine = job.spine;
   bo.coupledSpine = job.coupledSpine;
   bo.trackers = in.source->trackers();
   const bool trace = job.motion.size() > 6 && job.motion.substr(job.motion.size() - 6) == ".jsonl";

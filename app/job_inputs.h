@@ -29,6 +29,6 @@ Result<JobInputs> openJobInputs(const RenderJob& job);
 // The body solver's options for the job. Synthetic motions and BVH clips are built for (fitted
 // to) sourceOptions.userHeight; a recorded trace's user is unknown unless given: the solver
 // calibrates from its first head sample.
-runtime::AvatarBodyOptions bodyOptionsFor(const RenderJob& job, avatar::SpineMode spine, const JobInputs& in);
+runtime::AvatarBodyOptions bodyOptionsFor(const RenderJob& job, const JobInputs& in);
 
 }  // namespace embody::app

@@ -51,11 +51,10 @@ int main(int argc, char** argv) {
     try {
       return c.run(std::span<const std::string>(args).subspan(1));
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "embody %s: error: %s\n", c.name, e.what());
+      std::fprintf(stderr, "error: embody %s: %s\n", c.name, e.what());
       return 1;
     }
   }
-  std::fprintf(stderr, "embody: unknown command '%s'\n\n", args[0].c_str());
-  printUsage(stderr);
+  std::fprintf(stderr, "error: unknown command '%s' (see 'embody --help')\n", args[0].c_str());
   return 2;
 }

@@ -23,10 +23,45 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-int fail(const std::string& message, int code = 1) {
-  std::fprintf(stderr, "error: %s\n", message.c_str());
-  return code;
+// One window frame of `pose`: the camera for the window's view, the scene, and the renderer's
+// begin / draw / end / present. `drawn`: the window had an image to draw into.
+Status drawFrame(engine::AvatarRenderer& ar, engine::DesktopWindow& win, VkQueue queue, const avatar::SkeletonPose& pose,
+                 const RenderJob& job, uint64_t rendererFrame, bool screenshot, bool& drawn) {
+  if (auto s = ar.computePose(pose); !s) return s;
+  engine::Camera cam;
+  const bool third = win.thirdPerson();
+  if (third) {
+    cam = ar.orbitAround(pose, job.yaw, job.pitch);
+  } else {
+    // At the eyes, looking down at the own body (the head is hidden; arms, chest and feet show).
+    const glm::mat4 eye = ar.eyePose(pose) * glm::mat4_cast(glm::angleAxis(glm::radians(-60.0f), glm::vec3(1, 0, 0)));
+    cam = engine::cameraFromPose(eye, engine::FovAngles::symmetric(glm::radians(90.0f), win.aspect()), 0.02f);
+  }
+  engine::SceneFrame scene;
+  scene.avatar = &ar.gpuAvatar();
+  scene.palette = ar.palette();
+  scene.firstPerson = !third;
+  scene.grid = job.grid;
+  engine::Renderer& r = ar.renderer();
+  if (screenshot) win.requestScreenshot();
+  engine::SubmitSync sync;
+  if (auto s = r.beginFrame(); !s) return s;
+  if (auto s = r.setScene(scene); !s) return s;
+  auto d = win.draw(r, rendererFrame, cam, sync);
+  if (!d) return Error{d.error()};
+  drawn = *d;
+  if (auto s = r.endFrame(sync); !s) return s;
+  return win.present(queue);
 }
+
+void printSummary(uint64_t shown, double seconds, const runtime::StatsSummary& sum) {
+  std::printf("mirror: %llu frames shown in %.2f s (%.1f fps); ik p50 %.2f ms, p99 %.2f ms, %zu deadline misses\n",
+              static_cast<unsigned long long>(shown), seconds, seconds > 0 ? double(shown) / seconds : 0.0, sum.ikP50Ms,
+              sum.ikP99Ms, sum.deadlineMisses);
+}
+
+// The next frame shown is the last one --frames asks for.
+bool lastFrameOf(const MirrorJob& mj, uint64_t shown) { return mj.frames > 0 && shown + 1 == uint64_t(mj.frames); }
 
 }  // namespace
 
@@ -38,46 +73,38 @@ bool displayAvailable() {
 
 int runMirror(const MirrorJob& mj) {
   const RenderJob& job = mj.run;
-  if (job.view != "third" && job.view != "first") return fail("--view must be first or third", 2);
-  if (!(job.fps >= 1.0 && job.fps <= 1000.0)) return fail("--fps must be 1 .. 1000", 2);
-  if (mj.frames < 0) return fail("--frames must be 0 or more", 2);
-  if (job.width < 64 || job.height < 64 || job.width > 8192 || job.height > 8192)
-    return fail("--size must be 64x64 .. 8192x8192", 2);
-  if (!(job.budgetMs > 0.0 && job.budgetMs <= 1000.0)) return fail("--ik-budget-ms must be > 0 and <= 1000", 2);
-  if (job.userHeight != 0.0f && !(job.userHeight >= 0.5f && job.userHeight <= 2.5f))
-    return fail("--user-height must be 0.5 .. 2.5 m", 2);
-  avatar::SpineMode spine;
-  if (!avatar::parseSpineMode(job.spine, spine)) return fail("--spine must be auto, full or simplified", 2);
+  if (job.view != "third" && job.view != "first") return usageError("--view must be first or third");
+  if (mj.frames < 0) return usageError("--frames must be 0 or more");
   // Files first (the likely errors, no display needed to report them), then the display.
   auto inputs = openJobInputs(job);
-  if (!inputs) return fail(inputs.error());
+  if (!inputs) return runtimeError(inputs.error());
   const avatar::AvatarAsset& asset = inputs->asset;
   const tracking::SourceOptions& so = inputs->sourceOptions;
   tracking::PoseSource& source = *inputs->source;
-  auto solver = runtime::AvatarBodySolver::create(asset, bodyOptionsFor(job, spine, *inputs));
-  if (!solver) return fail("avatar " + job.avatar + ": " + solver.error());
+  auto solver = runtime::AvatarBodySolver::create(asset, bodyOptionsFor(job, *inputs));
+  if (!solver) return runtimeError("avatar " + job.avatar + ": " + solver.error());
 
   auto extensions = engine::DesktopWindow::requiredInstanceExtensions();
-  if (!extensions) return fail("embody mirror: " + extensions.error());
+  if (!extensions) return runtimeError("embody mirror: " + extensions.error());
   engine::InstanceOptions io;
   io.validation = job.validate ? engine::Validation::IfPresent : engine::Validation::Off;
   io.extensions = *extensions;
   auto instance = engine::Instance::create(io);
-  if (!instance) return fail(instance.error());
+  if (!instance) return runtimeError(instance.error());
   auto windowDevice = engine::WindowDevice::create(*instance, job.device == "auto" ? "" : job.device);
-  if (!windowDevice) return fail(windowDevice.error());
+  if (!windowDevice) return runtimeError(windowDevice.error());
   engine::Device& device = (*windowDevice)->device();
   engine::AvatarRendererOptions ro;
   ro.width = uint32_t(job.width);  // its offscreen target is unused; the size gives the cameras' aspect
   ro.height = uint32_t(job.height);
   auto created = engine::AvatarRenderer::create(device, asset, ro);
-  if (!created) return fail(created.error());
+  if (!created) return runtimeError(created.error());
   engine::AvatarRenderer& ar = **created;
   engine::DesktopWindow::Keys keys;
   keys.thirdPerson = job.view == "third";
   auto window = engine::DesktopWindow::create(device, uint32_t(job.width), uint32_t(job.height),
                                            "embody mirror - V: view, Space: pause, Esc: quit", keys);
-  if (!window) return fail(window.error());
+  if (!window) return runtimeError(window.error());
   engine::DesktopWindow& win = **window;
 
   const avatar::SkeletonPose rest = avatar::SkeletonPose::rest(asset.skeleton);
@@ -116,40 +143,9 @@ int runMirror(const MirrorJob& mj) {
     }
     if (ik.acquire()) stats.add(ik.frame().stats);
     const avatar::SkeletonPose& pose = ik.framesSolved() > 0 ? ik.frame().pose : rest;
-    if (auto s = ar.computePose(pose); !s) {
-      error = s.error();
-      break;
-    }
-    engine::Camera cam;
-    const bool third = win.thirdPerson();
-    if (third) {
-      cam = ar.orbitAround(pose, job.yaw, job.pitch);
-    } else {
-      // At the eyes, looking down at the own body (the head is hidden; arms, chest and feet show).
-      const glm::mat4 eye = ar.eyePose(pose) * glm::mat4_cast(glm::angleAxis(glm::radians(-60.0f), glm::vec3(1, 0, 0)));
-      cam = engine::cameraFromPose(eye, engine::FovAngles::symmetric(glm::radians(90.0f), win.aspect()), 0.02f);
-    }
-    engine::SceneFrame scene;
-    scene.avatar = &ar.gpuAvatar();
-    scene.palette = ar.palette();
-    scene.firstPerson = !third;
-    scene.grid = job.grid;
-    engine::Renderer& r = ar.renderer();
-    const bool lastFrame = mj.frames > 0 && shown + 1 == uint64_t(mj.frames);
-    if (lastFrame && !mj.screenshot.empty()) win.requestScreenshot();
-    engine::SubmitSync sync;
-    Status st = r.beginFrame();
-    if (st) st = r.setScene(scene);
-    ++rendererFrames;
     bool drawn = false;
-    if (st) {
-      auto d = win.draw(r, rendererFrames, cam, sync);
-      if (!d) st = Status(Error{d.error()});
-      else drawn = *d;
-    }
-    if (st) st = r.endFrame(sync);
-    if (st) st = win.present(device.queue());
-    if (!st) {
+    const bool screenshot = lastFrameOf(mj, shown) && !mj.screenshot.empty();
+    if (auto st = drawFrame(ar, win, device.queue(), pose, job, ++rendererFrames, screenshot, drawn); !st) {
       error = st.error();
       break;
     }
@@ -165,12 +161,8 @@ int runMirror(const MirrorJob& mj) {
   }
   ik.stop();
   ar.renderer().waitIdle();
-  if (!error.empty()) return fail(error);
-  const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
-  const runtime::StatsSummary sum = stats.summary();
-  std::printf("mirror: %llu frames shown in %.2f s (%.1f fps); ik p50 %.2f ms, p99 %.2f ms, %zu deadline misses\n",
-              static_cast<unsigned long long>(shown), seconds, seconds > 0 ? double(shown) / seconds : 0.0, sum.ikP50Ms,
-              sum.ikP99Ms, sum.deadlineMisses);
+  if (!error.empty()) return runtimeError(error);
+  printSummary(shown, std::chrono::duration<double>(Clock::now() - started).count(), stats.summary());
   if (job.validate && instance->validationEnabled()) std::fprintf(stderr, "validation messages: %u\n", instance->messageCount());
   return 0;
 }

@@ -1,6 +1,7 @@
 // Runtime and tracking costs per frame: the hand-off, the filter, the loss guard, sources, and a
 // full IkStage step on the sample humanoid with the real PIK solver.
 #include <benchmark/benchmark.h>
+#include <numbers>
 
 #include "tests/support/sample_models.h"
 #include "runtime/ik_stage.h"
@@ -65,7 +66,7 @@ BENCHMARK(BM_LoadCmuWalk)->Unit(benchmark::kMillisecond);
 static void BM_IkStageSampleHumanoid(benchmark::State& state) {
   auto model = std::make_shared<const ik::Model>(test::sampleHumanoid().value());
   runtime::PikBinding binding = runtime::PikBinding::byTaskNames(*model);
-  binding.modelFromTracking = Eigen::Isometry3d(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()));
+  binding.modelFromTracking = Eigen::Isometry3d(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitY()));
   ik::SolveOptions opts;
   opts.max_iterations = static_cast<int>(state.range(0));
   runtime::PikBodySolver solver(model, binding, opts);

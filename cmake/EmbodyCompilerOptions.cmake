@@ -1,4 +1,6 @@
 # Warnings for our own code; third-party headers come in as SYSTEM includes via imported targets.
+# (Installed as embody::warnings only because static libraries name their private dependencies
+# in their link interface; it adds nothing to a consumer's link.)
 add_library(embody_warnings INTERFACE)
 # -Wno-missing-field-initializers: the Vulkan/OpenXR idiom `VkFooInfo info{VK_STRUCTURE_TYPE_FOO}`
 # value-initialises the rest on purpose.
@@ -22,13 +24,24 @@ if(EMBODY_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
   add_link_options(-fsanitize=address,undefined)
 endif()
+if(EMBODY_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "EMBODY_FUZZ needs clang (libFuzzer): cmake -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_C_COMPILER=clang")
+  endif()
+  # Every library is instrumented for coverage; the fuzz executables add -fsanitize=fuzzer (main).
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
+                      -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+endif()
 if(EMBODY_TSAN)
   add_compile_options(-fsanitize=thread -fno-omit-frame-pointer)
   add_link_options(-fsanitize=thread)
 endif()
 
 # embody_library(NAME DIRS dir... LIBS lib...): a static library from every .cpp in the given
-# folders (non-recursive), so adding a file to a folder needs no CMake edit.
+# folders (non-recursive), so adding a file to a folder needs no CMake edit. It is also installed
+# (docs/api.md): the library, the folders' headers under include/embody/<dir>/ (so the same
+# `#include "ik/solver.h"` works), and the target exported as embody::<NAME without embody_>.
 function(embody_library name)
   cmake_parse_arguments(ARG "" "" "DIRS;LIBS;PRIVATE_LIBS" ${ARGN})
   set(srcs)
@@ -38,11 +51,27 @@ function(embody_library name)
   endforeach()
   if(NOT srcs)  # a folder not written yet: keep the target so dependants still configure
     add_library(${name} INTERFACE)
-    target_include_directories(${name} INTERFACE "${CMAKE_SOURCE_DIR}")
+    target_include_directories(${name} INTERFACE "$<BUILD_INTERFACE:${CMAKE_SOURCE_DIR}>")
     target_link_libraries(${name} INTERFACE ${ARG_LIBS})
-    return()
+  else()
+    add_library(${name} STATIC ${srcs})
+    target_include_directories(${name} PUBLIC "$<BUILD_INTERFACE:${CMAKE_SOURCE_DIR}>")
+    target_link_libraries(${name} PUBLIC ${ARG_LIBS} PRIVATE embody_warnings ${ARG_PRIVATE_LIBS})
   endif()
-  add_library(${name} STATIC ${srcs})
-  target_include_directories(${name} PUBLIC "${CMAKE_SOURCE_DIR}")
-  target_link_libraries(${name} PUBLIC ${ARG_LIBS} PRIVATE embody_warnings ${ARG_PRIVATE_LIBS})
+  embody_install_library(${name} DIRS ${ARG_DIRS})
+endfunction()
+
+# embody_install_library(NAME [DIRS dir...]): installs a library target into the `embody` export
+# set (embody::<NAME without embody_>) with the headers of DIRS (cmake/EmbodyInstall.cmake
+# writes embodyConfig.cmake).
+function(embody_install_library name)
+  cmake_parse_arguments(ARG "" "" "DIRS" ${ARGN})
+  string(REGEX REPLACE "^embody_" "" exportName "${name}")
+  set_target_properties(${name} PROPERTIES EXPORT_NAME ${exportName})
+  target_include_directories(${name} INTERFACE "$<INSTALL_INTERFACE:include/embody>")
+  install(TARGETS ${name} EXPORT embodyTargets ARCHIVE DESTINATION lib)
+  foreach(d IN LISTS ARG_DIRS)
+    file(GLOB headers "${CMAKE_SOURCE_DIR}/${d}/*.h")
+    install(FILES ${headers} DESTINATION include/embody/${d})
+  endforeach()
 endfunction()

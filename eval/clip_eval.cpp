@@ -67,7 +67,7 @@ Result<JointTrack> runtimeTrack(const tracking::BvhAvatar& avatar, const EvalOpt
   // Full markers are the clip's own joints, exact: a check that import, solve and export agree,
   // not a tracking scenario, so no One Euro filter (its lag alone is about 1 cm on a walk).
   cfg.filter = o.trackers != TrackerSet::Full;
-  cfg.guard.userHeight = float(avatar.mapping.restHeightUnits * avatar.mapping.scale);
+  cfg.guard.userHeight = float(avatar.mapping.heightUnits * avatar.mapping.scale);
   runtime::IkStage stage(**solver, runtime::steadyClock(), cfg);
   auto source = sourceFor(avatar, o.trackers);
   runtime::SolvedFrame frame;

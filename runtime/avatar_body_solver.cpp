@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "avatar/body/anthropometry.h"
+#include "avatar/glm_eigen.h"
 #include "avatar/humanoid/humanoid_map.h"
 
 namespace embody::runtime {
@@ -13,9 +15,8 @@ using tracking::TrackerStatus;
 
 namespace {
 
-Eigen::Vector3d toEigen(const glm::vec3& v) { return {v.x, v.y, v.z}; }
-glm::vec3 toGlm(const Eigen::Vector3d& v) { return {float(v.x()), float(v.y()), float(v.z())}; }
-Eigen::Quaterniond toEigen(const glm::quat& q) { return Eigen::Quaterniond(q.w, q.x, q.y, q.z); }
+using avatar::toEigen;
+using avatar::toGlm;
 
 // The model `body` was built with, plus `tasks` (the builder's validation runs again).
 Result<ik::Model> withTasks(const ik::Model& model, const std::vector<ik::TaskDesc>& tasks) {
@@ -49,9 +50,8 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
   auto body = avatar::buildBodyModel(avatar_, bo);
   if (!body) return Error{body.error()};
   body_ = std::move(body).value();
-  const avatar::HumanoidMap& map = avatar_.humanoid;
-  up_ = toEigen(map.up).normalized();
-  forward_ = toEigen(map.forward);
+  up_ = toEigen(avatar_.humanoid.up).normalized();
+  forward_ = toEigen(avatar_.humanoid.forward);
   forward_ = (forward_ - up_ * up_.dot(forward_)).normalized();
   // Tracking space (+X right, +Y up, -Z forward) -> avatar space.
   Eigen::Matrix3d c;
@@ -59,220 +59,16 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
   c.col(1) = up_;
   c.col(2) = -forward_;
   fromTracking_ = Eigen::Quaterniond(c).normalized();
-
-  joint_[size_t(tracking::index(TrackerId::Head))] = body_.head;
-  joint_[size_t(tracking::index(TrackerId::LeftHand))] = body_.leftHand;
-  joint_[size_t(tracking::index(TrackerId::RightHand))] = body_.rightHand;
-  joint_[size_t(tracking::index(TrackerId::Hips))] = body_.hips;
-  joint_[size_t(tracking::index(TrackerId::LeftFoot))] = body_.leftFoot;
-  joint_[size_t(tracking::index(TrackerId::RightFoot))] = body_.rightFoot;
-  auto ikOf = [&](avatar::HumanBone bone) {
-    const int a = map.joint(bone);
-    return a >= 0 ? body_.ikJointOfAvatar[size_t(a)] : -1;
-  };
-  leftShoulder_ = ikOf(avatar::HumanBone::leftUpperArm);
-  rightShoulder_ = ikOf(avatar::HumanBone::rightUpperArm);
-  const ik::JointId leftElbow = ikOf(avatar::HumanBone::leftLowerArm);
-  if (leftShoulder_ < 0 || rightShoulder_ < 0 || leftElbow < 0) return Error{"the avatar's arms are not mapped"};
-  hipJoint_ = {ikOf(avatar::HumanBone::leftUpperLeg), ikOf(avatar::HumanBone::rightUpperLeg)};
-  kneeJoint_ = {ikOf(avatar::HumanBone::leftLowerLeg), ikOf(avatar::HumanBone::rightLowerLeg)};
+  ik::JointId leftElbow = -1;
+  if (auto s = bindJoints(leftElbow); !s) return s;
   const bool legs = hipJoint_[0] >= 0 && hipJoint_[1] >= 0 && kneeJoint_[0] >= 0 && kneeJoint_[1] >= 0;
   if (options.seat.enabled && !legs) return Error{"seated mode: the avatar's upper and lower legs are not mapped"};
-  // Limb chains for the knee and elbow direction tasks. The elbow's IK joint at the lower arm's
-  // pivot is its forearm twist; the hinge is the joint before it.
-  for (size_t s = 0; s < 2; ++s) {
-    const bool left = s == 0;
-    limbRoot_[s] = hipJoint_[s];
-    limbMiddle_[s] = limbHinge_[s] = kneeJoint_[s];
-    limbEnd_[s] = left ? body_.leftFoot : body_.rightFoot;
-    const ik::JointId elbow = ikOf(left ? avatar::HumanBone::leftLowerArm : avatar::HumanBone::rightLowerArm);
-    limbRoot_[2 + s] = left ? leftShoulder_ : rightShoulder_;
-    limbMiddle_[2 + s] = elbow;
-    limbEnd_[2 + s] = left ? body_.leftHand : body_.rightHand;
-    if (elbow >= 0) {
-      const ik::JointDesc& twist = body_.model.joints[size_t(elbow)].desc;
-      limbHinge_[2 + s] = twist.type == ik::JointType::Revolute && twist.parent >= 0 &&
-                                  body_.model.joints[size_t(twist.parent)].desc.type == ik::JointType::Revolute
-                              ? twist.parent
-                              : -1;
-    }
-  }
-
-  // Rest geometry from the model without tasks (q = 0 is the rest pose).
-  {
-    ik::Data rest(body_.model);
-    (void)rest.setConfiguration(Eigen::VectorXd::Zero(body_.model.dofs));
-    ik::kinematics(body_.model, rest, false);
-    auto pos = [&](ik::JointId j) { return Eigen::Vector3d(rest.jointFrame(j).translation()); };
-    for (size_t k = 0; k < 4; ++k)
-      if (limbRoot_[k] >= 0 && limbMiddle_[k] >= 0 && limbEnd_[k] >= 0)
-        limb_[k] = {(pos(limbMiddle_[k]) - pos(limbRoot_[k])).norm(), (pos(limbEnd_[k]) - pos(limbMiddle_[k])).norm()};
-    for (auto id : tracking::kAllTrackers)
-      restRotation_[size_t(tracking::index(id))] = Eigen::Quaterniond(rest.jointFrame(joint_[size_t(tracking::index(id))]).rotation());
-    armReach_ = (pos(leftElbow) - pos(leftShoulder_)).norm() + (pos(body_.leftHand) - pos(leftElbow)).norm();
-
-    // Height and floor from the skinned rest mesh (the skeleton alone misses the skull and soles).
-    std::vector<glm::mat4> globals, palette;
-    avatar::computeGlobals(avatar_.skeleton, avatar::SkeletonPose::rest(avatar_.skeleton), globals);
-    avatar::computeSkinningPalette(avatar_, globals, palette);
-    std::vector<glm::vec3> positions, normals;
-    avatar::skinOnCpu(avatar_.mesh, palette, positions, normals);
-    double lo = 1e30, hi = -1e30;
-    for (const auto& p : positions) {
-      const double h = up_.dot(toEigen(p));
-      lo = std::min(lo, h), hi = std::max(hi, h);
-    }
-    const Eigen::Vector3d head = pos(body_.head);
-    if (!(hi > lo + 0.3)) {  // no usable mesh: the skeleton, with a head's height on top
-      lo = std::min(up_.dot(pos(body_.leftFoot)), up_.dot(pos(body_.rightFoot))) - 0.07;
-      hi = up_.dot(head) + 0.15;
-    }
-    floor_ = lo;
-    avatarHeight_ = hi - lo;
-    for (auto id : tracking::kAllTrackers)
-      restHeight_[size_t(tracking::index(id))] = up_.dot(pos(joint_[size_t(tracking::index(id))])) - floor_;
-    // The eyes: at the anthropometric eye height (0.936 of stature), ahead of the head's pivot.
-    const auto dims = tracking::BodyDimensions::fromHeight(float(avatarHeight_));
-    avatarEyeHeight_ = dims.eyeHeight;
-    const Eigen::Vector3d eye = head + up_ * (floor_ + avatarEyeHeight_ - up_.dot(head)) + forward_ * dims.eyeForward;
-    eyeInHead_ = restRotation_[0].conjugate() * (eye - head);
-    restHeadToHips_ = pos(body_.hips) - head;
-    if (legs) {
-      // Seated mode's leg geometry. The hip joint centres sit about a thigh's thickness (5 % of
-      // stature) above the seat surface.
-      legs_.up = up_;
-      legs_.forward = forward_;
-      legs_.floor = floor_;
-      legs_.eye = eye;
-      for (size_t s = 0; s < 2; ++s) {
-        const ik::JointId foot = s == 0 ? body_.leftFoot : body_.rightFoot;
-        legs_.hip[s] = pos(hipJoint_[s]);
-        legs_.knee[s] = pos(kneeJoint_[s]);
-        legs_.ankle[s] = pos(foot);
-        legs_.footRotation[s] = Eigen::Quaterniond(rest.jointFrame(foot).rotation());
-      }
-      legs_.pelvisRotation = restRotation_[size_t(tracking::index(TrackerId::Hips))];
-      legs_.hipAboveSeat = 0.05 * avatarHeight_;
-    }
-
-    // Tracker frame -> joint frame. Reference tracker orientations (tracking space) for the rest
-    // pose: identity for head, hips, feet; the grip pose of the rest hand for the hands.
-    for (auto id : tracking::kAllTrackers) {
-      const size_t i = size_t(tracking::index(id));
-      glm::quat ref(1.0f, 0.0f, 0.0f, 0.0f);
-      if (id == TrackerId::LeftHand || id == TrackerId::RightHand) {
-        const bool left = id == TrackerId::LeftHand;
-        const Eigen::Vector3d fingers = restRotation_[i] * Eigen::Vector3d::UnitY();
-        const Eigen::Vector3d palm = restRotation_[i] * Eigen::Vector3d::UnitX() * (left ? 1.0 : -1.0);
-        ref = tracking::gripOrientation(left ? tracking::Side::Left : tracking::Side::Right,
-                                        toGlm(fromTracking_.conjugate() * fingers), toGlm(fromTracking_.conjugate() * palm));
-      }
-      jointFromTracker_[i] = (fromTracking_ * toEigen(ref)).conjugate() * restRotation_[i];
-    }
-
-    // Feet for three-point mode: rest ankles relative to the hips' ground point.
-    const Eigen::Vector3d hipsGround = pos(body_.hips) - up_ * up_.dot(pos(body_.hips));
-    planner_.configure(options.feet, FootShape{}, up_, forward_,
-                       {pos(body_.leftFoot) - hipsGround, pos(body_.rightFoot) - hipsGround}, avatarHeight_ / 1.75);
-  }
-
+  measureRest(leftElbow, legs);
   if (options.sameBody.enabled) useSameBody(options.sameBody);  // before the tasks take the eye offset
-
-  // Tasks from the layout (layout priority 1 = solver level 0).
   layout_ = options.seat.enabled ? seatedTaskLayoutFor(options.trackers) : taskLayoutFor(options.trackers);
   std::vector<ik::TaskDesc> tasks;
-  auto add = [&](ik::TaskDesc t, int priority, float weight) {
-    t.level = priority - 1;
-    t.weight = weight;
-    tasks.push_back(std::move(t));
-    return ik::TaskId(tasks.size() - 1);
-  };
-  for (const TaskSpec& spec : layout_.tasks) {
-    const size_t i = size_t(tracking::index(spec.tracker));
-    ik::TaskDesc t;
-    t.name = std::string(taskKindName(spec.kind)) + "_" + std::string(tracking::trackerKey(spec.tracker));
-    t.joint = joint_[i];
-    t.position_tolerance = 5e-4;
-    t.rotation_tolerance = 0.01;
-    switch (spec.kind) {
-      case TaskKind::TrackerPosition:
-        t.type = ik::TaskType::Position;
-        if (spec.tracker == TrackerId::Head) t.offset = eyeInHead_;
-        // A tracked pelvis steers the trunk over the ground only: its height follows from the
-        // head and the legs, whose proportions differ between user and avatar.
-        if (spec.tracker == TrackerId::Hips && std::abs(std::abs(up_.y()) - 1.0) < 1e-6) t.axes = ik::kAxisX | ik::kAxisZ;
-        positionTask_[i] = add(t, spec.priority, spec.weight);
-        break;
-      case TaskKind::TrackerOrientation:
-        t.type = ik::TaskType::Orientation;
-        if (spec.tracker != TrackerId::Head) t.rotation_tolerance = 0.05;
-        orientationTask_[i] = add(t, spec.priority, spec.weight);
-        break;
-      case TaskKind::FootPlant:
-        t.type = ik::TaskType::Pose;
-        positionTask_[i] = add(t, spec.priority, spec.weight);
-        break;
-      case TaskKind::Balance:
-        t.type = ik::TaskType::CenterOfMass;
-        t.position_tolerance = 0.005;
-        balanceTask_ = add(t, spec.priority, spec.weight);
-        break;
-      case TaskKind::SeatedHip:
-      case TaskKind::SeatedKnee: {
-        const size_t side = spec.tracker == TrackerId::LeftFoot ? 0 : 1;
-        const bool hip = spec.kind == TaskKind::SeatedHip;
-        t.name = std::string(hip ? "seated_hip_" : "seated_knee_") + (side == 0 ? "left" : "right");
-        t.type = ik::TaskType::Position;
-        t.joint = hip ? hipJoint_[side] : kneeJoint_[side];
-        (hip ? seatHipTask_ : seatKneeTask_)[side] = add(t, spec.priority, spec.weight);
-        break;
-      }
-      case TaskKind::SeatedPelvis:
-        t.name = "seated_pelvis";
-        t.type = ik::TaskType::Orientation;
-        t.joint = body_.hips;
-        t.rotation_tolerance = 0.05;
-        seatPelvisTask_ = add(t, spec.priority, spec.weight);
-        break;
-      case TaskKind::LimbPole: {
-        const size_t k = spec.tracker == TrackerId::LeftFoot    ? 0
-                         : spec.tracker == TrackerId::RightFoot ? 1
-                         : spec.tracker == TrackerId::LeftHand  ? 2
-                                                                : 3;
-        if (!options.limbPoles || limbMiddle_[k] < 0 || limbRoot_[k] < 0 || !(limb_[k].upper > 0.0)) break;
-        t.name = std::string(k < 2 ? "pole_knee_" : "pole_elbow_") + (k % 2 == 0 ? "left" : "right");
-        t.type = ik::TaskType::Position;
-        t.joint = limbMiddle_[k];
-        t.position_tolerance = 0.02;  // a direction, not a place: it need not hold a solve back
-        poleTask_[k] = add(t, spec.priority, spec.weight);
-        break;
-      }
-      case TaskKind::InferredHips:
-        t.type = ik::TaskType::Position;
-        t.position_tolerance = 0.05;
-        hipsPosTask_ = add(t, spec.priority, spec.weight);
-        t.type = ik::TaskType::Orientation;
-        t.name += "_rotation";
-        t.rotation_tolerance = 0.2;
-        hipsRotTask_ = add(t, spec.priority, spec.weight * 0.5f);
-        break;
-    }
-  }
-  if (options.jointMarkers) {
-    int lowest = 1;
-    for (const TaskSpec& spec : layout_.tasks) lowest = std::max(lowest, spec.priority);
-    for (size_t a = 0; a < avatar_.skeleton.joints.size(); ++a) {
-      const int j = body_.ikJointOfAvatar[a];
-      if (j < 0 || body_.avatarJoint[size_t(j)] != int(a)) continue;
-      ik::TaskDesc t;
-      t.name = "marker_" + avatar_.skeleton.joints[a].name;
-      t.type = ik::TaskType::Pose;
-      t.joint = j;
-      t.position_tolerance = 5e-4;
-      t.rotation_tolerance = 0.01;
-      markerTask_.emplace_back(int(a), add(t, lowest + 1, 1.0f));
-    }
-  }
+  for (const TaskSpec& spec : layout_.tasks) addLayoutTask(spec, tasks);
+  if (options.jointMarkers) addJointMarkerTasks(tasks);
   auto model = withTasks(body_.model, tasks);
   if (!model) return Error{"body model with tracker tasks: " + model.error()};
   body_.model = std::move(model).value();
@@ -288,9 +84,238 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
   return Status::success();
 }
 
+Status AvatarBodySolver::bindJoints(ik::JointId& leftElbow) {
+  joint_[size_t(tracking::index(TrackerId::Head))] = body_.head;
+  joint_[size_t(tracking::index(TrackerId::LeftHand))] = body_.leftHand;
+  joint_[size_t(tracking::index(TrackerId::RightHand))] = body_.rightHand;
+  joint_[size_t(tracking::index(TrackerId::Hips))] = body_.hips;
+  joint_[size_t(tracking::index(TrackerId::LeftFoot))] = body_.leftFoot;
+  joint_[size_t(tracking::index(TrackerId::RightFoot))] = body_.rightFoot;
+  auto ikOf = [&](avatar::HumanBone bone) {
+    const int a = avatar_.humanoid.joint(bone);
+    return a >= 0 ? body_.ikJointOfAvatar[size_t(a)] : -1;
+  };
+  leftShoulder_ = ikOf(avatar::HumanBone::leftUpperArm);
+  rightShoulder_ = ikOf(avatar::HumanBone::rightUpperArm);
+  leftElbow = ikOf(avatar::HumanBone::leftLowerArm);
+  if (leftShoulder_ < 0 || rightShoulder_ < 0 || leftElbow < 0) return Error{"the avatar's arms are not mapped"};
+  hipJoint_ = {ikOf(avatar::HumanBone::leftUpperLeg), ikOf(avatar::HumanBone::rightUpperLeg)};
+  kneeJoint_ = {ikOf(avatar::HumanBone::leftLowerLeg), ikOf(avatar::HumanBone::rightLowerLeg)};
+  bindLimbs(leftElbow, ikOf(avatar::HumanBone::rightLowerArm));
+  return Status::success();
+}
+
+// Limb chains for the knee and elbow direction tasks. The elbow's IK joint at the lower arm's
+// pivot is its forearm twist; the hinge is the joint before it.
+void AvatarBodySolver::bindLimbs(ik::JointId leftElbow, ik::JointId rightElbow) {
+  for (size_t s = 0; s < 2; ++s) {
+    const bool left = s == 0;
+    limbRoot_[s] = hipJoint_[s];
+    limbMiddle_[s] = limbHinge_[s] = kneeJoint_[s];
+    limbEnd_[s] = left ? body_.leftFoot : body_.rightFoot;
+    const ik::JointId elbow = left ? leftElbow : rightElbow;
+    limbRoot_[2 + s] = left ? leftShoulder_ : rightShoulder_;
+    limbMiddle_[2 + s] = elbow;
+    limbEnd_[2 + s] = left ? body_.leftHand : body_.rightHand;
+    if (elbow >= 0) {
+      const ik::JointDesc& twist = body_.model.joints[size_t(elbow)].desc;
+      limbHinge_[2 + s] = twist.type == ik::JointType::Revolute && twist.parent >= 0 &&
+                                  body_.model.joints[size_t(twist.parent)].desc.type == ik::JointType::Revolute
+                              ? twist.parent
+                              : -1;
+    }
+  }
+}
+
+// Rest geometry from the model without tasks (q = 0 is the rest pose): heights, the eye point,
+// the seated legs, the tracker -> joint frames and the foot planner's rest stance.
+void AvatarBodySolver::measureRest(ik::JointId leftElbow, bool legs) {
+  ik::Data rest(body_.model);
+  (void)rest.setConfiguration(Eigen::VectorXd::Zero(body_.model.dofs));
+  ik::kinematics(body_.model, rest, false);
+  auto pos = [&](ik::JointId j) { return Eigen::Vector3d(rest.jointFrame(j).translation()); };
+  for (size_t k = 0; k < 4; ++k)
+    if (limbRoot_[k] >= 0 && limbMiddle_[k] >= 0 && limbEnd_[k] >= 0)
+      limb_[k] = {(pos(limbMiddle_[k]) - pos(limbRoot_[k])).norm(), (pos(limbEnd_[k]) - pos(limbMiddle_[k])).norm()};
+  for (auto id : tracking::kAllTrackers)
+    restRotation_[size_t(tracking::index(id))] = Eigen::Quaterniond(rest.jointFrame(joint_[size_t(tracking::index(id))]).rotation());
+  armReach_ = (pos(leftElbow) - pos(leftShoulder_)).norm() + (pos(body_.leftHand) - pos(leftElbow)).norm();
+  measureHeight(pos(body_.head), pos(body_.leftFoot), pos(body_.rightFoot));
+  for (auto id : tracking::kAllTrackers)
+    restHeight_[size_t(tracking::index(id))] = up_.dot(pos(joint_[size_t(tracking::index(id))])) - floor_;
+  // The eyes: at the anthropometric eye height (avatar::kEyeHeightRatio of stature), ahead of
+  // the head's pivot.
+  const Eigen::Vector3d head = pos(body_.head);
+  const auto dims = tracking::BodyDimensions::fromHeight(float(avatarHeight_));
+  avatarEyeHeight_ = dims.eyeHeight;
+  const Eigen::Vector3d eye = head + up_ * (floor_ + avatarEyeHeight_ - up_.dot(head)) + forward_ * dims.eyeForward;
+  eyeInHead_ = restRotation_[0].conjugate() * (eye - head);
+  restHeadToHips_ = pos(body_.hips) - head;
+  if (legs) {
+    // Seated mode's leg geometry. The hip joint centres sit about a thigh's thickness (5 % of
+    // stature) above the seat surface.
+    legs_.up = up_;
+    legs_.forward = forward_;
+    legs_.floor = floor_;
+    legs_.eye = eye;
+    for (size_t s = 0; s < 2; ++s) {
+      const ik::JointId foot = s == 0 ? body_.leftFoot : body_.rightFoot;
+      legs_.hip[s] = pos(hipJoint_[s]);
+      legs_.knee[s] = pos(kneeJoint_[s]);
+      legs_.ankle[s] = pos(foot);
+      legs_.footRotation[s] = Eigen::Quaterniond(rest.jointFrame(foot).rotation());
+    }
+    legs_.pelvisRotation = restRotation_[size_t(tracking::index(TrackerId::Hips))];
+    legs_.hipAboveSeat = 0.05 * avatarHeight_;
+  }
+  trackerFrames();
+  // Feet for three-point mode: rest ankles relative to the hips' ground point.
+  const Eigen::Vector3d hipsGround = pos(body_.hips) - up_ * up_.dot(pos(body_.hips));
+  planner_.configure(options_.feet, FootShape{}, up_, forward_,
+                     {pos(body_.leftFoot) - hipsGround, pos(body_.rightFoot) - hipsGround}, avatarHeight_ / 1.75);
+}
+
+// Height and floor from the skinned rest mesh (the skeleton alone misses the skull and soles);
+// without a usable mesh, the skeleton with a head's height on top.
+void AvatarBodySolver::measureHeight(const Eigen::Vector3d& head, const Eigen::Vector3d& leftFoot, const Eigen::Vector3d& rightFoot) {
+  std::vector<glm::mat4> globals, palette;
+  avatar::computeGlobals(avatar_.skeleton, avatar::SkeletonPose::rest(avatar_.skeleton), globals);
+  avatar::computeSkinningPalette(avatar_, globals, palette);
+  std::vector<glm::vec3> positions, normals;
+  avatar::skinOnCpu(avatar_.mesh, palette, positions, normals);
+  double lo = 1e30, hi = -1e30;
+  for (const auto& p : positions) {
+    const double h = up_.dot(toEigen(p));
+    lo = std::min(lo, h), hi = std::max(hi, h);
+  }
+  if (!(hi > lo + 0.3)) {
+    lo = std::min(up_.dot(leftFoot), up_.dot(rightFoot)) - 0.07;
+    hi = up_.dot(head) + 0.15;
+  }
+  floor_ = lo;
+  avatarHeight_ = hi - lo;
+}
+
+// Tracker frame -> joint frame. Reference tracker orientations (tracking space) for the rest
+// pose: identity for head, hips, feet; the grip pose of the rest hand for the hands.
+void AvatarBodySolver::trackerFrames() {
+  for (auto id : tracking::kAllTrackers) {
+    const size_t i = size_t(tracking::index(id));
+    glm::quat ref(1.0f, 0.0f, 0.0f, 0.0f);
+    if (id == TrackerId::LeftHand || id == TrackerId::RightHand) {
+      const bool left = id == TrackerId::LeftHand;
+      const Eigen::Vector3d fingers = restRotation_[i] * Eigen::Vector3d::UnitY();
+      const Eigen::Vector3d palm = restRotation_[i] * Eigen::Vector3d::UnitX() * (left ? 1.0 : -1.0);
+      ref = tracking::gripOrientation(left ? tracking::Side::Left : tracking::Side::Right,
+                                      toGlm(fromTracking_.conjugate() * fingers), toGlm(fromTracking_.conjugate() * palm));
+    }
+    jointFromTracker_[i] = (fromTracking_ * toEigen(ref)).conjugate() * restRotation_[i];
+  }
+}
+
+// One task of the layout (layout priority 1 = solver level 0), appended to `tasks`.
+void AvatarBodySolver::addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskDesc>& tasks) {
+  auto add = [&](ik::TaskDesc t, float weight) {
+    t.level = spec.priority - 1;
+    t.weight = weight;
+    tasks.push_back(std::move(t));
+    return ik::TaskId(tasks.size() - 1);
+  };
+  const size_t i = size_t(tracking::index(spec.tracker));
+  ik::TaskDesc t;
+  t.name = std::string(taskKindName(spec.kind)) + "_" + std::string(tracking::trackerKey(spec.tracker));
+  t.joint = joint_[i];
+  t.position_tolerance = 5e-4;
+  t.rotation_tolerance = 0.01;
+  switch (spec.kind) {
+    case TaskKind::TrackerPosition:
+      t.type = ik::TaskType::Position;
+      if (spec.tracker == TrackerId::Head) t.offset = eyeInHead_;
+      // A tracked pelvis steers the trunk over the ground only: its height follows from the
+      // head and the legs, whose proportions differ between user and avatar.
+      if (spec.tracker == TrackerId::Hips && std::abs(std::abs(up_.y()) - 1.0) < 1e-6) t.axes = ik::kAxisX | ik::kAxisZ;
+      positionTask_[i] = add(t, spec.weight);
+      break;
+    case TaskKind::TrackerOrientation:
+      t.type = ik::TaskType::Orientation;
+      if (spec.tracker != TrackerId::Head) t.rotation_tolerance = 0.05;
+      orientationTask_[i] = add(t, spec.weight);
+      break;
+    case TaskKind::FootPlant:
+      t.type = ik::TaskType::Pose;
+      positionTask_[i] = add(t, spec.weight);
+      break;
+    case TaskKind::Balance:
+      t.type = ik::TaskType::CenterOfMass;
+      t.position_tolerance = 0.005;
+      balanceTask_ = add(t, spec.weight);
+      break;
+    case TaskKind::SeatedHip:
+    case TaskKind::SeatedKnee: {
+      const size_t side = spec.tracker == TrackerId::LeftFoot ? 0 : 1;
+      const bool hip = spec.kind == TaskKind::SeatedHip;
+      t.name = std::string(hip ? "seated_hip_" : "seated_knee_") + (side == 0 ? "left" : "right");
+      t.type = ik::TaskType::Position;
+      t.joint = hip ? hipJoint_[side] : kneeJoint_[side];
+      (hip ? seatHipTask_ : seatKneeTask_)[side] = add(t, spec.weight);
+      break;
+    }
+    case TaskKind::SeatedPelvis:
+      t.name = "seated_pelvis";
+      t.type = ik::TaskType::Orientation;
+      t.joint = body_.hips;
+      t.rotation_tolerance = 0.05;
+      seatPelvisTask_ = add(t, spec.weight);
+      break;
+    case TaskKind::LimbPole: {
+      const size_t k = spec.tracker == TrackerId::LeftFoot    ? 0
+                       : spec.tracker == TrackerId::RightFoot ? 1
+                       : spec.tracker == TrackerId::LeftHand  ? 2
+                                                              : 3;
+      if (!options_.limbPoles || limbMiddle_[k] < 0 || limbRoot_[k] < 0 || !(limb_[k].upper > 0.0)) break;
+      t.name = std::string(k < 2 ? "pole_knee_" : "pole_elbow_") + (k % 2 == 0 ? "left" : "right");
+      t.type = ik::TaskType::Position;
+      t.joint = limbMiddle_[k];
+      t.position_tolerance = 0.02;  // a direction, not a place: it need not hold a solve back
+      poleTask_[k] = add(t, spec.weight);
+      break;
+    }
+    case TaskKind::InferredHips:
+      t.type = ik::TaskType::Position;
+      t.position_tolerance = 0.05;
+      hipsPosTask_ = add(t, spec.weight);
+      t.type = ik::TaskType::Orientation;
+      t.name += "_rotation";
+      t.rotation_tolerance = 0.2;
+      hipsRotTask_ = add(t, spec.weight * 0.5f);
+      break;
+  }
+}
+
 void AvatarBodySolver::calibrate(float userHeight) {
   const auto dims = tracking::BodyDimensions::fromHeight(userHeight);
   scale_ = avatarEyeHeight_ / double(dims.eyeHeight);
+}
+
+// --trackers full (embody eval): a pose marker on every mapped avatar joint, one level below the
+// layout's lowest.
+void AvatarBodySolver::addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks) {
+  int lowest = 1;
+  for (const TaskSpec& spec : layout_.tasks) lowest = std::max(lowest, spec.priority);
+  for (size_t a = 0; a < avatar_.skeleton.joints.size(); ++a) {
+    const int j = body_.ikJointOfAvatar[a];
+    if (j < 0 || body_.avatarJoint[size_t(j)] != int(a)) continue;
+    ik::TaskDesc t;
+    t.name = "marker_" + avatar_.skeleton.joints[a].name;
+    t.type = ik::TaskType::Pose;
+    t.joint = j;
+    t.position_tolerance = 5e-4;
+    t.rotation_tolerance = 0.01;
+    t.level = lowest;  // layout priority lowest + 1 = solver level lowest
+    t.weight = 1.0f;
+    tasks.push_back(std::move(t));
+    markerTask_.emplace_back(int(a), ik::TaskId(tasks.size() - 1));
+  }
 }
 
 void AvatarBodySolver::useSameBody(const AvatarBodyOptions::SameBody& same) {
@@ -524,7 +549,7 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
     const bool live = targets.status[headIndex] == TrackerStatus::Tracked && head.valid && eye > 0.4f && eye < 2.4f;
     // Seated, the head's height says nothing about the user's stature: 1.75 m unless given.
     const bool standing = live && !layout_.seated;
-    calibrate(standing ? eye / 0.936f : 1.75f);
+    calibrate(standing ? eye / float(avatar::kEyeHeightRatio) : 1.75f);
     if (standing) calibratedFromHead_ = true;
   }
   setTargets(targets);
@@ -672,9 +697,12 @@ BodySignals AvatarBodySolver::bodySignals(double time, const SolveResult& result
   const Eigen::Vector3d pelvisUp = pelvisTurn * up_;
   s.pelvisTilt = std::atan2(pelvisUp.cross(up_).norm(), pelvisUp.dot(up_));
   s.lowestTrunkOrKnee = std::min(s.pelvisHeight, height(jointPosition(body_.head)));
-  Eigen::Vector3d left = pelvisTurn * up_.cross(forward_);
-  left -= up_ * up_.dot(left);
-  left = left.norm() > 1e-6 ? left.normalized() : Eigen::Vector3d(up_.cross(forward_));
+  // Sides across the feet's own heading: on a walk the stride runs along it, where the pelvis
+  // (which turns with the head and the gait) would let the stride leak into the sideways measure.
+  Eigen::Vector3d heading = footForward(0) + footForward(1);
+  heading -= up_ * up_.dot(heading);
+  if (heading.norm() < 0.5) heading = pelvisTurn * forward_ - up_ * up_.dot(pelvisTurn * forward_);
+  const Eigen::Vector3d left = heading.norm() > 1e-6 ? Eigen::Vector3d(up_.cross(heading).normalized()) : Eigen::Vector3d(up_.cross(forward_));
   s.legSeparation = left.dot(jointPosition(body_.leftFoot) - jointPosition(body_.rightFoot));
   if (kneeJoint_[0] >= 0 && kneeJoint_[1] >= 0) {
     for (ik::JointId k : kneeJoint_) s.lowestTrunkOrKnee = std::min(s.lowestTrunkOrKnee, height(jointPosition(k)));

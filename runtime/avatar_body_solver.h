@@ -88,7 +88,12 @@ struct AvatarBodyOptions {
   struct SameBody {
     bool enabled = false;
     Eigen::Vector3d eyeOffset = Eigen::Vector3d::Zero();  // from the head joint, rest pose, tracking axes
-    std::array<Eigen::Quaterniond, tracking::kTrackerCount> reference{};  // tracker orientation at rest
+    // Eigen's quaternion default constructor leaves it uninitialised: start from identity.
+    std::array<Eigen::Quaterniond, tracking::kTrackerCount> reference = [] {
+      std::array<Eigen::Quaterniond, tracking::kTrackerCount> r;
+      r.fill(Eigen::Quaterniond::Identity());
+      return r;
+    }();  // tracker orientation at rest
   } sameBody;
 };
 
@@ -155,7 +160,16 @@ class AvatarBodySolver final : public BodySolver {
 
  private:
   AvatarBodySolver(const avatar::AvatarAsset& avatar) : avatar_(avatar) {}
+  // create()'s steps: the body model and the frames, the tracker joints, the rest geometry, the
+  // layout's tasks.
   Status build(const AvatarBodyOptions& options);
+  Status bindJoints(ik::JointId& leftElbow);
+  void bindLimbs(ik::JointId leftElbow, ik::JointId rightElbow);
+  void measureRest(ik::JointId leftElbow, bool legs);
+  void measureHeight(const Eigen::Vector3d& head, const Eigen::Vector3d& leftFoot, const Eigen::Vector3d& rightFoot);
+  void trackerFrames();
+  void addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskDesc>& tasks);
+  void addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks);
   void calibrate(float userHeight);
   void useSameBody(const AvatarBodyOptions::SameBody& same);
   void setTargets(const tracking::GuardedSample& targets);
@@ -197,7 +211,7 @@ class AvatarBodySolver final : public BodySolver {
   CollapseGuard guard_;
   PoseFade fade_;
   bool reseeded_ = false;  // the next solve starts cold (after a re-seed)
-  bool broken_ = false;    // the last solve produced a non-finite or invalid configuration  // the next solve starts cold (a re-seed after a collapse)
+  bool broken_ = false;    // the last solve produced a non-finite or invalid configuration
   // Seated mode: tasks per side (0 = left), the legs' rest geometry and the placed seat.
   std::array<ik::TaskId, 2> seatHipTask_{-1, -1}, seatKneeTask_{-1, -1};
   ik::TaskId seatPelvisTask_ = -1;

@@ -49,7 +49,7 @@ struct BodySignals {
   double headTargetHeight = 0.0, standingEyeHeight = 0.0;
   double pelvisTilt = 0.0;           // radians from upright
   double lowestTrunkOrKnee = 0.0;    // the lowest of the knees, the pelvis and the head
-  double legSeparation = 0.0;        // min over knees and ankles of (left - right) along the pelvis's left
+  double legSeparation = 0.0;        // min over knees and ankles of (left - right), across the feet's heading
   bool inferredLegs = false;         // crossing counts only for legs the runtime places
   double residual = 0.0;             // the worst of the head's and the reachable hands' errors
   int iterations = 0;                // solver iterations this frame

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <nlohmann/json.hpp>
+#include <numbers>
 
 namespace embody::runtime {
 
@@ -15,7 +16,7 @@ void SeatedStats::add(const AvatarBodySolver& solver) {
   ++measured_;
   const LowerBodyPosture p = solver.posture();
   const SeatedLegs& legs = solver.seatedLegs();
-  constexpr double kDeg = 180.0 / 3.14159265358979323846;
+  constexpr double kDeg = 180.0 / std::numbers::pi;
   for (size_t s = 0; s < 2; ++s) {
     hipDrift_ = std::max(hipDrift_, (p.hip[s] - seat->hip[s]).norm() * toMetres);
     ankleDrift_ = std::max(ankleDrift_, (p.ankle[s] - seat->ankle[s]).norm() * toMetres);

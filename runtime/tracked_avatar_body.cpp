@@ -5,6 +5,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "avatar/glm_eigen.h"
+
 namespace embody::runtime {
 
 Result<std::unique_ptr<TrackedAvatarBody>> TrackedAvatarBody::create(const avatar::AvatarAsset& avatar,
@@ -33,14 +35,14 @@ glm::mat4 TrackedAvatarBody::avatarToTracking() const {
     glm::vec3 axis(0.0f);
     axis[i] = 1.0f;
     const Eigen::Vector3d c = solver_->toAvatar(axis) - o;
-    forward[i] = glm::vec4(float(c.x()), float(c.y()), float(c.z()), 0.0f);
+    forward[i] = glm::vec4(avatar::toGlm(c), 0.0f);
   }
-  forward[3] = glm::vec4(float(o.x()), float(o.y()), float(o.z()), 1.0f);
+  forward[3] = glm::vec4(avatar::toGlm(o), 1.0f);
   return glm::inverse(forward);
 }
 
 glm::vec3 TrackedAvatarBody::toTracking(const Eigen::Vector3d& p) const {
-  return glm::vec3(avatarToTracking() * glm::vec4(float(p.x()), float(p.y()), float(p.z()), 1.0f));
+  return glm::vec3(avatarToTracking() * glm::vec4(avatar::toGlm(p), 1.0f));
 }
 
 bool TrackedAvatarBody::solve(const tracking::PoseSample& sample, avatar::SkeletonPose& pose) {

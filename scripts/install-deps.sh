@@ -10,6 +10,7 @@ PACKAGES=(
   libopenxr-dev libopenxr-loader1 libopenxr-utils openxr-layer-corevalidation
   catch2 libglfw3-dev xvfb xauth libbenchmark-dev gnuplot-nox liborocos-kdl-dev
   clang-format
+  clang libclang-rt-14-dev llvm   # make fuzz: libFuzzer + sanitizer runtimes, llvm-symbolizer
 )
 
 if [[ ! -r /etc/os-release ]] || ! grep -qE '^ID=debian' /etc/os-release; then

@@ -5,7 +5,7 @@ namespace embody::tracking {
 BodyDimensions BodyDimensions::fromHeight(float h) {
   BodyDimensions d;
   d.height = h;
-  d.eyeHeight = kEyeHeightRatio * h;
+  d.eyeHeight = float(kEyeHeightRatio) * h;
   d.eyeForward = 0.045f * h;
   d.eyeAboveNeck = 0.062f * h;
   d.shoulderHeight = 0.818f * h;

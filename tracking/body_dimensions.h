@@ -3,14 +3,14 @@
 // Drillis & Contini 1966, the table Winter's "Biomechanics and Motor Control of Human Movement"
 // reprints). Used where a source or a fallback needs a plausible body without an avatar:
 // synthetic motions, the neutral pose of a lost hand, arm-reach limits.
+#include "avatar/body/anthropometry.h"
 #include "tracking/tracker.h"
 
 namespace embody::tracking {
 
-// Eye height over body height: H-Anim's 1.75 m humanoid has its eyes at 1.633 m. The same
-// ratio as avatar::kEyeHeightRatio (avatar/body/calibration.h), so a synthetic or BVH head target
-// and a calibrated avatar's eyes agree.
-inline constexpr float kEyeHeightRatio = 0.933f;
+// Eye height over body height (avatar/body/anthropometry.h): the one ratio, so a synthetic or
+// BVH head target and a calibrated avatar's eyes agree.
+using avatar::kEyeHeightRatio;
 
 struct BodyDimensions {
   float height = 1.75f;

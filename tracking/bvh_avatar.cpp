@@ -72,7 +72,7 @@ Result<BvhAvatar> buildBvhAvatar(avatar::BvhClip clip, const BvhTrackerOptions& 
     asset.skeleton.joints.push_back(std::move(joint));
   }
   if (const std::string bad = asset.skeleton.validate(); !bad.empty()) return Error{"BVH skeleton: " + bad};
-  avatar::buildCapsuleMesh(asset, float(m.restHeightUnits * m.scale));
+  avatar::buildCapsuleMesh(asset, float(m.heightUnits * m.scale));
   if (auto s = avatar::prepareAvatar(asset, ""); !s) return Error{s.error()};
   if (auto s = checkStanding(asset); !s) return Error{s.error()};
   out.trace = std::move(trace).value();

@@ -1,7 +1,6 @@
 #include "tracking/bvh_source.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 
@@ -11,221 +10,128 @@ namespace embody::tracking {
 
 namespace {
 
+using avatar::BvhBody;
 using avatar::BvhClip;
 using avatar::BvhGlobal;
+using avatar::HumanBone;
 
-// Lower case, namespace prefix ("mixamorig:") and rig prefixes dropped, separators removed:
-// "mixamorig:LeftHand" -> "lefthand", "Hand_L" -> "handl", "Bip01 L Hand" -> "lhand".
-std::string normalise(std::string_view name) {
-  if (auto c = name.rfind(':'); c != std::string_view::npos) name.remove_prefix(c + 1);
-  std::string s;
-  for (char ch : name)
-    if (std::isalnum(static_cast<unsigned char>(ch))) s += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  for (std::string_view prefix : {"mixamorig", "bip001", "bip01", "character1", "def"})
-    if (s.rfind(prefix, 0) == 0 && s.size() > prefix.size()) {
-      s.erase(0, prefix.size());
-      break;
-    }
-  return s;
-}
+constexpr HumanBone kTrackerBone[kTrackerCount] = {HumanBone::head,     HumanBone::leftHand, HumanBone::rightHand,
+                                                   HumanBone::hips,     HumanBone::leftFoot, HumanBone::rightFoot};
 
-const std::array<std::vector<std::string_view>, kTrackerCount>& aliases() {
-  static const std::array<std::vector<std::string_view>, kTrackerCount> a = {{
-      {"head"},
-      {"lefthand", "lhand", "handl", "leftwrist", "lwrist", "wristl"},
-      {"righthand", "rhand", "handr", "rightwrist", "rwrist", "wristr"},
-      {"hips", "hip", "pelvis"},
-      {"leftfoot", "lfoot", "footl", "leftankle", "lankle", "anklel"},
-      {"rightfoot", "rfoot", "footr", "rightankle", "rankle", "ankler"},
-  }};
-  return a;
-}
-
-int findJoint(const BvhClip& clip, TrackerId id) {
-  const auto& names = aliases()[static_cast<size_t>(index(id))];
-  for (std::string_view alias : names)
-    for (size_t j = 0; j < clip.joints.size(); ++j)
-      if (!clip.joints[j].endSite && normalise(clip.joints[j].name) == alias) return static_cast<int>(j);
-  return -1;
-}
-
-std::string axisName(const glm::dvec3& v) {
-  static const char* kAxes = "XYZ";
-  for (int i = 0; i < 3; ++i)
-    if (std::abs(v[i]) > 0.5) return std::string(v[i] > 0 ? "+" : "-") + kAxes[i];
-  return "?";
-}
-
-// The signed coordinate axis nearest to v (v non-zero).
-glm::dvec3 snap(const glm::dvec3& v) {
-  int best = 0;
-  for (int i = 1; i < 3; ++i)
-    if (std::abs(v[i]) > std::abs(v[best])) best = i;
-  glm::dvec3 a(0.0);
-  a[best] = v[best] > 0 ? 1.0 : -1.0;
-  return a;
-}
-
-}  // namespace
-
-Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, BvhMapping* mappingOut) {
+Status checkOptions(const BvhClip& clip, const BvhTrackerOptions& options) {
   if (clip.joints.empty() || clip.frameCount == 0) return Error{"BVH clip has no joints or no frames"};
   if (!(options.userHeight >= 0.5f && options.userHeight <= 2.5f)) return Error{"user height outside 0.5 .. 2.5 m"};
   if (options.scale < 0.0 || !std::isfinite(options.scale)) return Error{"BVH scale must be positive"};
-  BvhMapping m;
+  return {};
+}
+
+// A required tracker without a joint stops the run (one line: what is missing, how to map it);
+// an optional one is absent with a note.
+Status checkTrackers(const BvhClip& clip, const BvhTrackerOptions& options, BvhMapping& m) {
+  std::string missing;
   for (auto id : kAllTrackers) {
-    int& j = m.joint[static_cast<size_t>(index(id))];
-    j = findJoint(clip, id);
-    if (j >= 0) continue;
-    std::string tried;
-    for (auto a : aliases()[static_cast<size_t>(index(id))]) tried += (tried.empty() ? "" : ", ") + std::string(a);
-    if (id == TrackerId::Hips) {  // the root is the pelvis in every common rig
-      j = 0;
-      m.notes.push_back("hips: no joint named like " + tried + "; using the root joint '" + clip.joints[0].name + "'");
+    if (m.joint[static_cast<size_t>(index(id))] >= 0) continue;
+    const std::string bone(avatar::humanBoneName(kTrackerBone[static_cast<size_t>(index(id))]));
+    if (options.required.has(id)) {
+      missing += (missing.empty() ? "" : ", ") + bone;
     } else {
-      m.notes.push_back(std::string(trackerKey(id)) + ": no joint named like " + tried + "; tracker absent");
+      m.notes.push_back(std::string(trackerKey(id)) + ": no joint named or shaped like the " + bone + "; tracker absent");
     }
   }
-  auto joint = [&](TrackerId id) { return m.joint[static_cast<size_t>(index(id))]; };
+  if (missing.empty()) return {};
+  std::string example = "JOINT";
+  for (const auto& j : clip.joints)
+    if (!j.endSite) example = j.name;  // a real name from the file, for the example
+  return Error{"no joint for " + missing + " (by names or skeleton shape); map it with --bvh-bone-map FILE, "
+               "e.g. {\"" + missing.substr(0, missing.find(',')) + "\": \"" + example + "\"}"};
+}
 
-  std::vector<BvhGlobal> rest;
-  avatar::bvhGlobals(clip, {}, rest);
+std::string mappingNote(const BvhClip& clip, const BvhMapping& m, const BvhTrackerOptions& options) {
+  const BvhBody& b = m.body;
+  char buf[400];
+  std::snprintf(buf, sizeof buf,
+                "standing height %.2f units; scale %.4f m/unit (%s); %s up (%s, %.0f%% sure), facing %s (%s, %.0f%% "
+                "sure), %s; joints by %s",
+                m.heightUnits, m.scale, options.scale > 0.0 ? "given" : "fitted to the user height", m.upAxis.c_str(),
+                b.upFrom.c_str(), 100.0 * b.upConfidence, m.facingAxis.c_str(), b.forwardFrom.c_str(),
+                100.0 * b.forwardConfidence, b.walking.c_str(), std::string(avatar::mappingMethodName(b.humanoid.method)).c_str());
+  std::string note = buf;
+  note += ":";
+  for (auto id : kAllTrackers) {
+    const int j = m.joint[static_cast<size_t>(index(id))];
+    note += std::string(" ") + std::string(trackerKey(id)) + "=" + (j >= 0 ? clip.joints[static_cast<size_t>(j)].name : "-");
+  }
+  return note;
+}
 
-  // File axes -> OpenXR. Up: hips to head; left: left limbs minus right limbs.
-  glm::dvec3 up(0, 1, 0);
-  if (joint(TrackerId::Head) >= 0) {
-    const glm::dvec3 v = rest[static_cast<size_t>(joint(TrackerId::Head))].position -
-                         rest[static_cast<size_t>(joint(TrackerId::Hips))].position;
-    if (glm::length(v) > 1e-9) up = snap(v);
-  }
-  glm::dvec3 lateral(0.0);
-  for (auto [l, r] : {std::pair{TrackerId::LeftHand, TrackerId::RightHand}, std::pair{TrackerId::LeftFoot, TrackerId::RightFoot}})
-    if (joint(l) >= 0 && joint(r) >= 0)
-      lateral += rest[static_cast<size_t>(joint(l))].position - rest[static_cast<size_t>(joint(r))].position;
-  lateral -= up * glm::dot(lateral, up);
-  glm::dvec3 left = glm::length(lateral) > 1e-9 ? snap(lateral) : glm::dvec3(0.0);
-  if (glm::length(left) < 0.5 || std::abs(glm::dot(left, up)) > 0.5) {
-    left = std::abs(up.x) < 0.5 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 0, 1);
-    m.notes.push_back("facing: no left/right limbs to tell the facing; assuming the usual +Z");
-  }
-  const glm::dvec3 forward = glm::cross(left, up);  // OpenXR: (-X) x (+Y) = -Z
-  m.upAxis = axisName(up);
-  m.facingAxis = axisName(forward);
-  // Rows of the file -> OpenXR rotation: world X = right = -left, Y = up, Z = back = -forward.
-  const glm::dmat3 toXr = glm::transpose(glm::dmat3(-left, up, -forward));
-  const glm::dquat qToXr = glm::quat_cast(toXr);
+// Tracker frames in the reference (first motion) frame, in OpenXR axes: identity for the head,
+// hips and feet (the clip is turned so the performer faces -Z there); for hands the grip of a
+// hand along its forearm.
+struct References {
+  std::array<glm::dquat, kTrackerCount> orientation;
+  std::vector<BvhGlobal> pose;  // the reference frame's globals
+  glm::dvec3 eyeOffset{0.0};    // from the head joint to the eyes, OpenXR axes, metres
+};
 
-  // Standing height in file units from the rest skeleton, with the legs straightened: rest poses
-  // often stand with the legs apart (CMU's does), which would underestimate the height.
-  const double rootLevel = glm::dot(rest[0].position, up);
-  double top = -1e300, lowest = 1e300;
-  for (const auto& g : rest) {
-    top = std::max(top, glm::dot(g.position, up) - rootLevel);
-    lowest = std::min(lowest, glm::dot(g.position, up) - rootLevel);
-  }
-  double legHeight = -lowest;  // fallback without feet: the rest pose as it is
-  for (auto foot : {TrackerId::LeftFoot, TrackerId::RightFoot}) {
-    const int ankle = joint(foot);
-    if (ankle < 0) continue;
-    double straight = 0.0;
-    for (int j = ankle; j > 0; j = clip.joints[static_cast<size_t>(j)].parent) {
-      const glm::dvec3& o = clip.joints[static_cast<size_t>(j)].offset;
-      const double len = glm::length(o), vertical = std::abs(glm::dot(o, up));
-      straight += vertical > 0.8 * len ? len : vertical;  // leg bones count whole, hip offsets only vertically
-    }
-    double sole = glm::dot(rest[static_cast<size_t>(ankle)].position, up);
-    for (size_t j = static_cast<size_t>(ankle) + 1; j < clip.joints.size(); ++j) {
-      int a = clip.joints[j].parent;
-      while (a > ankle) a = clip.joints[static_cast<size_t>(a)].parent;
-      if (a == ankle) sole = std::min(sole, glm::dot(rest[j].position, up));
-    }
-    legHeight = std::max(legHeight, straight + glm::dot(rest[static_cast<size_t>(ankle)].position, up) - sole);
-  }
-  m.restHeightUnits = top + legHeight;
-  if (!(m.restHeightUnits > 1e-9)) return Error{"BVH rest skeleton has no height (all joints at one level)"};
-  m.scale = options.scale > 0.0 ? options.scale : options.userHeight / m.restHeightUnits;
-  {
-    char buf[200];
-    std::snprintf(buf, sizeof buf, "standing height %.2f units (rest skeleton, legs straight), %s up, facing %s; "
-                  "scale %.4f m/unit (%s)",
-                  m.restHeightUnits, m.upAxis.c_str(), m.facingAxis.c_str(), m.scale,
-                  options.scale > 0.0 ? "given" : "fitted to the user height");
-    m.notes.insert(m.notes.begin(), buf);
-  }
-  const double performer = m.restHeightUnits * m.scale;
-  const BodyDimensions body = BodyDimensions::fromHeight(static_cast<float>(std::clamp(performer, 0.5, 2.5)));
-
-  // Reference orientations (tracker frame in the rest pose, OpenXR axes) and the eye offset.
-  auto restXr = [&](int j) { return toXr * rest[static_cast<size_t>(j)].position * m.scale; };
-  std::array<glm::dquat, kTrackerCount> reference;
-  reference.fill(glm::dquat(1, 0, 0, 0));
+References references(const BvhClip& clip, const BvhMapping& m) {
+  References r;
+  r.orientation.fill(glm::dquat(1, 0, 0, 0));
+  avatar::bvhGlobals(clip, clip.frame(m.body.firstFrame), r.pose);
+  auto xr = [&](int j) { return m.body.toXr * r.pose[static_cast<size_t>(j)].position * m.scale; };
   for (auto [id, side] : {std::pair{TrackerId::LeftHand, Side::Left}, std::pair{TrackerId::RightHand, Side::Right}}) {
-    const int h = joint(id);
+    const int h = m.joint[static_cast<size_t>(index(id))];
     if (h < 0) continue;
     // Fingers along the forearm (the first ancestor not on top of the wrist).
     int a = clip.joints[static_cast<size_t>(h)].parent;
-    while (a >= 0 && glm::length(restXr(h) - restXr(a)) < 1e-4) a = clip.joints[static_cast<size_t>(a)].parent;
-    const glm::dvec3 forearm = a >= 0 ? restXr(h) - restXr(a) : glm::dvec3(0.0);
-    reference[static_cast<size_t>(index(id))] = glm::dquat(restGripOrientation(side, glm::vec3(forearm)));
+    while (a >= 0 && glm::length(xr(h) - xr(a)) < 1e-4) a = clip.joints[static_cast<size_t>(a)].parent;
+    const glm::dvec3 forearm = a >= 0 ? xr(h) - xr(a) : glm::dvec3(0.0);
+    r.orientation[static_cast<size_t>(index(id))] = glm::dquat(restGripOrientation(side, glm::vec3(forearm)));
   }
-  glm::dvec3 eyeOffset(0.0);
-  if (joint(TrackerId::Head) >= 0) {
-    // Eyes at kEyeHeightRatio of the standing height, ahead of the head joint (OpenXR axes, rest pose).
-    const double headAboveSole =
-        (legHeight + glm::dot(rest[static_cast<size_t>(joint(TrackerId::Head))].position, up) - rootLevel) * m.scale;
-    const double rise = std::clamp(kEyeHeightRatio * performer - headAboveSole, -0.05 * performer, 0.1 * performer);
-    eyeOffset = glm::dvec3(0.0, rise, -static_cast<double>(body.eyeForward));
-  }
+  // Eyes at kEyeHeightRatio of the standing height, ahead of the head joint.
+  const double performer = m.heightUnits * m.scale;
+  const BodyDimensions body = BodyDimensions::fromHeight(static_cast<float>(std::clamp(performer, 0.5, 2.5)));
+  const double rise = std::clamp(kEyeHeightRatio * performer - m.body.headJointUnits * m.scale, -0.05 * performer,
+                                 0.1 * performer);
+  r.eyeOffset = glm::dvec3(0.0, rise, -static_cast<double>(body.eyeForward));
+  return r;
+}
 
+// Every motion frame's trackers (times from 0 at frame 0), and the lowest point of the clip.
+Trace sampleFrames(const BvhClip& clip, const BvhMapping& m, const References& ref, double& floorY) {
+  const glm::dquat qToXr = glm::quat_cast(m.body.toXr);
   Trace trace;
   trace.source = "bvh";
-  trace.userHeight = options.userHeight;
-  trace.samples.resize(clip.frameCount);  // times from 0; TraceSource replays from the first sample
-  std::vector<BvhGlobal> g;
   for (auto id : kAllTrackers)
-    if (joint(id) >= 0) trace.trackers.set(id);
-  double floorY = 1e300;
-  for (size_t f = 0; f < clip.frameCount; ++f) {
+    if (m.joint[static_cast<size_t>(index(id))] >= 0) trace.trackers.set(id);
+  trace.samples.resize(clip.frameCount - m.body.firstFrame);
+  std::vector<BvhGlobal> g;
+  floorY = 1e300;
+  for (size_t f = m.body.firstFrame; f < clip.frameCount; ++f) {
     avatar::bvhGlobals(clip, clip.frame(f), g);
-    for (const auto& x : g) floorY = std::min(floorY, (toXr * x.position).y * m.scale);
-    PoseSample& s = trace.samples[f];
+    for (const auto& x : g) floorY = std::min(floorY, (m.body.toXr * x.position).y * m.scale);
+    PoseSample& s = trace.samples[f - m.body.firstFrame];
     s.time = static_cast<double>(f) * clip.frameTime;
     for (auto id : kAllTrackers) {
-      const int j = joint(id);
+      const int j = m.joint[static_cast<size_t>(index(id))];
       if (j < 0) continue;
       const auto ju = static_cast<size_t>(j);
-      const glm::dquat delta = qToXr * g[ju].rotation * glm::inverse(rest[ju].rotation) * glm::inverse(qToXr);
-      glm::dvec3 p = toXr * g[ju].position * m.scale;
-      if (id == TrackerId::Head) p += delta * eyeOffset;
+      const glm::dquat delta = qToXr * g[ju].rotation * glm::inverse(ref.pose[ju].rotation) * glm::inverse(qToXr);
+      glm::dvec3 p = m.body.toXr * g[ju].position * m.scale;
+      if (id == TrackerId::Head) p += delta * ref.eyeOffset;
       TrackerPose& t = s[id];
       t.position = glm::vec3(p);
-      t.orientation = glm::normalize(glm::quat(delta * reference[static_cast<size_t>(index(id))]));
+      t.orientation = glm::normalize(glm::quat(delta * ref.orientation[static_cast<size_t>(index(id))]));
       t.valid = true;
     }
   }
-  // Many converted clips (CMU's among them) start with a reference pose (a T-pose) one frame
-  // before the motion: a jump no person makes. Skip it rather than replay the jump.
-  if (trace.samples.size() > 2) {
-    auto fastest = [&](const PoseSample& a, const PoseSample& b) {
-      float v = 0.0f;
-      for (auto id : kAllTrackers)
-        if (trace.trackers.has(id))
-          v = std::max(v, glm::length(b[id].position - a[id].position) / static_cast<float>(clip.frameTime));
-      return v;
-    };
-    const float first = fastest(trace.samples[0], trace.samples[1]);
-    if (first > 10.0f && fastest(trace.samples[1], trace.samples[2]) < 10.0f) {
-      trace.samples.erase(trace.samples.begin());
-      m.firstFrame = 1;
-      char buf[160];
-      std::snprintf(buf, sizeof buf, "frame 0 is a reference pose (a tracker jumps at %.0f m/s to frame 1); skipped",
-                    static_cast<double>(first));
-      m.notes.push_back(buf);
-    }
-  }
+  return trace;
+}
+
+// The lowest point on the floor, the first frame's hips over the origin.
+glm::vec3 placeOnFloor(Trace& trace, double floorY, const BvhTrackerOptions& options) {
   glm::vec3 shift(0.0f);
   if (options.alignGround) shift.y = -static_cast<float>(floorY);
-  if (options.recentre) {
+  if (options.recentre && trace.trackers.has(TrackerId::Hips)) {
     const glm::vec3 h0 = trace.samples[0][TrackerId::Hips].position;
     shift.x = -h0.x;
     shift.z = -h0.z;
@@ -235,10 +141,80 @@ Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, 
       if (trace.trackers.has(id)) s[id].position += shift;
     sanitize(s);
   }
-  m.toXr = toXr;
+  return shift;
+}
+
+// The eyes at most at eye height (kEyeHeightRatio of the standing height) in 99% of the frames:
+// the floor is the clip's lowest point and the head's reference is the first motion frame, both
+// of which can lift the eye point above what a body of that height reaches standing. The excess
+// comes off the eye offset, along the head's up.
+float capEyeHeight(Trace& trace, double performer) {
+  if (!trace.trackers.has(TrackerId::Head) || trace.samples.empty()) return 0.0f;
+  std::vector<float> y;
+  for (const auto& s : trace.samples) y.push_back(s[TrackerId::Head].position.y);
+  const size_t k = (y.size() - 1) * 99 / 100;
+  std::nth_element(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(k), y.end());
+  const float excess = y[k] - static_cast<float>(kEyeHeightRatio * performer);
+  if (excess <= 0.0f) return 0.0f;
+  for (auto& s : trace.samples) {
+    TrackerPose& h = s[TrackerId::Head];
+    h.position -= h.orientation * glm::vec3(0.0f, excess, 0.0f);
+  }
+  return excess;
+}
+
+// The references at the clip's rest pose (every channel zero), for code that sets the clip's own
+// skeleton beside the trace (tracking/bvh_avatar.h, embody eval): at the rest pose a tracker reads
+// restTurn * ref.orientation and the eyes sit restTurn * eyeOffset from the head joint, where
+// restTurn is the joint's turn from the reference frame to the rest pose (tracking axes).
+void restReferences(const BvhClip& clip, const References& ref, float eyeDrop, BvhMapping& m) {
+  const glm::dquat qToXr = glm::quat_cast(m.body.toXr);
+  std::vector<BvhGlobal> rest;
+  avatar::bvhGlobals(clip, {}, rest);
+  for (auto id : kAllTrackers) {
+    const size_t i = static_cast<size_t>(index(id));
+    const int j = m.joint[i];
+    if (j < 0) continue;
+    const auto ju = static_cast<size_t>(j);
+    const glm::dquat restTurn = qToXr * rest[ju].rotation * glm::inverse(ref.pose[ju].rotation) * glm::inverse(qToXr);
+    m.reference[i] = restTurn * ref.orientation[i];
+    if (id == TrackerId::Head)  // capEyeHeight lowered the eyes along the head's up
+      m.eyeOffset = restTurn * (ref.eyeOffset - ref.orientation[i] * glm::dvec3(0.0, double(eyeDrop), 0.0));
+  }
+}
+
+}  // namespace
+
+std::array<int, kTrackerCount> bvhTrackerJoints(const avatar::HumanoidMap& humanoid) {
+  std::array<int, kTrackerCount> j{};
+  for (auto id : kAllTrackers) j[static_cast<size_t>(index(id))] = humanoid.joint(kTrackerBone[static_cast<size_t>(index(id))]);
+  return j;
+}
+
+Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, BvhMapping* mappingOut) {
+  if (auto s = checkOptions(clip, options); !s.ok()) return Error{s.error()};
+  auto body = avatar::analyseBvhBody(clip, options.body);
+  if (!body) return Error{body.error()};
+  BvhMapping m;
+  m.body = std::move(*body);
+  m.joint = bvhTrackerJoints(m.body.humanoid);
+  if (auto s = checkTrackers(clip, options, m); !s.ok()) return Error{s.error()};
+  m.heightUnits = m.body.heightUnits;
+  m.scale = options.scale > 0.0 ? options.scale : options.userHeight / m.heightUnits;
+  m.upAxis = m.body.upAxis;
+  m.facingAxis = m.body.forwardAxis;
+  m.notes.insert(m.notes.begin(), mappingNote(clip, m, options));
+  for (const auto& n : m.body.notes) m.notes.push_back(n);
+  for (const auto& n : m.body.humanoid.notes) m.notes.push_back(n);
+  const References ref = references(clip, m);
+  double floorY = 0.0;
+  Trace trace = sampleFrames(clip, m, ref, floorY);
+  trace.userHeight = options.userHeight;
+  const glm::vec3 shift = placeOnFloor(trace, floorY, options);
+  m.toXr = m.body.toXr;
   m.shift = glm::dvec3(shift);
-  m.eyeOffset = eyeOffset;
-  m.reference = reference;
+  m.firstFrame = m.body.firstFrame;
+  restReferences(clip, ref, capEyeHeight(trace, m.heightUnits * m.scale), m);
   for (const auto& w : clip.warnings) m.notes.push_back(w);
   trace.notes = m.notes;
   if (mappingOut) *mappingOut = std::move(m);

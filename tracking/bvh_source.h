@@ -2,36 +2,38 @@
 // BVH motion capture as a pose source: head, hands, hips and feet trackers derived from the
 // clip's joints, converted to OpenXR conventions and scaled to metres.
 //
-// - Joints are found by name in the common namings (CMU Head/LeftHand/LeftFoot, Mixamo
-//   mixamorig:LeftHand, Bandai-Namco Hand_L/Foot_L, Biped "Bip01 L Hand", ...); a tracker whose
-//   joint is missing is absent and reported in notes().
-// - Axes: the up axis is the rest skeleton's hips-to-head direction and the facing comes from its
-//   left/right limbs (most files are +Y up facing +Z), snapped to the nearest axis-aligned frame
-//   and rotated onto OpenXR's +Y up / -Z forward (for the usual case: 180 deg about Y).
-// - Scale: the rest skeleton's height (sole to the top of the head) in file units is mapped to
-//   the user's height, so the motion fits the user's avatar; `scale` (metres per unit,
-//   --bvh-scale) overrides, e.g. 0.0564 for CMU's real units.
-// - The lowest point of the clip is put on the floor (y = 0) and the first frame's hips over the
+// - The body (avatar/bvh/bvh_body.h): joints from the one avatar name table (every common
+//   convention), else the topology mapper, else the user's bone map; up, forward and the
+//   performer's height measured on the motion; a leading reference pose found.
+// - A tracker the run needs (`required`: head and hands by default) whose joint is not mapped is
+//   an error naming the joint and the override; other missing trackers are absent with a note.
+// - The clip is turned onto OpenXR's +Y up, the performer facing -Z at the start; scaled so the
+//   performer is the user's height (`scale`, --bvh-scale, overrides: e.g. 0.0564 for CMU's
+//   units); the lowest point of the clip on the floor (y = 0), the first frame's hips over the
 //   origin.
 #include <array>
 #include <string>
 
 #include "avatar/bvh/bvh.h"
+#include "avatar/bvh/bvh_body.h"
 #include "tracking/trace.h"
 
 namespace embody::tracking {
 
 struct BvhTrackerOptions {
   float userHeight = 1.75f;
-  double scale = 0.0;  // metres per file unit; 0 = fit the rest skeleton to userHeight
+  double scale = 0.0;  // metres per file unit; 0 = fit the performer's height to userHeight
   bool alignGround = true;
   bool recentre = true;
+  avatar::BvhBodyOptions body;                        // --bvh-up, --bvh-forward, --bvh-bone-map
+  TrackerMask required = TrackerMask::threePoint();  // trackers whose absence is an error
 };
 
 struct BvhMapping {
   std::array<int, kTrackerCount> joint{-1, -1, -1, -1, -1, -1};  // clip joint per tracker, -1 missing
-  double restHeightUnits = 0.0;  // rest skeleton height in file units
-  double scale = 0.0;            // metres per unit used
+  avatar::BvhBody body;    // humanoid map, axes and their confidence, height, reference frame
+  double heightUnits = 0.0;  // the performer's standing height in file units
+  double scale = 0.0;        // metres per unit used
   std::string upAxis, facingAxis;  // in file axes, e.g. "+Y", "+Z"
   std::vector<std::string> notes;
   // File -> tracking space, as the trace uses it: p_tracking = toXr * p_file * scale + shift
@@ -43,6 +45,9 @@ struct BvhMapping {
   glm::dvec3 eyeOffset{0.0};  // tracking axes, from the head joint, in the rest pose
   std::array<glm::dquat, kTrackerCount> reference{};  // tracker orientation in the rest pose (tracking axes)
 };
+
+// The clip joint per tracker in a body's humanoid map (-1 where unmapped).
+std::array<int, kTrackerCount> bvhTrackerJoints(const avatar::HumanoidMap& humanoid);
 
 // Samples every frame of the clip into a trace (time = frame * frameTime).
 Result<Trace> bvhToTrace(const avatar::BvhClip& clip, const BvhTrackerOptions& options, BvhMapping* mapping = nullptr);

@@ -123,6 +123,8 @@ Result<std::unique_ptr<PoseSource>> openPoseSource(std::string_view spec, const 
     BvhTrackerOptions o;
     o.userHeight = options.userHeight;
     o.scale = options.bvhScale;
+    o.body = options.bvh;
+    o.required = TrackerMask(static_cast<uint8_t>(options.required.bits() & options.trackers.bits()));
     auto s = openBvhSource(std::string(spec), o);
     if (!s) return Error{s.error()};
     source = std::move(*s);

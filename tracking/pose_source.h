@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "avatar/bvh/bvh_body.h"
 #include "core/result.h"
 #include "tracking/tracker.h"
 
@@ -35,8 +36,10 @@ class PoseSource {
 
 struct SourceOptions {
   float userHeight = 1.75f;  // synthetic motions are built for it; BVH clips are scaled to it
-  double bvhScale = 0.0;     // metres per BVH unit; 0 = estimate from the rest skeleton's height
+  double bvhScale = 0.0;     // metres per BVH unit; 0 = fit the performer's measured height
   TrackerMask trackers = TrackerMask::all();  // trackers to keep (e.g. threePoint()); others absent
+  TrackerMask required = TrackerMask::threePoint();  // BVH: trackers whose joint must be found
+  avatar::BvhBodyOptions bvh;  // --bvh-up, --bvh-forward, --bvh-bone-map (the file's contents)
 };
 
 // Opens "synthetic:NAME", "FILE.bvh" or "FILE.jsonl" (by extension). Errors name the file and,

@@ -130,9 +130,11 @@ Result<Trace> parseTrace(std::istream& in, const std::string& name) {
     nlohmann::json j;
     try {
       j = nlohmann::json::parse(nonFiniteToNull(line));
-    } catch (const nlohmann::json::parse_error& e) {
+    } catch (const nlohmann::json::exception& e) {
+      // parse_error, and out_of_range for a number too large for a double (1e999).
       std::string what = e.what();
       if (auto p = what.find("syntax error"); p != std::string::npos) what = what.substr(p);
+      if (auto p = what.find("number overflow"); p != std::string::npos) what = what.substr(p);
       return fail("not valid JSON: " + what);
     }
     if (!j.is_object()) return fail("expected a JSON object per line");

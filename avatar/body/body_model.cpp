@@ -4,13 +4,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 
+#include "avatar/glm_eigen.h"
 #include "ik/spine/spine_model.h"
 
 namespace embody::avatar {
 namespace {
 
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
+constexpr double kDeg = std::numbers::pi / 180.0;
 
 // Per intervertebral joint, bottom (vl5 = L5-S1) to top (skullbase = Occ-C1): flexion+extension,
 // lateral bending to one side, axial rotation to one side, degrees. White & Panjabi (1990) as
@@ -23,7 +25,10 @@ constexpr std::array<std::array<double, 3>, kVertebralJointCount> kLevelRangeDeg
     {25, 5, 5},                                                                              // Occ-C1
 }};
 constexpr double kFlexionShare = 0.6;
-// Knees and elbows bend at least this much (radians, ~1.7 degrees): see the elbow's limits.
+// Knees and elbows bend at least this much (radians, ~1.7 degrees), never straight and never
+// backwards: a hinge at exactly 0 is the straight-limb singularity (shortening the limb has no
+// first-order effect there, and a local solver stalls), and below 0 it bends against its
+// anatomical direction.
 constexpr double kMinHingeBend = 0.03;
 
 // de Leva (1996), male, percent of body mass; trunk split into lower (pelvis), middle and upper.
@@ -42,10 +47,6 @@ double levelMassPercent(int level) {
   return 0.85 * kHeadNeck;
 }
 
-Eigen::Vector3d toEigen(const glm::vec3& v) {
-  return {v.x, v.y, v.z};
-}
-
 // +Y along the bone, +X = Y x forward (falls back to up x Y when the bone points forward).
 Eigen::Matrix3d boneFrame(const Eigen::Vector3d& dir, const Eigen::Vector3d& forward,
                           const Eigen::Vector3d& up) {
@@ -62,9 +63,459 @@ Eigen::Matrix3d boneFrame(const Eigen::Vector3d& dir, const Eigen::Vector3d& for
   return r;
 }
 
-struct SiteGroup {
-  int joint;
-  int firstLevel, endLevel;
+// The bone kinds the IK model drives, and per kind what the joint is (the per-bone spec table).
+enum class Kind { None, Hips, Spine, Clavicle, UpperArm, Elbow, Hand, UpperLeg, Knee, Ankle, Toes };
+
+// One limb joint: type, limits for the left side (the right side mirrors the third component:
+// its lower limit is minus the left's upper, and the other way), de Leva mass share (percent)
+// and centre of mass along the segment. Hinge axes of elbow and knee come from the rest geometry.
+struct LimbSpec {
+  Kind kind;
+  HumanBone left, right;
+  ik::JointType type;
+  std::vector<double> lower, upper;
+  bool mirrorLast = false;
+  double massPercent = 0.0, com = 0.0;
+};
+
+const std::vector<LimbSpec>& limbSpecs() {
+  using B = HumanBone;
+  using T = ik::JointType;
+  static const std::vector<LimbSpec> specs = {
+      {Kind::Clavicle, B::leftShoulder, B::rightShoulder, T::Swing, {-0.35, -0.35}, {0.35, 0.35}},
+      {Kind::UpperArm, B::leftUpperArm, B::rightUpperArm, T::Ball, {-1.0, -1.5, -0.8}, {3.0, 1.5, 2.8}, true, kUpperArm, kUpperArmCom},
+      {Kind::Elbow, B::leftLowerArm, B::rightLowerArm, T::Revolute, {kMinHingeBend}, {2.6}, false, kForearm, kForearmCom},
+      {Kind::Hand, B::leftHand, B::rightHand, T::Ball, {-1.2, -0.25, -0.6}, {1.2, 0.25, 0.6}, false, kHand, kHandCom},
+      {Kind::UpperLeg, B::leftUpperLeg, B::rightUpperLeg, T::Ball, {-0.5, -0.7, -0.5}, {2.1, 0.7, 0.8}, true, kThigh, kThighCom},
+      {Kind::Knee, B::leftLowerLeg, B::rightLowerLeg, T::Revolute, {kMinHingeBend}, {2.4}, false, kShank, kShankCom},
+      {Kind::Ankle, B::leftFoot, B::rightFoot, T::Ball, {-0.9, -0.5, -0.5}, {0.6, 0.5, 0.5}, false, kFoot, kFootCom},
+      {Kind::Toes, B::leftToes, B::rightToes, T::Revolute, {-0.6}, {0.6}},
+  };
+  return specs;
+}
+
+void setLimits(ik::JointDesc& d, std::vector<double> lo, std::vector<double> hi) {
+  d.lower = std::move(lo);
+  d.upper = std::move(hi);
+}
+
+// Builds the body model in steps (one object for the state they share): rest frames, spine
+// sites, the kind of each avatar joint, then the joints hips-first (the coupled spine with the
+// hips), then the tasks.
+class BodyModelBuilder {
+ public:
+  BodyModelBuilder(const AvatarAsset& avatar, const BodyModelOptions& options)
+      : map_(avatar.humanoid), sk_(avatar.skeleton), options_(options), n_(sk_.joints.size()) {}
+
+  Result<BodyModel> build() {
+    if (auto s = checkMapping(); !s) return Error{s.error()};
+    restFrames();
+    if (!(options_.scale > 0.05 && options_.scale < 20.0)) return Error{"body scale must be between 0.05 and 20"};
+    body_.scale = options_.scale;
+    chooseSpineSites();
+    classifyJoints();
+    b_.setUp(up_);
+    body_.ikJointOfAvatar.assign(n_, -1);
+    for (size_t a = 0; a < n_; ++a)
+      if (auto s = addJointsOf(static_cast<int>(a)); !s) return Error{s.error()};
+    if (body_.head < 0 || body_.leftHand < 0 || body_.rightHand < 0 || body_.leftFoot < 0 || body_.rightFoot < 0)
+      return Error{"the mapped hands, feet or head do not hang below the hips; cannot build the body model"};
+    if (options_.addTasks) addTasks();
+    auto model = b_.build();
+    if (!model.ok()) return Error{"body model: " + model.error()};
+    body_.model = std::move(model.value());
+    return std::move(body_);
+  }
+
+ private:
+  const HumanoidMap& map_;
+  const Skeleton& sk_;
+  const BodyModelOptions& options_;
+  const size_t n_;
+  BodyModel body_;
+  std::vector<Eigen::Vector3d> pivot_;  // per avatar joint, model space at the user's scale
+  Eigen::Vector3d up_, forward_;
+  double height_ = 0.0, massScale_ = 0.0;
+  bool perVertebra_ = false;             // one spine bone per vertebral joint
+  std::vector<SpineBone> sites_;
+  std::vector<Kind> kind_;
+  std::vector<int> siteIndexOf_;
+  ik::ModelBuilder b_;
+  std::vector<Eigen::Isometry3d> world_;  // per IK joint at rest
+
+  size_t at(int joint) const { return static_cast<size_t>(joint); }
+
+  Status checkMapping() const {
+    if (!map_.usable()) {
+      std::string missing;
+      for (HumanBone b : map_.missingRequired) missing += (missing.empty() ? "" : ", ") + std::string(humanBoneName(b));
+      return Error{"the avatar's humanoid mapping is incomplete; missing required bones: " +
+                   (missing.empty() ? std::string("(no mapping)") : missing)};
+    }
+    if (map_.spine.empty()) return Error{"the avatar has no spine between hips and head"};
+    return {};
+  }
+
+  // Rest global rotations and scales (for retargeting), pivots, up, forward, height, masses.
+  void restFrames() {
+    std::vector<glm::mat4> globals;
+    computeGlobals(sk_, SkeletonPose::rest(sk_), globals);
+    body_.avatarRestGlobalRotation.resize(n_);
+    body_.avatarRestGlobalScale.resize(n_);
+    pivot_.resize(n_);
+    for (size_t j = 0; j < n_; ++j) {
+      const glm::vec3 c0(globals[j][0]), c1(globals[j][1]), c2(globals[j][2]);
+      const glm::vec3 s(glm::length(c0), glm::length(c1), glm::length(c2));
+      body_.avatarRestGlobalScale[j] = s;
+      body_.avatarRestGlobalRotation[j] = glm::normalize(glm::quat_cast(glm::mat3(c0 / s.x, c1 / s.y, c2 / s.z)));
+      pivot_[j] = options_.scale * toEigen(glm::vec3(globals[j][3]));
+    }
+    up_ = toEigen(map_.up).normalized();
+    forward_ = toEigen(map_.forward).normalized();
+    const double lowestFoot = std::min(pivot_[at(map_.joint(HumanBone::leftFoot))].dot(up_),
+                                       pivot_[at(map_.joint(HumanBone::rightFoot))].dot(up_));
+    height_ = std::max(0.5, pivot_[at(map_.joint(HumanBone::head))].dot(up_) - lowestFoot + 0.18);
+    massScale_ = options_.totalMass / 100.0;
+  }
+
+  // Spine sites: every spine bone that stands for a vertebra (full / the avatar's own bones), or
+  // the eight groups of the simplified model when the avatar has a bone per vertebra.
+  void chooseSpineSites() {
+    perVertebra_ = map_.spine.size() == kVertebralJointCount &&
+                   std::all_of(map_.spine.begin(), map_.spine.end(), [](const SpineBone& b) { return b.levelCount() == 1; });
+    if (options_.spine == SpineMode::Simplified && perVertebra_) {
+      // 3 lumbar, 3 thoracic, 2 cervical sites (Raunhardt & Boulic's simplified model) + the head.
+      const int starts[] = {0, 2, 4, 5, 9, 13, 17, 20, 24, 25};
+      for (int g = 0; g + 1 < 10; ++g) sites_.push_back({map_.spine[at(starts[g])].joint, starts[g], starts[g + 1]});
+      body_.spineModel = "simplified";
+    } else {
+      for (const SpineBone& b : map_.spine)
+        if (b.levelCount() > 0) sites_.push_back(b);
+      body_.spineModel = perVertebra_ ? "full" : "bones";
+    }
+    body_.spineSites = sites_;
+  }
+
+  // Which avatar joints the IK model drives: the hips, the spine sites, and the limb bones of
+  // the spec table that hang below the hips.
+  void classifyJoints() {
+    kind_.assign(n_, Kind::None);
+    siteIndexOf_.assign(n_, -1);
+    const int hips = map_.joint(HumanBone::hips);
+    kind_[at(hips)] = Kind::Hips;
+    for (size_t s = 0; s < sites_.size(); ++s) {
+      kind_[at(sites_[s].joint)] = Kind::Spine;
+      siteIndexOf_[at(sites_[s].joint)] = static_cast<int>(s);
+    }
+    for (const LimbSpec& spec : limbSpecs())
+      for (HumanBone b : {spec.left, spec.right})
+        if (map_.has(b) && sk_.isAncestor(hips, map_.joint(b)) && map_.joint(b) != hips) kind_[at(map_.joint(b))] = spec.kind;
+  }
+
+  const LimbSpec* specOf(Kind kind) const {
+    for (const LimbSpec& spec : limbSpecs())
+      if (spec.kind == kind) return &spec;
+    return nullptr;
+  }
+
+  bool isLeft(int j) const {
+    for (const LimbSpec& spec : limbSpecs())
+      if (map_.joint(spec.left) == j) return true;
+    return false;
+  }
+
+  // The bone's direction: towards the next mapped bone down the limb, the next spine site, or
+  // (for ends) the first child / the parent's direction.
+  int nextOf(int j) const {
+    const Kind kind = kind_[at(j)];
+    if (kind == Kind::Hips) return sites_.empty() ? -1 : sites_.front().joint;
+    if (kind == Kind::Spine) {
+      const int s = siteIndexOf_[at(j)];
+      return s + 1 < static_cast<int>(sites_.size()) ? sites_[at(s) + 1].joint : -1;
+    }
+    if (kind == Kind::Hand) {  // towards the fingers: the middle knuckle (else another), not the thumb
+      const auto first = static_cast<int>(isLeft(j) ? HumanBone::leftIndexProximal : HumanBone::rightIndexProximal);
+      for (int f : {1, 0, 2, 3}) {
+        const int k = map_.joint(static_cast<HumanBone>(first + 3 * f));  // index, middle, ring, little proximal
+        if (k >= 0 && k != j && sk_.isAncestor(j, k)) return k;
+      }
+      return -1;
+    }
+    if (kind == Kind::None || kind == Kind::Toes) return -1;
+    const LimbSpec* next = specOf(static_cast<Kind>(static_cast<int>(kind) + 1));  // the next bone down the limb
+    return map_.joint(isLeft(j) ? next->left : next->right);
+  }
+
+  Eigen::Vector3d direction(int j) const {
+    const int next = nextOf(j);
+    if (next >= 0 && (pivot_[at(next)] - pivot_[at(j)]).norm() > 1e-5) return (pivot_[at(next)] - pivot_[at(j)]).normalized();
+    if (kind_[at(j)] == Kind::Spine) return up_;  // the head: up
+    for (int c : sk_.children(j))
+      if ((pivot_[at(c)] - pivot_[at(j)]).norm() > 1e-4) return (pivot_[at(c)] - pivot_[at(j)]).normalized();
+    const int p = sk_.joints[at(j)].parent;
+    if (p >= 0 && (pivot_[at(j)] - pivot_[at(p)]).norm() > 1e-5) return (pivot_[at(j)] - pivot_[at(p)]).normalized();
+    return up_;
+  }
+
+  double segmentLength(int j) const {
+    const int next = nextOf(j);
+    if (next >= 0) return (pivot_[at(next)] - pivot_[at(j)]).norm();
+    return 0.045 * height_;  // hands and toes without a child: a typical length
+  }
+
+  // Adds an IK joint at the avatar joint's pivot, under the IK joint of its nearest driven
+  // ancestor (or, sameParent, under the joint already at this pivot).
+  ik::JointId add(int avatarJoint, ik::JointDesc desc, const Eigen::Matrix3d& rot, bool sameParent = false) {
+    int parentIk = -1;
+    if (sameParent || body_.ikJointOfAvatar[at(avatarJoint)] >= 0) {
+      parentIk = body_.ikJointOfAvatar[at(avatarJoint)];  // a second joint at the same pivot
+    } else {
+      int parentAvatar = sk_.joints[at(avatarJoint)].parent;
+      while (parentAvatar >= 0 && body_.ikJointOfAvatar[at(parentAvatar)] < 0) parentAvatar = sk_.joints[at(parentAvatar)].parent;
+      parentIk = parentAvatar >= 0 ? body_.ikJointOfAvatar[at(parentAvatar)] : -1;
+    }
+    Eigen::Isometry3d w = Eigen::Isometry3d::Identity();
+    w.linear() = rot;
+    w.translation() = pivot_[at(avatarJoint)];
+    desc.parent = parentIk;
+    desc.rest = parentIk >= 0 ? world_[at(parentIk)].inverse() * w : w;
+    const ik::JointId id = b_.addJoint(desc);
+    world_.push_back(w);
+    body_.avatarJoint.push_back(avatarJoint);
+    body_.ikRestRotation.push_back(Eigen::Quaterniond(rot));
+    body_.ikJointOfAvatar[at(avatarJoint)] = id;
+    return id;
+  }
+
+  Status addJointsOf(int j) {
+    const Kind kind = kind_[at(j)];
+    if (kind == Kind::None) return {};
+    if (kind != Kind::Hips && !sk_.isAncestor(map_.joint(HumanBone::hips), j)) return {};
+    const Eigen::Matrix3d rot = boneFrame(direction(j), forward_, up_);
+    ik::JointDesc d;
+    d.name = sk_.joints[at(j)].name;
+    if (kind == Kind::Hips) {
+      d.type = ik::JointType::Free;
+      d.mass = kLowerTrunk * massScale_;
+      d.com = Eigen::Vector3d(0, 0.5 * segmentLength(j), 0);
+      body_.hips = add(j, d, rot);
+      return options_.coupledSpine ? addCoupledSpine() : Status{};
+    }
+    if (kind == Kind::Spine) {
+      if (!options_.coupledSpine) addUncoupledSpineSite(j, d, rot);  // else added with the coupled spine
+      return {};
+    }
+    addLimbJoint(j, *specOf(kind), d, rot);
+    return {};
+  }
+
+  // One row of the spec table; elbow and knee get their hinge axis, the elbow a forearm twist.
+  void addLimbJoint(int j, const LimbSpec& spec, ik::JointDesc& d, const Eigen::Matrix3d& rot) {
+    const bool left = isLeft(j);
+    d.type = spec.type;
+    d.lower = spec.lower;
+    d.upper = spec.upper;
+    if (spec.mirrorLast && !left) {
+      d.lower.back() = -spec.upper.back();
+      d.upper.back() = -spec.lower.back();
+    }
+    d.mass = spec.massPercent * massScale_;
+    if (spec.massPercent > 0.0) d.com = Eigen::Vector3d(0, spec.com * segmentLength(j), 0);
+    if (spec.kind == Kind::Clavicle) d.axis = Eigen::Vector3d::UnitY();
+    if (spec.kind == Kind::Toes) d.axis = Eigen::Vector3d::UnitX();
+    if (spec.kind == Kind::Elbow || spec.kind == Kind::Knee) d.axis = rot.transpose() * hingeAxis(j, spec, rot);
+    const ik::JointId id = add(j, d, rot);
+    if (spec.kind == Kind::Hand) (left ? body_.leftHand : body_.rightHand) = id;
+    if (spec.kind == Kind::Ankle) (left ? body_.leftFoot : body_.rightFoot) = id;
+    if (spec.kind == Kind::Elbow) {
+      ik::JointDesc twist;
+      twist.name = d.name + "_twist";
+      twist.type = ik::JointType::Revolute;
+      twist.axis = Eigen::Vector3d::UnitY();
+      setLimits(twist, {-1.4}, {1.4});
+      add(j, twist, rot);
+    }
+  }
+
+  // World hinge axis of an elbow (upper arm x forward, so + flexes the forearm forward; a bent
+  // rest elbow gives the axis directly) or a knee (upper leg x -forward: + flexes the shank back).
+  Eigen::Vector3d hingeAxis(int j, const LimbSpec& spec, const Eigen::Matrix3d& rot) const {
+    const bool elbow = spec.kind == Kind::Elbow;
+    const HumanBone upperBone = elbow ? (isLeft(j) ? HumanBone::leftUpperArm : HumanBone::rightUpperArm)
+                                      : (isLeft(j) ? HumanBone::leftUpperLeg : HumanBone::rightUpperLeg);
+    const Eigen::Vector3d dUpper = (pivot_[at(j)] - pivot_[at(map_.joint(upperBone))]).normalized();
+    Eigen::Vector3d axis = dUpper.cross(elbow ? forward_ : Eigen::Vector3d(-forward_));
+    if (elbow) {
+      const Eigen::Vector3d bent = dUpper.cross(direction(j));
+      if (bent.norm() > 0.17) axis = bent.dot(axis) >= 0 ? bent : -bent;
+    }
+    if (axis.norm() < 1e-6) axis = rot.col(0);
+    return axis.normalized();
+  }
+
+  // Without the coupled spine: one Ball per site with its vertebrae's summed ranges.
+  void addUncoupledSpineSite(int j, ik::JointDesc& d, const Eigen::Matrix3d& rot) {
+    const SpineBone& s = sites_[at(siteIndexOf_[at(j)])];
+    Eigen::Vector3d r = Eigen::Vector3d::Zero();
+    double mass = 0.0;
+    for (int l = s.firstLevel; l < s.endLevel; ++l) {
+      for (int k = 0; k < 3; ++k) r[k] += kLevelRangeDeg[at(l)][at(k)] * kDeg;
+      mass += levelMassPercent(l);
+    }
+    // exp-map components in the site frame: x flexion (+ forward), y torsion, z bending.
+    d.type = ik::JointType::Ball;
+    setLimits(d, {-(1.0 - kFlexionShare) * r[0], -r[2], -r[1]}, {kFlexionShare * r[0], r[2], r[1]});
+    d.mass = mass * massScale_;
+    const bool head = s.endLevel == kVertebralJointCount;
+    d.com = Eigen::Vector3d(0, head ? 0.06 * height_ / 1.75 : 0.5 * segmentLength(j), 0);
+    const ik::JointId id = add(j, d, rot);
+    if (head) body_.head = id;
+  }
+
+  // The coupled spine's description for the avatar: the default full / simplified one for a
+  // bone-per-vertebra avatar, else one site per spine bone below the head, split where a bone
+  // spans two regions (the pieces share its pivot).
+  Result<ik::spine::SpineDescription> spineDescription() const {
+    if (perVertebra_)
+      return options_.spine != SpineMode::Simplified ? ik::spine::defaultFullSpine() : ik::spine::defaultSimplifiedSpine();
+    std::vector<ik::spine::SiteSpec> specs;
+    const int regionEnd[] = {5, 17, 24};
+    for (const SpineBone& sb : sites_) {
+      const int end = std::min(sb.endLevel, kVertebralJointCount - 1);  // the head (Occ-C1) is not a site
+      for (int from = sb.firstLevel; from < end;) {
+        int to = end;
+        for (int e : regionEnd)
+          if (from < e && to > e) to = e;
+        specs.push_back({sk_.joints[at(sb.joint)].name + (from == sb.firstLevel ? "" : "_" + std::string(vertebralJointName(from))),
+                         std::string(vertebralJointName(from)), std::string(vertebralJointName(to - 1)), true, true});
+        from = to;
+      }
+    }
+    auto d = ik::spine::withSites(ik::spine::defaultFullSpine(), specs);
+    if (!d.ok()) return Error{"spine: " + d.error()};
+    return std::move(d.value());
+  }
+
+  // The coupled spine (Raunhardt & Boulic 2008, ik/spine) laid onto the avatar's spine bones;
+  // each site takes the coupling rows and ranges of the vertebrae it stands for; the head
+  // (Occ-C1) is a Ball joint on top.
+  Status addCoupledSpine() {
+    const SpineBone headSite = sites_.back();
+    if (headSite.endLevel != kVertebralJointCount) return Error{"spine: the head bone does not close the spine"};
+    auto desc = spineDescription();
+    if (!desc) return Error{desc.error()};
+    std::vector<int> siteJoint;  // avatar joint of each description site
+    for (const auto& site : desc->sites) {
+      int joint = -1;
+      for (const SpineBone& sb : map_.spine)
+        if (sb.standsFor(site.first)) joint = sb.joint;
+      if (joint < 0) return Error{"spine: no avatar bone stands for " + desc->vertebrae[at(site.first)].name};
+      siteJoint.push_back(joint);
+    }
+    std::vector<Eigen::Isometry3d> siteWorld, rests;
+    if (auto s = siteRestFrames(siteJoint, headSite.joint, siteWorld, rests); !s) return s;
+    const size_t before = b_.joints().size();
+    auto added = ik::spine::appendSpine(b_, *desc, body_.hips, rests, ik::spine::SpineOptions{});
+    if (!added.ok()) return Error{"spine: " + added.error()};
+    recordSpineJoints(*desc, *added, before, siteJoint, siteWorld, headSite);
+    addHead(headSite.joint, added->top);
+    return {};
+  }
+
+  // World rest frames of the sites: at each site's bone pivot, +Y towards the next distinct
+  // pivot; and each relative to the one below (the first to the hips).
+  Status siteRestFrames(const std::vector<int>& siteJoint, int headJoint, std::vector<Eigen::Isometry3d>& siteWorld,
+                        std::vector<Eigen::Isometry3d>& rests) const {
+    siteWorld.resize(siteJoint.size());
+    rests.resize(siteJoint.size());
+    for (size_t k = 0; k < siteJoint.size(); ++k) {
+      const Eigen::Vector3d here = pivot_[at(siteJoint[k])];
+      Eigen::Vector3d next = pivot_[at(headJoint)];
+      for (size_t m = k + 1; m < siteJoint.size(); ++m)
+        if ((pivot_[at(siteJoint[m])] - here).norm() > 1e-6) {
+          next = pivot_[at(siteJoint[m])];
+          break;
+        }
+      if ((next - here).norm() < 1e-6) return Error{"spine: two spine bones share a pivot with the head"};
+      siteWorld[k].setIdentity();
+      siteWorld[k].linear() = boneFrame(next - here, forward_, up_);
+      siteWorld[k].translation() = here;
+      rests[k] = (k == 0 ? world_[at(body_.hips)] : siteWorld[k - 1]).inverse() * siteWorld[k];
+    }
+    return {};
+  }
+
+  // Book-keeping for the joints appendSpine added (pivot, rest rotation), the sites' masses and
+  // which joint drives each spine bone.
+  void recordSpineJoints(const ik::spine::SpineDescription& desc, const ik::spine::SpineJoints& added, size_t before,
+                         const std::vector<int>& siteJoint, const std::vector<Eigen::Isometry3d>& siteWorld,
+                         const SpineBone& headSite) {
+    for (size_t id = before; id < b_.joints().size(); ++id) {
+      size_t k = 0;
+      for (size_t m = 0; m < added.sites.size(); ++m) {
+        const auto& sj = added.sites[m];
+        if (sj.swing == static_cast<int>(id) || sj.revolute == static_cast<int>(id) || sj.ball == static_cast<int>(id)) k = m;
+      }
+      world_.push_back(siteWorld[k]);
+      body_.avatarJoint.push_back(siteJoint[k]);
+      body_.ikRestRotation.push_back(Eigen::Quaterniond(siteWorld[k].linear()));
+    }
+    body_.spineSites.clear();
+    for (size_t k = 0; k < desc.sites.size(); ++k) {
+      const auto& site = desc.sites[k];
+      const ik::JointId last = added.sites[k].last();
+      body_.ikJointOfAvatar[at(siteJoint[k])] = last;  // the bone takes the composed rotation
+      double mass = 0.0;
+      for (int l = site.first; l < site.first + site.count; ++l) mass += levelMassPercent(l);
+      const Eigen::Vector3d top = k + 1 < desc.sites.size() ? Eigen::Vector3d(siteWorld[k + 1].translation())
+                                                            : pivot_[at(headSite.joint)];
+      b_.setSegment(last, mass * massScale_, Eigen::Vector3d(0, 0.5 * (top - siteWorld[k].translation()).norm(), 0));
+      body_.spineSites.push_back({siteJoint[k], site.first, site.first + site.count});
+    }
+    body_.spineSites.push_back(headSite.firstLevel == kVertebralJointCount - 1
+                                   ? headSite
+                                   : SpineBone{headSite.joint, kVertebralJointCount - 1, kVertebralJointCount});
+    body_.spineEqualities = added.equalities;
+  }
+
+  // The head: a Ball joint for Occ-C1 on top of the spine.
+  void addHead(int headJoint, ik::JointId spineTop) {
+    ik::JointDesc h;
+    h.name = sk_.joints[at(headJoint)].name;
+    h.type = ik::JointType::Ball;
+    const auto& r = kLevelRangeDeg[kVertebralJointCount - 1];
+    setLimits(h, {-(1.0 - kFlexionShare) * r[0] * kDeg, -r[2] * kDeg, -r[1] * kDeg},
+              {kFlexionShare * r[0] * kDeg, r[2] * kDeg, r[1] * kDeg});
+    h.mass = levelMassPercent(kVertebralJointCount - 1) * massScale_;
+    h.com = Eigen::Vector3d(0, 0.06 * height_ / 1.75, 0);
+    body_.ikJointOfAvatar[at(headJoint)] = spineTop;  // parent for add()
+    body_.head = add(headJoint, h, boneFrame(up_, forward_, up_), /*sameParent=*/true);
+  }
+
+  // PIK's levels: feet (0), centre of mass (1), head and hips (2), hands (3).
+  void addTasks() {
+    auto pose = [&](const char* name, ik::JointId joint, int level, bool enabled = true) {
+      ik::TaskDesc t;
+      t.name = name;
+      t.type = ik::TaskType::Pose;
+      t.joint = joint;
+      t.level = level;
+      t.enabled = enabled;
+      return b_.addTask(t);
+    };
+    body_.leftFootTask = pose("left_foot", body_.leftFoot, 0);
+    body_.rightFootTask = pose("right_foot", body_.rightFoot, 0);
+    ik::TaskDesc com;
+    com.name = "com";
+    com.type = ik::TaskType::CenterOfMass;
+    com.level = 1;
+    body_.comTask = b_.addTask(com);
+    body_.headTask = pose("head", body_.head, 2);
+    // A waist tracker, when there is one (off until the runtime binds and enables it).
+    body_.hipsTask = pose("hips", body_.hips, 2, false);
+    body_.leftHandTask = pose("left_hand", body_.leftHand, 3);
+    body_.rightHandTask = pose("right_hand", body_.rightHand, 3);
+  }
 };
 
 }  // namespace
@@ -82,463 +533,7 @@ bool parseSpineMode(const std::string& text, SpineMode& out) {
 }
 
 Result<BodyModel> buildBodyModel(const AvatarAsset& avatar, const BodyModelOptions& options) {
-  const HumanoidMap& map = avatar.humanoid;
-  const Skeleton& sk = avatar.skeleton;
-  if (!map.usable()) {
-    std::string missing;
-    for (HumanBone b : map.missingRequired)
-      missing += (missing.empty() ? "" : ", ") + std::string(humanBoneName(b));
-    return Error{"the avatar's humanoid mapping is incomplete; missing required bones: " +
-                 (missing.empty() ? std::string("(no mapping)") : missing)};
-  }
-  if (map.spine.empty()) return Error{"the avatar has no spine between hips and head"};
-  BodyModel body;
-  std::vector<glm::mat4> globals;
-  computeGlobals(sk, SkeletonPose::rest(sk), globals);
-  const size_t n = sk.joints.size();
-  body.avatarRestGlobalRotation.resize(n);
-  body.avatarRestGlobalScale.resize(n);
-  std::vector<Eigen::Vector3d> pivot(n);
-  for (size_t j = 0; j < n; ++j) {
-    const glm::vec3 c0(globals[j][0]), c1(globals[j][1]), c2(globals[j][2]);
-    const glm::vec3 s(glm::length(c0), glm::length(c1), glm::length(c2));
-    body.avatarRestGlobalScale[j] = s;
-    body.avatarRestGlobalRotation[j] =
-        glm::normalize(glm::quat_cast(glm::mat3(c0 / s.x, c1 / s.y, c2 / s.z)));
-    pivot[j] = options.scale * toEigen(glm::vec3(globals[j][3]));
-  }
-  if (!(options.scale > 0.05 && options.scale < 20.0)) return Error{"body scale must be between 0.05 and 20"};
-  body.scale = options.scale;
-  const Eigen::Vector3d up = toEigen(map.up).normalized();
-  const Eigen::Vector3d forward = toEigen(map.forward).normalized();
-  const double height =
-      std::max(0.5, pivot[static_cast<size_t>(map.joint(HumanBone::head))].dot(up) -
-                        std::min(pivot[static_cast<size_t>(map.joint(HumanBone::leftFoot))].dot(up),
-                                 pivot[static_cast<size_t>(map.joint(HumanBone::rightFoot))].dot(up)) +
-                        0.18);
-  const double massScale = options.totalMass / 100.0;
-
-  // Spine sites: every spine bone that stands for a vertebra (full / the avatar's own bones), or
-  // the eight groups of the simplified model when the avatar has a bone per vertebra.
-  bool perVertebra = std::count_if(map.spine.begin(), map.spine.end(),
-                                   [](const SpineBone& b) { return b.levelCount() == 1; }) ==
-                         static_cast<long>(map.spine.size()) &&
-                     map.spine.size() == kVertebralJointCount;
-  std::vector<SpineBone> sites;
-  if (options.spine == SpineMode::Simplified && perVertebra) {
-    // 3 lumbar, 3 thoracic, 2 cervical sites (Raunhardt & Boulic's simplified model) + the head.
-    const int starts[] = {0, 2, 4, 5, 9, 13, 17, 20, 24, 25};
-    for (int g = 0; g + 1 < 10; ++g)
-      sites.push_back({map.spine[static_cast<size_t>(starts[g])].joint, starts[g], starts[g + 1]});
-    body.spineModel = "simplified";
-  } else {
-    for (const SpineBone& b : map.spine)
-      if (b.levelCount() > 0) sites.push_back(b);
-    body.spineModel = perVertebra ? "full" : "bones";
-  }
-  body.spineSites = sites;
-
-  // Which avatar joints the IK model drives, and what each one's frame aims at.
-  std::vector<int> kind(n, 0);  // 0 none, else a tag below
-  enum Tag { Hips = 1, Spine, Clavicle, UpperArm, Elbow, Hand, UpperLeg, Knee, Ankle, Toes };
-  const int hips = map.joint(HumanBone::hips);
-  kind[static_cast<size_t>(hips)] = Hips;
-  std::vector<int> siteIndexOf(n, -1);
-  for (size_t s = 0; s < sites.size(); ++s) {
-    kind[static_cast<size_t>(sites[s].joint)] = Spine;
-    siteIndexOf[static_cast<size_t>(sites[s].joint)] = static_cast<int>(s);
-  }
-  auto mark = [&](HumanBone b, int tag) {
-    if (map.has(b) && sk.isAncestor(hips, map.joint(b)) && map.joint(b) != hips)
-      kind[static_cast<size_t>(map.joint(b))] = tag;
-  };
-  mark(HumanBone::leftShoulder, Clavicle);
-  mark(HumanBone::rightShoulder, Clavicle);
-  mark(HumanBone::leftUpperArm, UpperArm);
-  mark(HumanBone::rightUpperArm, UpperArm);
-  mark(HumanBone::leftLowerArm, Elbow);
-  mark(HumanBone::rightLowerArm, Elbow);
-  mark(HumanBone::leftHand, Hand);
-  mark(HumanBone::rightHand, Hand);
-  mark(HumanBone::leftUpperLeg, UpperLeg);
-  mark(HumanBone::rightUpperLeg, UpperLeg);
-  mark(HumanBone::leftLowerLeg, Knee);
-  mark(HumanBone::rightLowerLeg, Knee);
-  mark(HumanBone::leftFoot, Ankle);
-  mark(HumanBone::rightFoot, Ankle);
-  mark(HumanBone::leftToes, Toes);
-  mark(HumanBone::rightToes, Toes);
-  auto isLeft = [&](int j) {
-    for (HumanBone b :
-         {HumanBone::leftShoulder, HumanBone::leftUpperArm, HumanBone::leftLowerArm, HumanBone::leftHand,
-          HumanBone::leftUpperLeg, HumanBone::leftLowerLeg, HumanBone::leftFoot, HumanBone::leftToes})
-      if (map.joint(b) == j) return true;
-    return false;
-  };
-  // The bone's direction: towards the next mapped bone down the limb, the next spine site, or
-  // (for ends) the first child / the parent's direction.
-  auto nextOf = [&](int j) -> int {
-    auto pick = [&](HumanBone l, HumanBone r) { return map.joint(isLeft(j) ? l : r); };
-    switch (kind[static_cast<size_t>(j)]) {
-      case Hips:
-        return sites.empty() ? -1 : sites.front().joint;
-      case Spine: {
-        const int s = siteIndexOf[static_cast<size_t>(j)];
-        return s + 1 < static_cast<int>(sites.size()) ? sites[static_cast<size_t>(s) + 1].joint : -1;
-      }
-      case Clavicle:
-        return pick(HumanBone::leftUpperArm, HumanBone::rightUpperArm);
-      case UpperArm:
-        return pick(HumanBone::leftLowerArm, HumanBone::rightLowerArm);
-      case Elbow:
-        return pick(HumanBone::leftHand, HumanBone::rightHand);
-      case Hand:  // towards the fingers: the middle knuckle (else another), not a first child that may be the
-                  // thumb
-        for (int f : {1, 0, 2, 3}) {
-          const auto first =
-              static_cast<int>(isLeft(j) ? HumanBone::leftIndexProximal : HumanBone::rightIndexProximal);
-          const int k =
-              map.joint(static_cast<HumanBone>(first + 3 * f));  // index, middle, ring, little proximal
-          if (k >= 0 && k != j && sk.isAncestor(j, k)) return k;
-        }
-        return -1;
-      case UpperLeg:
-        return pick(HumanBone::leftLowerLeg, HumanBone::rightLowerLeg);
-      case Knee:
-        return pick(HumanBone::leftFoot, HumanBone::rightFoot);
-      case Ankle:
-        return pick(HumanBone::leftToes, HumanBone::rightToes);
-      default:
-        return -1;
-    }
-  };
-  auto direction = [&](int j) -> Eigen::Vector3d {
-    const int next = nextOf(j);
-    if (next >= 0 && (pivot[static_cast<size_t>(next)] - pivot[static_cast<size_t>(j)]).norm() > 1e-5)
-      return (pivot[static_cast<size_t>(next)] - pivot[static_cast<size_t>(j)]).normalized();
-    if (kind[static_cast<size_t>(j)] == Spine) return up;  // the head: up
-    for (int c : sk.children(j))
-      if ((pivot[static_cast<size_t>(c)] - pivot[static_cast<size_t>(j)]).norm() > 1e-4)
-        return (pivot[static_cast<size_t>(c)] - pivot[static_cast<size_t>(j)]).normalized();
-    const int p = sk.joints[static_cast<size_t>(j)].parent;
-    if (p >= 0 && (pivot[static_cast<size_t>(j)] - pivot[static_cast<size_t>(p)]).norm() > 1e-5)
-      return (pivot[static_cast<size_t>(j)] - pivot[static_cast<size_t>(p)]).normalized();
-    return up;
-  };
-  auto segmentLength = [&](int j) {
-    const int next = nextOf(j);
-    if (next >= 0) return (pivot[static_cast<size_t>(next)] - pivot[static_cast<size_t>(j)]).norm();
-    return 0.045 * height;  // hands and toes without a child: a typical length
-  };
-
-  auto limitsOf = [](ik::JointDesc& d, std::vector<double> lo, std::vector<double> hi) {
-    d.lower = std::move(lo);
-    d.upper = std::move(hi);
-  };
-  auto& limits = limitsOf;
-  ik::ModelBuilder b;
-  b.setUp(up);
-  body.ikJointOfAvatar.assign(n, -1);
-  std::vector<Eigen::Isometry3d> world;  // per IK joint at rest
-  auto add = [&](int avatarJoint, ik::JointDesc desc, const Eigen::Matrix3d& rot, bool sameParent = false) {
-    int parentAvatar = sk.joints[static_cast<size_t>(avatarJoint)].parent;
-    int parentIk = -1;
-    if (sameParent || body.ikJointOfAvatar[static_cast<size_t>(avatarJoint)] >= 0) {
-      parentIk = body.ikJointOfAvatar[static_cast<size_t>(avatarJoint)];  // a second joint at the same pivot
-    } else {
-      while (parentAvatar >= 0 && body.ikJointOfAvatar[static_cast<size_t>(parentAvatar)] < 0)
-        parentAvatar = sk.joints[static_cast<size_t>(parentAvatar)].parent;
-      parentIk = parentAvatar >= 0 ? body.ikJointOfAvatar[static_cast<size_t>(parentAvatar)] : -1;
-    }
-    Eigen::Isometry3d w = Eigen::Isometry3d::Identity();
-    w.linear() = rot;
-    w.translation() = pivot[static_cast<size_t>(avatarJoint)];
-    desc.parent = parentIk;
-    desc.rest = parentIk >= 0 ? world[static_cast<size_t>(parentIk)].inverse() * w : w;
-    const ik::JointId id = b.addJoint(desc);
-    world.push_back(w);
-    body.avatarJoint.push_back(avatarJoint);
-    body.ikRestRotation.push_back(Eigen::Quaterniond(rot));
-    body.ikJointOfAvatar[static_cast<size_t>(avatarJoint)] = id;
-    return id;
-  };
-
-  // The coupled spine (Raunhardt & Boulic 2008, ik/spine) laid onto the avatar's spine
-  // bones: one site per bone (split where a bone spans two regions, the pieces sharing its
-  // pivot), or the default full / simplified descriptions for a bone-per-vertebra avatar. Each
-  // site takes the coupling rows and ranges of the vertebrae it stands for; the head (Occ-C1) is
-  // a Ball joint on top.
-  auto addCoupledSpine = [&]() -> Status {
-    std::vector<SpineBone> vertebral;  // sites below the head
-    for (const SpineBone& sb : sites)
-      if (sb.endLevel <= kVertebralJointCount - 1)
-        vertebral.push_back(sb);
-      else if (sb.firstLevel < kVertebralJointCount - 1)
-        vertebral.push_back({sb.joint, sb.firstLevel, kVertebralJointCount - 1});
-    const SpineBone headSite = sites.back();
-    if (headSite.endLevel != kVertebralJointCount)
-      return Error{"spine: the head bone does not close the spine"};
-    ik::spine::SpineDescription desc;
-    std::vector<int> siteJoint;  // avatar joint of each description site
-    if (perVertebra && options.spine != SpineMode::Simplified) {
-      desc = ik::spine::defaultFullSpine();
-    } else if (perVertebra) {
-      desc = ik::spine::defaultSimplifiedSpine();
-    } else {
-      std::vector<ik::spine::SiteSpec> specs;
-      const int regionEnd[] = {5, 17, 24};
-      for (const SpineBone& sb : vertebral)
-        for (int from = sb.firstLevel; from < sb.endLevel;) {
-          int to = sb.endLevel;
-          for (int e : regionEnd)
-            if (from < e && to > e) to = e;
-          specs.push_back({sk.joints[static_cast<size_t>(sb.joint)].name +
-                               (from == sb.firstLevel ? "" : "_" + std::string(vertebralJointName(from))),
-                           std::string(vertebralJointName(from)), std::string(vertebralJointName(to - 1)),
-                           true, true});
-          from = to;
-        }
-      auto d = ik::spine::withSites(ik::spine::defaultFullSpine(), specs);
-      if (!d.ok()) return Error{"spine: " + d.error()};
-      desc = std::move(d.value());
-    }
-    for (const auto& site : desc.sites) {
-      int joint = -1;
-      for (const SpineBone& sb : map.spine)
-        if (sb.standsFor(site.first)) joint = sb.joint;
-      if (joint < 0)
-        return Error{"spine: no avatar bone stands for " +
-                     desc.vertebrae[static_cast<size_t>(site.first)].name};
-      siteJoint.push_back(joint);
-    }
-    // World rest frames: at each site's bone pivot, +Y towards the next distinct pivot.
-    std::vector<Eigen::Isometry3d> siteWorld(desc.sites.size());
-    std::vector<Eigen::Isometry3d> rests(desc.sites.size());
-    const int headJoint = headSite.joint;
-    for (size_t k = 0; k < desc.sites.size(); ++k) {
-      const Eigen::Vector3d here = pivot[static_cast<size_t>(siteJoint[k])];
-      Eigen::Vector3d next = pivot[static_cast<size_t>(headJoint)];
-      for (size_t m = k + 1; m < desc.sites.size(); ++m)
-        if ((pivot[static_cast<size_t>(siteJoint[m])] - here).norm() > 1e-6) {
-          next = pivot[static_cast<size_t>(siteJoint[m])];
-          break;
-        }
-      if ((next - here).norm() < 1e-6) return Error{"spine: two spine bones share a pivot with the head"};
-      siteWorld[k].setIdentity();
-      siteWorld[k].linear() = boneFrame(next - here, forward, up);
-      siteWorld[k].translation() = here;
-      rests[k] = (k == 0 ? world[static_cast<size_t>(body.hips)] : siteWorld[k - 1]).inverse() * siteWorld[k];
-    }
-    const size_t before = b.joints().size();
-    ik::spine::SpineOptions so;
-    auto added = ik::spine::appendSpine(b, desc, body.hips, rests, so);
-    if (!added.ok()) return Error{"spine: " + added.error()};
-    // Book-keeping for the joints appendSpine added: pivot, rest rotation, masses.
-    for (size_t id = before; id < b.joints().size(); ++id) {
-      size_t k = 0;
-      for (size_t m = 0; m < added->sites.size(); ++m) {
-        const auto& sj = added->sites[m];
-        if (sj.swing == static_cast<int>(id) || sj.revolute == static_cast<int>(id) ||
-            sj.ball == static_cast<int>(id))
-          k = m;
-      }
-      world.push_back(siteWorld[k]);
-      body.avatarJoint.push_back(siteJoint[k]);
-      body.ikRestRotation.push_back(Eigen::Quaterniond(siteWorld[k].linear()));
-    }
-    body.spineSites.clear();
-    for (size_t k = 0; k < desc.sites.size(); ++k) {
-      const auto& site = desc.sites[k];
-      const ik::JointId last = added->sites[k].last();
-      body.ikJointOfAvatar[static_cast<size_t>(siteJoint[k])] = last;  // the bone takes the composed rotation
-      double mass = 0.0;
-      for (int l = site.first; l < site.first + site.count; ++l) mass += levelMassPercent(l);
-      const Eigen::Vector3d top = k + 1 < desc.sites.size() ? Eigen::Vector3d(siteWorld[k + 1].translation())
-                                                            : pivot[static_cast<size_t>(headJoint)];
-      const double length = (top - siteWorld[k].translation()).norm();
-      b.setSegment(last, mass * massScale, Eigen::Vector3d(0, 0.5 * length, 0));
-      body.spineSites.push_back({siteJoint[k], site.first, site.first + site.count});
-    }
-    body.spineSites.push_back(headSite.firstLevel == kVertebralJointCount - 1
-                                  ? headSite
-                                  : SpineBone{headJoint, kVertebralJointCount - 1, kVertebralJointCount});
-    body.spineEqualities = added->equalities;
-    // The head: a Ball joint for Occ-C1 on top of the spine.
-    ik::JointDesc h;
-    h.name = sk.joints[static_cast<size_t>(headJoint)].name;
-    h.type = ik::JointType::Ball;
-    const auto& r = kLevelRangeDeg[kVertebralJointCount - 1];
-    limitsOf(h, {-(1.0 - kFlexionShare) * r[0] * kDeg, -r[2] * kDeg, -r[1] * kDeg},
-             {kFlexionShare * r[0] * kDeg, r[2] * kDeg, r[1] * kDeg});
-    h.mass = levelMassPercent(kVertebralJointCount - 1) * massScale;
-    h.com = Eigen::Vector3d(0, 0.06 * height / 1.75, 0);
-    body.ikJointOfAvatar[static_cast<size_t>(headJoint)] = added->top;  // parent for add()
-    body.head = add(headJoint, h, boneFrame(up, forward, up), /*sameParent=*/true);
-    return {};
-  };
-
-  for (size_t a = 0; a < n; ++a) {
-    const int j = static_cast<int>(a);
-    const int tag = kind[a];
-    if (tag == 0) continue;
-    if (tag != Hips && !sk.isAncestor(hips, j)) continue;
-    const Eigen::Vector3d dir = direction(j);
-    const Eigen::Matrix3d rot = boneFrame(dir, forward, up);
-    const double side = isLeft(j) ? 1.0 : -1.0;
-    const double len = segmentLength(j);
-    ik::JointDesc d;
-    d.name = sk.joints[a].name;
-    switch (tag) {
-      case Hips: {
-        d.type = ik::JointType::Free;
-        d.mass = kLowerTrunk * massScale;
-        d.com = Eigen::Vector3d(0, 0.5 * len, 0);
-        const ik::JointId id = add(j, d, rot);
-        body.hips = id;
-        if (options.coupledSpine) {
-          if (auto s = addCoupledSpine(); !s.ok()) return Error{s.error()};
-        }
-        break;
-      }
-      case Spine: {
-        if (options.coupledSpine) break;  // added with the coupled spine
-        const SpineBone& s = sites[static_cast<size_t>(siteIndexOf[a])];
-        Eigen::Vector3d r = Eigen::Vector3d::Zero();
-        double mass = 0.0;
-        for (int l = s.firstLevel; l < s.endLevel; ++l) {
-          for (int k = 0; k < 3; ++k)
-            r[k] += kLevelRangeDeg[static_cast<size_t>(l)][static_cast<size_t>(k)] * kDeg;
-          mass += levelMassPercent(l);
-        }
-        // exp-map components in the site frame: x flexion (+ forward), y torsion, z bending.
-        d.type = ik::JointType::Ball;
-        limits(d, {-(1.0 - kFlexionShare) * r[0], -r[2], -r[1]}, {kFlexionShare * r[0], r[2], r[1]});
-        d.mass = mass * massScale;
-        d.com = Eigen::Vector3d(0, s.endLevel == kVertebralJointCount ? 0.06 * height / 1.75 : 0.5 * len, 0);
-        const ik::JointId id = add(j, d, rot);
-        if (s.endLevel == kVertebralJointCount) body.head = id;
-        break;
-      }
-      case Clavicle:
-        d.type = ik::JointType::Swing;
-        d.axis = Eigen::Vector3d::UnitY();
-        limits(d, {-0.35, -0.35}, {0.35, 0.35});
-        add(j, d, rot);
-        break;
-      case UpperArm:
-        d.type = ik::JointType::Ball;
-        limits(d, {-1.0, -1.5, side > 0 ? -0.8 : -2.8}, {3.0, 1.5, side > 0 ? 2.8 : 0.8});
-        d.mass = kUpperArm * massScale;
-        d.com = Eigen::Vector3d(0, kUpperArmCom * len, 0);
-        add(j, d, rot);
-        break;
-      case Elbow: {
-        // Hinge axis from the rest geometry: upper arm x forward (so + flexes the forearm
-        // forward); a bent rest elbow gives the axis directly.
-        const int upper = map.joint(side > 0 ? HumanBone::leftUpperArm : HumanBone::rightUpperArm);
-        const Eigen::Vector3d dUpper = (pivot[a] - pivot[static_cast<size_t>(upper)]).normalized();
-        Eigen::Vector3d axis = dUpper.cross(forward);
-        const Eigen::Vector3d bent = dUpper.cross(dir);
-        if (bent.norm() > 0.17) axis = bent.dot(axis) >= 0 ? bent : -bent;
-        if (axis.norm() < 1e-6) axis = rot.col(0);
-        d.type = ik::JointType::Revolute;
-        d.axis = rot.transpose() * axis.normalized();
-        // Never straight and never backwards: a hinge at exactly 0 is the straight-limb
-        // singularity (shortening the limb has no first-order effect there, and a local solver
-        // stalls), and below 0 it bends against its anatomical direction.
-        limits(d, {kMinHingeBend}, {2.6});
-        d.mass = kForearm * massScale;
-        d.com = Eigen::Vector3d(0, kForearmCom * len, 0);
-        add(j, d, rot);
-        ik::JointDesc twist;
-        twist.name = d.name + "_twist";
-        twist.type = ik::JointType::Revolute;
-        twist.axis = Eigen::Vector3d::UnitY();
-        limits(twist, {-1.4}, {1.4});
-        add(j, twist, rot);
-        break;
-      }
-      case Hand: {
-        d.type = ik::JointType::Ball;
-        limits(d, {-1.2, -0.25, -0.6}, {1.2, 0.25, 0.6});
-        d.mass = kHand * massScale;
-        d.com = Eigen::Vector3d(0, kHandCom * len, 0);
-        const ik::JointId id = add(j, d, rot);
-        (side > 0 ? body.leftHand : body.rightHand) = id;
-        break;
-      }
-      case UpperLeg:
-        d.type = ik::JointType::Ball;
-        limits(d, {-0.5, -0.7, side > 0 ? -0.5 : -0.8}, {2.1, 0.7, side > 0 ? 0.8 : 0.5});
-        d.mass = kThigh * massScale;
-        d.com = Eigen::Vector3d(0, kThighCom * len, 0);
-        add(j, d, rot);
-        break;
-      case Knee: {
-        const int upper = map.joint(side > 0 ? HumanBone::leftUpperLeg : HumanBone::rightUpperLeg);
-        const Eigen::Vector3d dUpper = (pivot[a] - pivot[static_cast<size_t>(upper)]).normalized();
-        Eigen::Vector3d axis = dUpper.cross(-forward);  // + flexes the shank backwards
-        if (axis.norm() < 1e-6) axis = rot.col(0);
-        d.type = ik::JointType::Revolute;
-        d.axis = rot.transpose() * axis.normalized();
-        limits(d, {kMinHingeBend}, {2.4});  // as the elbow: never straight, never backwards
-        d.mass = kShank * massScale;
-        d.com = Eigen::Vector3d(0, kShankCom * len, 0);
-        add(j, d, rot);
-        break;
-      }
-      case Ankle: {
-        d.type = ik::JointType::Ball;
-        limits(d, {-0.9, -0.5, -0.5}, {0.6, 0.5, 0.5});
-        d.mass = kFoot * massScale;
-        d.com = Eigen::Vector3d(0, kFootCom * len, 0);
-        const ik::JointId id = add(j, d, rot);
-        (side > 0 ? body.leftFoot : body.rightFoot) = id;
-        break;
-      }
-      case Toes:
-        d.type = ik::JointType::Revolute;
-        d.axis = Eigen::Vector3d::UnitX();
-        limits(d, {-0.6}, {0.6});
-        add(j, d, rot);
-        break;
-    }
-  }
-  if (body.head < 0 || body.leftHand < 0 || body.rightHand < 0 || body.leftFoot < 0 || body.rightFoot < 0)
-    return Error{"the mapped hands, feet or head do not hang below the hips; cannot build the body model"};
-
-  if (options.addTasks) {
-    auto pose = [&](const char* name, ik::JointId joint, int level) {
-      ik::TaskDesc t;
-      t.name = name;
-      t.type = ik::TaskType::Pose;
-      t.joint = joint;
-      t.level = level;
-      return b.addTask(t);
-    };
-    body.leftFootTask = pose("left_foot", body.leftFoot, 0);
-    body.rightFootTask = pose("right_foot", body.rightFoot, 0);
-    ik::TaskDesc com;
-    com.name = "com";
-    com.type = ik::TaskType::CenterOfMass;
-    com.level = 1;
-    body.comTask = b.addTask(com);
-    body.headTask = pose("head", body.head, 2);
-    // A waist tracker, when there is one (off until the runtime binds and enables it).
-    ik::TaskDesc waist;
-    waist.name = "hips";
-    waist.type = ik::TaskType::Pose;
-    waist.joint = body.hips;
-    waist.level = 2;
-    waist.enabled = false;
-    body.hipsTask = b.addTask(waist);
-    body.leftHandTask = pose("left_hand", body.leftHand, 3);
-    body.rightHandTask = pose("right_hand", body.rightHand, 3);
-  }
-  auto model = b.build();
-  if (!model.ok()) return Error{"body model: " + model.error()};
-  body.model = std::move(model.value());
-  return body;
+  return BodyModelBuilder(avatar, options).build();
 }
 
 void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& data, SkeletonPose& pose) {
@@ -558,8 +553,7 @@ void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& 
       const Eigen::Isometry3d& frame = data.jointFrame(ikJoint);
       const Eigen::Quaterniond delta = Eigen::Quaterniond(frame.rotation()) *
                                        body.ikRestRotation[static_cast<size_t>(ikJoint)].conjugate();
-      const glm::quat d(static_cast<float>(delta.w()), static_cast<float>(delta.x()),
-                        static_cast<float>(delta.y()), static_cast<float>(delta.z()));
+      const glm::quat d = toGlm(delta);
       const glm::quat wanted = glm::normalize(d * body.avatarRestGlobalRotation[a]);
       const glm::vec3 c0(parent[0]), c1(parent[1]), c2(parent[2]);
       const glm::quat parentRot = glm::normalize(
@@ -568,7 +562,7 @@ void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& 
       if (ikJoint == body.hips) {
         const Eigen::Vector3d p = frame.translation() / body.scale;
         local.translation =
-            glm::vec3(glm::inverse(parent) * glm::vec4(float(p.x()), float(p.y()), float(p.z()), 1.0f));
+            glm::vec3(glm::inverse(parent) * glm::vec4(toGlm(p), 1.0f));
       }
     }
     pose.local[a] = local;

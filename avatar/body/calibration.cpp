@@ -7,11 +7,13 @@
 #include <tuple>
 
 namespace embody::avatar {
+bool plausibleBodyHeight(double metres) {
+  return std::isfinite(metres) && metres >= kMinBodyHeight && metres <= kMaxBodyHeight;
+}
+
 namespace {
 
-bool plausible(double metres) {
-  return std::isfinite(metres) && metres >= 0.5 && metres <= 2.6;
-}
+bool plausible(double metres) { return plausibleBodyHeight(metres); }
 
 }  // namespace
 
@@ -100,7 +102,11 @@ Result<BodyProfile> loadProfile(const std::string& path) {
   if (!f) return Error{"cannot open profile '" + path + "'"};
   std::stringstream ss;
   ss << f.rdbuf();
-  const auto j = nlohmann::json::parse(ss.str(), nullptr, false);
+  return parseProfile(ss.str(), path);
+}
+
+Result<BodyProfile> parseProfile(std::string_view text, const std::string& path) {
+  const auto j = nlohmann::json::parse(text, nullptr, false);
   if (j.is_discarded() || !j.is_object()) return Error{"profile '" + path + "' is not a JSON object"};
   auto number = [&](const char* key, double& out, bool required) -> Status {
     if (!j.contains(key) || j[key].is_null()) {

@@ -9,13 +9,17 @@
 // the exact pivot match with the render skeleton).
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "avatar/avatar_asset.h"
+#include "avatar/body/anthropometry.h"  // kEyeHeightRatio
 #include "core/result.h"
 
 namespace embody::avatar {
 
-constexpr double kEyeHeightRatio = 0.933;
+// The body heights (and arm spans) calibration, profiles and every CLI option accept, in metres.
+constexpr double kMinBodyHeight = 0.5, kMaxBodyHeight = 2.6;
+bool plausibleBodyHeight(double metres);  // finite and within [kMinBodyHeight, kMaxBodyHeight]
 
 struct CalibrationInput {
   std::optional<double> userHeight;  // metres, total height
@@ -44,5 +48,7 @@ Result<BodyProfile> calibrate(const AvatarAsset& avatar, const CalibrationInput&
 
 Status saveProfile(const BodyProfile& profile, const std::string& path);
 Result<BodyProfile> loadProfile(const std::string& path);  // validates every number
+// The same from the file's text; `path` only names it in errors.
+Result<BodyProfile> parseProfile(std::string_view text, const std::string& path);
 
 }  // namespace embody::avatar

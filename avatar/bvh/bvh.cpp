@@ -1,5 +1,6 @@
 #include "avatar/bvh/bvh.h"
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -33,6 +34,7 @@ class Lexer {
     return true;
   }
   size_t line() const { return line_; }
+  size_t remaining() const { return pos_ < text_.size() ? text_.size() - pos_ : 0; }
 
  private:
   std::string_view text_;
@@ -218,7 +220,9 @@ class Parser {
       return fail("'Frames: " + std::to_string(declared) + "' with " + std::to_string(perFrame) +
                   " channels is more than this loader accepts (" + std::to_string(limits_.maxValues) +
                   " values)");
-    clip_.values.reserve(declared * perFrame);
+    // The claim is only a hint for the reserve, and the text bounds it: every value takes at least
+    // two bytes (a digit and a separator), so a 1 KB file that claims 10^8 frames reserves 1 KB.
+    clip_.values.reserve(std::min(declared * perFrame, lex_.remaining() / 2 + 1));
     size_t frames = 0;
     while (perFrame > 0 && next()) {
       if (frames == declared) {
@@ -236,7 +240,9 @@ class Parser {
       }
       ++frames;
     }
-    if (perFrame == 0) frames = declared;
+    // Without channels there is nothing to read per frame; the claim still cannot exceed what a
+    // file of this size could have listed (one line per frame).
+    if (perFrame == 0) frames = std::min(declared, lex_.remaining() + 1);
     if (frames < declared)
       clip_.warnings.push_back(name_ + ": declares " + std::to_string(declared) + " frames but has " +
                                std::to_string(frames) + "; using those");

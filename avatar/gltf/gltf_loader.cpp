@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -65,6 +66,24 @@ bool decodeImage(tinygltf::Image* image, const int imageIndex, std::string* /*er
 }
 
 // ---------------------------------------------------------------------------------------------
+// External files (buffers and images next to a .gltf): only regular files within the size limit,
+// so a URI naming a FIFO, a device or a huge file cannot hang the loader or exhaust memory.
+bool readExternalFile(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+  const uint64_t maxBytes = *static_cast<const uint64_t*>(user);
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    if (err) *err += "'" + path + "' is not a regular file\n";
+    return false;
+  }
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec || size > maxBytes) {
+    if (err) *err += "'" + path + "' is larger than " + std::to_string(maxBytes) + " bytes\n";
+    return false;
+  }
+  return tinygltf::ReadWholeFile(out, err, path, nullptr);
+}
+
+// ---------------------------------------------------------------------------------------------
 // GLB container: checked by hand so that the JSON chunk can be kept and a truncated file gives a
 // precise reason before tinygltf sees it.
 struct GlbChunks {
@@ -105,6 +124,12 @@ Result<GlbChunks> splitContainer(const std::vector<uint8_t>& bytes) {
     out.json.assign(reinterpret_cast<const char*>(&bytes[20]), jsonLength);
     while (!out.json.empty() && (out.json.back() == ' ' || out.json.back() == '\0')) out.json.pop_back();
   } else {
+    // Text glTF is a JSON object: anything else (random bytes, an image, a zip) gets one readable
+    // line instead of the JSON parser's message about some byte.
+    size_t first = 0;
+    while (first < bytes.size() && std::isspace(bytes[first])) ++first;
+    if (first == bytes.size() || bytes[first] != '{')
+      return fail("not a glTF file: neither a GLB container (no 'glTF' magic) nor glTF JSON text");
     out.json.assign(bytes.begin(), bytes.end());
   }
   return out;
@@ -197,21 +222,34 @@ class AccessorReader {
       return fail(where + ": count " + std::to_string(a.count) + " exceeds the limit of " +
                   std::to_string(limits_.maxAccessorCount));
     const size_t elemSize = static_cast<size_t>(componentSize(a.componentType)) * components;
-    std::vector<double> out(a.count * components, 0.0);
+    // Every declared count is checked against the bytes the file has before anything is allocated.
+    const uint8_t* base = nullptr;
+    size_t stride = elemSize;
     if (a.bufferView >= 0) {
       auto view = bufferView(a.bufferView, where);
       if (!view.ok()) return Error{view.error()};
       const tinygltf::BufferView& bv = model_.bufferViews[a.bufferView];
-      const size_t stride = bv.byteStride ? bv.byteStride : elemSize;
+      stride = bv.byteStride ? bv.byteStride : elemSize;
       if (stride < elemSize)
         return fail(where + ": byteStride " + std::to_string(stride) + " < element size");
+      // Each term is bounded first, so the sum below cannot wrap around.
+      if (a.byteOffset > bv.byteLength || (a.count > 1 && stride > bv.byteLength))
+        return fail(where + ": byteOffset or byteStride past the end of its " + std::to_string(bv.byteLength) +
+                    "-byte bufferView");
       if (a.count > 0) {
         const uint64_t need = static_cast<uint64_t>(a.byteOffset) + (a.count - 1) * stride + elemSize;
         if (need > bv.byteLength)
           return fail(where + ": reads " + std::to_string(need) + " bytes of a " +
                       std::to_string(bv.byteLength) + "-byte bufferView");
       }
-      const uint8_t* base = view.value() + a.byteOffset;
+      base = view.value() + a.byteOffset;
+    } else if (a.count > std::max<uint64_t>(4096, totalBufferBytes())) {
+      // All zeros (plus sparse entries): never longer than the file's binary data could back.
+      return fail(where + ": " + std::to_string(a.count) + " elements without a bufferView exceed the file's " +
+                  std::to_string(totalBufferBytes()) + " bytes of buffers");
+    }
+    std::vector<double> out(a.count * components, 0.0);
+    if (base) {
       const int cs = componentSize(a.componentType);
       for (size_t i = 0; i < a.count; ++i)
         for (int c = 0; c < components; ++c)
@@ -259,6 +297,12 @@ class AccessorReader {
   size_t count(int index) const { return model_.accessors[index].count; }
 
  private:
+  uint64_t totalBufferBytes() const {
+    uint64_t n = 0;
+    for (const auto& b : model_.buffers) n += b.data.size();
+    return n;
+  }
+
   Result<const uint8_t*> bufferView(int index, const std::string& where) const {
     if (index < 0 || static_cast<size_t>(index) >= model_.bufferViews.size())
       return fail(where + ": bufferView " + std::to_string(index) + " out of range");
@@ -266,7 +310,7 @@ class AccessorReader {
     if (bv.buffer < 0 || static_cast<size_t>(bv.buffer) >= model_.buffers.size())
       return fail(where + ": buffer " + std::to_string(bv.buffer) + " out of range");
     const auto& data = model_.buffers[bv.buffer].data;
-    if (static_cast<uint64_t>(bv.byteOffset) + bv.byteLength > data.size())
+    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset)
       return fail(where + ": bufferView " + std::to_string(index) + " runs past the end of its " +
                   std::to_string(data.size()) + "-byte buffer");
     return data.data() + bv.byteOffset;
@@ -602,6 +646,7 @@ struct MeshBuilder {
       }
     }
     if (nrm->empty()) computeNormals(asset.mesh.vertices, first, tris);
+    if (auto s = checkFinite(first, where); !s.ok()) return s;
 
     Primitive prim;
     prim.firstIndex = static_cast<uint32_t>(asset.mesh.indices.size());
@@ -617,6 +662,19 @@ struct MeshBuilder {
     if (!p.targets.empty() && warnings.size() < 1000)
       warnings.push_back(where + ": " + std::to_string(p.targets.size()) +
                          " morph targets loaded as the base shape");
+    return {};
+  }
+
+  // Finite inputs can still overflow (3e38 times a bind matrix) or come out of a singular inverse
+  // bind matrix as NaN: a vertex position that is not finite is an error, a normal falls back to +Y.
+  Status checkFinite(size_t first, const std::string& where) {
+    for (size_t i = first; i < asset.mesh.vertices.size(); ++i) {
+      SkinnedVertex& v = asset.mesh.vertices[i];
+      if (!std::isfinite(v.position.x + v.position.y + v.position.z))
+        return Error{where + ": vertex " + std::to_string(i - first) +
+                     " is not finite after its node's bind transform (singular or huge matrices)"};
+      if (!std::isfinite(v.normal.x + v.normal.y + v.normal.z)) v.normal = glm::vec3(0.0f, 1.0f, 0.0f);
+    }
     return {};
   }
 
@@ -746,6 +804,9 @@ Result<AvatarAsset> loadGltfFromMemory(const std::vector<uint8_t>& bytes, const 
   ImageLoaderContext imageContext{limits.maxImageDimension, &warnings};
   parser.SetImageLoader(decodeImage, &imageContext);
   parser.SetStoreOriginalJSONForExtrasAndExtensions(true);
+  uint64_t maxExternalBytes = limits.maxFileBytes;
+  parser.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &readExternalFile,
+                         &tinygltf::WriteWholeFile, &maxExternalBytes});
   tinygltf::Model model;
   std::string err, warn;
   bool ok = false;

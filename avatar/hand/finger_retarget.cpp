@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace embody::avatar {
 namespace {
@@ -41,7 +42,7 @@ glm::quat fromTo(const glm::vec3& a, const glm::vec3& b) {
   if (c < -0.99999f) {
     glm::vec3 axis = glm::cross(glm::vec3(1.0f, 0.0f, 0.0f), a);
     if (glm::dot(axis, axis) < 1e-6f) axis = glm::cross(glm::vec3(0.0f, 1.0f, 0.0f), a);
-    return glm::angleAxis(3.14159265f, glm::normalize(axis));
+    return glm::angleAxis(std::numbers::pi_v<float>, glm::normalize(axis));
   }
   const glm::vec3 x = glm::cross(a, b);
   return glm::normalize(glm::quat(1.0f + c, x.x, x.y, x.z));

@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cmath>
 #include <map>
+#include <tuple>
 #include <nlohmann/json.hpp>
 
 namespace embody::avatar {
@@ -93,6 +94,23 @@ std::string normalizeName(std::string_view raw) {
   return s;
 }
 
+// The name without its leading separated words, longest first: "Skeleton1_LHand" -> "lhand",
+// "Character1_Spine_01" -> {"spine01", "01"}. Rig and asset prefixes (OptiTrack's skeleton name,
+// HumanIK's character name) are matched after the full name, never instead of it.
+std::vector<std::string> nameSuffixes(std::string_view raw) {
+  const size_t cut = raw.find_last_of(":|");
+  if (cut != std::string_view::npos) raw = raw.substr(cut + 1);
+  std::vector<std::string> out;
+  for (size_t i = 1; i < raw.size(); ++i) {
+    const char c = raw[i - 1];
+    if (c == '_' || c == ' ' || c == '.' || c == '-') {
+      std::string s = normalizeName(raw.substr(i));
+      if (!s.empty()) out.push_back(std::move(s));
+    }
+  }
+  return out;
+}
+
 struct SidedAlias {
   HumanBone left, right;
   std::vector<std::string> bases;
@@ -103,12 +121,12 @@ struct SidedAlias {
 // that Unreal's spine_03 is the chest when spine_05 exists and the upper chest otherwise.
 const std::vector<std::pair<HumanBone, std::vector<std::string>>>& genericCenter() {
   static const std::vector<std::pair<HumanBone, std::vector<std::string>>> t = {
-      {HumanBone::hips, {"hips", "pelvis", "hip"}},
+      {HumanBone::hips, {"hips", "hip", "pelvis"}},  // CC_Base_Hip is the root above CC_Base_Pelvis
       {HumanBone::head, {"head"}},
-      {HumanBone::neck, {"neck", "neck01"}},
-      {HumanBone::upperChest, {"spine2", "upperchest", "spine05", "spine03"}},
-      {HumanBone::chest, {"spine1", "chest", "spine03", "spine02"}},
-      {HumanBone::spine, {"spine", "spine01", "lowerback", "abdomen"}},
+      {HumanBone::neck, {"neck", "neck01", "necktwist01", "lowerneck"}},
+      {HumanBone::upperChest, {"spine2", "upperchest", "chest2", "spine05", "spine03", "t8"}},
+      {HumanBone::chest, {"spine1", "chest", "spine03", "spine02", "t12", "l3"}},
+      {HumanBone::spine, {"spine", "spine01", "lowerback", "abdomen", "ab", "waist", "l5"}},
       {HumanBone::jaw, {"jaw"}},
   };
   return t;
@@ -117,11 +135,13 @@ const std::vector<std::pair<HumanBone, std::vector<std::string>>>& genericCenter
 const std::vector<SidedAlias>& genericSided() {
   static const std::vector<SidedAlias> t = [] {
     std::vector<SidedAlias> v = {
-        {HumanBone::leftShoulder, HumanBone::rightShoulder, {"shoulder", "clavicle"}},
-        {HumanBone::leftUpperArm, HumanBone::rightUpperArm, {"arm", "upperarm", "uparm"}},
-        {HumanBone::leftLowerArm, HumanBone::rightLowerArm, {"forearm", "lowerarm"}},
-        {HumanBone::leftHand, HumanBone::rightHand, {"hand", "wrist"}},
-        {HumanBone::leftUpperLeg, HumanBone::rightUpperLeg, {"upleg", "thigh", "upperleg"}},
+        // Joint-named rigs (cgspeed's LeftCollar, LeftShoulder, LeftElbow, LeftWrist) call the
+        // clavicle the collar and the upper arm the shoulder: collar first, shoulder as a fallback.
+        {HumanBone::leftShoulder, HumanBone::rightShoulder, {"collar", "clavicle", "shoulder"}},
+        {HumanBone::leftUpperArm, HumanBone::rightUpperArm, {"arm", "upperarm", "uparm", "uarm", "shoulder"}},
+        {HumanBone::leftLowerArm, HumanBone::rightLowerArm, {"forearm", "lowerarm", "farm", "elbow"}},
+        {HumanBone::leftHand, HumanBone::rightHand, {"wrist", "hand"}},  // cgspeed: LeftWrist above lhand
+        {HumanBone::leftUpperLeg, HumanBone::rightUpperLeg, {"upleg", "thigh", "upperleg", "hip"}},
         {HumanBone::leftLowerLeg, HumanBone::rightLowerLeg, {"leg", "calf", "shin", "lowerleg", "knee"}},
         {HumanBone::leftFoot, HumanBone::rightFoot, {"foot", "ankle"}},
         {HumanBone::leftToes, HumanBone::rightToes, {"toebase", "toe", "toes", "toe0", "ball"}},
@@ -314,9 +334,13 @@ void finishHumanoidMap(const Skeleton& skeleton, HumanoidMap& map) {
 
 HumanoidMap mapByNames(const Skeleton& skeleton) {
   HumanoidMap map;
-  std::map<std::string, int> byName;
+  std::map<std::string, int> byName;  // full names first, then names without leading words
   for (size_t j = 0; j < skeleton.joints.size(); ++j)
     byName.emplace(normalizeName(skeleton.joints[j].name), static_cast<int>(j));
+  const bool hanim = byName.count("humanoidroot") || byName.count("sacroiliac") ||
+                     byName.count("skullbase") || byName.count("vl5");
+  for (size_t j = 0; j < skeleton.joints.size(); ++j)
+    for (auto& suffix : nameSuffixes(skeleton.joints[j].name)) byName.emplace(std::move(suffix), static_cast<int>(j));
   std::vector<bool> taken(skeleton.joints.size(), false);
   auto take = [&](HumanBone b, const std::vector<std::string>& aliases) {
     if (map.has(b)) return;
@@ -329,8 +353,6 @@ HumanoidMap mapByNames(const Skeleton& skeleton) {
       }
     }
   };
-  const bool hanim = byName.count("humanoidroot") || byName.count("sacroiliac") ||
-                     byName.count("skullbase") || byName.count("vl5");
   if (hanim) {
     for (const auto& [b, aliases] : hanimTable()) take(b, aliases);
   } else {
@@ -344,6 +366,14 @@ HumanoidMap mapByNames(const Skeleton& skeleton) {
       take(s.left, l);
       take(s.right, r);
     }
+    // Without a collar, a "shoulder" directly above the elbow is the upper arm.
+    for (auto [shoulder, upper, lower] : {std::tuple{HumanBone::leftShoulder, HumanBone::leftUpperArm, HumanBone::leftLowerArm},
+                                          std::tuple{HumanBone::rightShoulder, HumanBone::rightUpperArm, HumanBone::rightLowerArm}})
+      if (!map.has(upper) && map.has(shoulder) && map.has(lower) &&
+          skeleton.joints[map.joint(lower)].parent == map.joint(shoulder)) {
+        map.bones[static_cast<int>(upper)] = map.joint(shoulder);
+        map.bones[static_cast<int>(shoulder)] = -1;
+      }
   }
   map.method = MappingMethod::Names;
   finishHumanoidMap(skeleton, map);
@@ -351,6 +381,14 @@ HumanoidMap mapByNames(const Skeleton& skeleton) {
 }
 
 namespace {
+
+// obj[key], or null when obj is not an object or lacks the key (json::value() throws on a
+// non-object, and a file may put any type anywhere).
+nlohmann::json member(const nlohmann::json& obj, const char* key) {
+  if (!obj.is_object()) return nullptr;
+  const auto it = obj.find(key);
+  return it == obj.end() ? nlohmann::json() : *it;
+}
 
 HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const std::vector<int>& nodeToJoint,
                      bool& present) {
@@ -364,9 +402,7 @@ HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const 
   if (!doc.is_object() || !doc.contains("extensions") || !doc["extensions"].is_object()) return map;
   const auto& ext = doc["extensions"];
   if (ext.contains("VRMC_vrm") && ext["VRMC_vrm"].is_object()) {
-    const auto& hb = ext["VRMC_vrm"]
-                         .value("humanoid", nlohmann::json::object())
-                         .value("humanBones", nlohmann::json::object());
+    const nlohmann::json hb = member(member(ext["VRMC_vrm"], "humanoid"), "humanBones");
     if (hb.is_object() && !hb.empty()) {
       present = true;
       for (const auto& [name, entry] : hb.items()) {
@@ -383,8 +419,7 @@ HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const 
       }
     }
   } else if (ext.contains("VRM") && ext["VRM"].is_object()) {
-    const auto& hb =
-        ext["VRM"].value("humanoid", nlohmann::json::object()).value("humanBones", nlohmann::json::array());
+    const nlohmann::json hb = member(member(ext["VRM"], "humanoid"), "humanBones");
     if (hb.is_array() && !hb.empty()) {
       present = true;
       for (const auto& entry : hb) {
@@ -415,6 +450,8 @@ HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const 
   finishHumanoidMap(skeleton, map);
   return map;
 }
+
+}  // namespace
 
 Status applyBoneMap(const std::string& text, const Skeleton& skeleton, const std::vector<int>& nodeToJoint,
                     HumanoidMap& map) {
@@ -447,8 +484,6 @@ Status applyBoneMap(const std::string& text, const Skeleton& skeleton, const std
   }
   return {};
 }
-
-}  // namespace
 
 Result<HumanoidMap> mapHumanoid(const HumanoidInputs& in) {
   const Skeleton& skeleton = *in.skeleton;

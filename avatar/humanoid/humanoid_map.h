@@ -8,8 +8,11 @@
 //   2. VRM 1.0 VRMC_vrm.humanoid.humanBones (object bone -> {"node": i});
 //   3. VRM 0.x VRM.humanoid.humanBones (array of {"bone", "node"}; the model faces -Z);
 //   4. names: H-Anim (humanoid_root, sacroiliac, l_hip ... skullbase) when the skeleton uses
-//      H-Anim names, else Mixamo (mixamorig:Hips ...), CMU/BVH, Unreal, 3ds Max Biped, VRoid and
-//      Rigify names;
+//      H-Anim names, else one table for Mixamo (mixamorig:Hips ...), CMU (original and cgspeed),
+//      MotionBuilder/HumanIK, 3ds Max Biped, Reallusion CC_Base/CC3, Bandai-Namco, Rokoko,
+//      Perception Neuron, Xsens MVN, OptiTrack Motive, Unreal, VRM/VRoid and Rigify names.
+//      Namespaces (`ns:`), rig prefixes and leading asset words (`Skeleton1_`, `Character1_`)
+//      are dropped; twist, roll, share and helper bones match nothing and stay unmapped;
 //   5. topology and rest-pose geometry (names ignored): the hips are the joint whose branches
 //      are two legs going down and a spine going up; the spine branches into two arms and a neck;
 //      left and right come from the rest pose (left = up x forward, forward from the toes, else +Z).
@@ -146,6 +149,10 @@ Result<HumanoidMap> mapHumanoid(const HumanoidInputs& in);
 // Building blocks, exposed for tests.
 HumanoidMap mapByNames(const Skeleton& skeleton);
 HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& jointHasWeights);
+// Applies a user bone map (JSON object VRM-bone-name -> node name or index into nodeToJoint) on
+// top of `map`: its entries win, null unmaps. Errors name the bad entry.
+Status applyBoneMap(const std::string& text, const Skeleton& skeleton, const std::vector<int>& nodeToJoint,
+                    HumanoidMap& map);
 // Fills missingRequired, spine and forward for a map whose bones are set.
 void finishHumanoidMap(const Skeleton& skeleton, HumanoidMap& map);
 

@@ -71,7 +71,16 @@ TEST_CASE("hostile glTF files give a clear error, never a crash or a huge alloca
   }
   SECTION("not glTF at all") {
     std::string junk = "this is not json";
-    CHECK_THAT(loadError(std::vector<uint8_t>(junk.begin(), junk.end())), Catch::Contains("parse error"));
+    CHECK_THAT(loadError(std::vector<uint8_t>(junk.begin(), junk.end())), Catch::Contains("not a glTF file"));
+    // Random bytes: one readable line, no raw parser message quoting a byte.
+    std::vector<uint8_t> noise(512);
+    uint32_t state = 12345u;
+    for (auto& b : noise) b = uint8_t((state = state * 1664525u + 1013904223u) >> 24);
+    noise[0] = 0x8f;
+    const std::string e = loadError(noise);
+    CHECK(e == "not a glTF file: neither a GLB container (no 'glTF' magic) nor glTF JSON text");
+    std::string broken = "{ \"asset\": ";  // JSON that starts right and breaks: the parser's message
+    CHECK_THAT(loadError(std::vector<uint8_t>(broken.begin(), broken.end())), Catch::Contains("parse error"));
   }
   SECTION("accessor reads past its bufferView") {
     TriangleFile f;

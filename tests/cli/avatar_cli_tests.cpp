@@ -106,5 +106,5 @@ TEST_CASE("embody avatar info reports the body model; --spine and calibration pr
   std::filesystem::remove(profile);
   CHECK(j["body_model"]["scale"].get<double>() == Approx(1.9 / 1.755).epsilon(0.01));
   CHECK(runEmbody("avatar calibrate default --profile /tmp/x.json").exitCode == 2);
-  CHECK(runEmbody("avatar calibrate default --user-height 40 --profile /tmp/x.json").exitCode == 1);
+  CHECK(runEmbody("avatar calibrate default --user-height 40 --profile /tmp/x.json").exitCode == 2);
 }

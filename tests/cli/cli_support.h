@@ -22,9 +22,9 @@ inline std::string embodyBinary() {
 #endif
 }
 
-inline CommandResult runEmbody(const std::string& args, bool mergeStderr = false) {
+// Runs a shell command line; its stdout is the output.
+inline CommandResult runShell(const std::string& cmd) {
   CommandResult r;
-  std::string cmd = embodyBinary() + " " + args + (mergeStderr ? " 2>&1" : " 2>/dev/null");
   FILE* p = popen(cmd.c_str(), "r");
   if (!p) return r;
   std::array<char, 4096> buf{};
@@ -33,6 +33,15 @@ inline CommandResult runEmbody(const std::string& args, bool mergeStderr = false
   int status = pclose(p);
   r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+inline CommandResult runEmbody(const std::string& args, bool mergeStderr = false) {
+  return runShell(embodyBinary() + " " + args + (mergeStderr ? " 2>&1" : " 2>/dev/null"));
+}
+
+// stderr only (stdout discarded).
+inline CommandResult runEmbodyStderr(const std::string& args) {
+  return runShell(embodyBinary() + " " + args + " 2>&1 >/dev/null");
 }
 
 }  // namespace embody::test

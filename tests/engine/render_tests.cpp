@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
+#include <numbers>
 
 #include "engine/avatar_renderer.h"
 #include "engine/image_io.h"
@@ -72,7 +73,7 @@ TEST_CASE("readback walks the padded row pitch (width not a multiple of 64)", "[
   fo.clearColor = glm::vec4(0.2f, 0.5f, 0.8f, 1.0f);
   // Camera looking away from the avatar: every pixel is the clear colour.
   const auto pose = avatar::SkeletonPose::rest(asset.skeleton);
-  const engine::Camera away = engine::orbitCamera(glm::vec3(0.0f, 1.0f, -20.0f), 5.0f, 3.14159f, 0.0f,
+  const engine::Camera away = engine::orbitCamera(glm::vec3(0.0f, 1.0f, -20.0f), 5.0f, std::numbers::pi_v<float>, 0.0f,
                                             engine::FovAngles::symmetric(0.8f, 100.0f / 37.0f));
   auto img = (*r)->render(pose, away, fo);
   REQUIRE(img);

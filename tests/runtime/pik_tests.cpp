@@ -1,6 +1,7 @@
 // The runtime driving the real prioritized IK solver (ik's sample humanoid): targets
 // reached, warm starts, deadlines kept with an injected clock.
 #include <catch2/catch.hpp>
+#include <numbers>
 
 #include "tests/support/sample_models.h"
 #include "runtime/ik_stage.h"
@@ -35,7 +36,7 @@ struct Fixture {
     model = std::make_shared<const ik::Model>(std::move(*m));
     binding = PikBinding::byTaskNames(*model);
     // The sample humanoid faces +Z with +X to its left: OpenXR's frame turned 180 deg about Y.
-    binding.modelFromTracking = Eigen::Isometry3d(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()));
+    binding.modelFromTracking = Eigen::Isometry3d(Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitY()));
     ik::Data d(*model);
     ik::kinematics(*model, d, false);
     const Eigen::Isometry3d trackingFromModel = binding.modelFromTracking.inverse();

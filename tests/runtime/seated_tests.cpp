@@ -7,6 +7,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <vector>
 
 #include "avatar/avatar_asset.h"
@@ -28,7 +29,7 @@ const avatar::AvatarAsset& mannequin() {
 }
 
 constexpr float kSeatedEye = 1.20f;  // a 1.75 m user on a chair about 45 cm high
-constexpr double kRad = 3.14159265358979323846 / 180.0;
+constexpr double kRad = std::numbers::pi / 180.0;
 
 // A seated user: eyes at `head` looking 15 degrees down, the hands in front of the chest
 // (forearms forward, palms facing each other), moving with the head.
@@ -141,7 +142,7 @@ TEST_CASE("seated: the pelvis stays on the seat and the legs stay seated while t
   double kneeMin = 1e9, kneeMax = -1e9, hipMin = 1e9, hipMax = -1e9;
   std::vector<double> head, hands;
   for (int i = 0; i < 360; ++i, t += 1.0 / 90.0) {
-    const double phase = i / 360.0 * 2.0 * 3.14159265358979323846;
+    const double phase = i / 360.0 * 2.0 * std::numbers::pi;
     const float lean = 0.5f * float(1.0 - std::cos(2.0 * phase));  // 0..1
     const glm::vec3 h = home + glm::vec3(0.2f * float(std::sin(phase)), -0.04f * lean, -0.2f * lean);
     REQUIRE(b.solve(seatedSample(h, t)));

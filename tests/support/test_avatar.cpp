@@ -4,13 +4,14 @@
 #include <array>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
+#include <numbers>
 #include <numeric>
 
 namespace embody::test {
 
 namespace {
 
-constexpr float kPi = 3.14159265358979f;
+constexpr float kPi = std::numbers::pi_v<float>;
 constexpr int kSpineJoints = 5;
 constexpr float kSpineBase = 0.2f, kSpineStep = 0.3f;
 constexpr int kHeadMaterial = 1;

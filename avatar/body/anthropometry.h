@@ -1,0 +1,9 @@
+#pragma once
+// Human proportions every library uses alike (header only, no dependencies): the solver's eye
+// point, calibration from an eye height, the trackers of synthetic motions and BVH clips.
+namespace embody::avatar {
+
+// Eye height over body height: H-Anim's 1.75 m humanoid has its eyes at 1.633 m.
+inline constexpr double kEyeHeightRatio = 0.933;
+
+}  // namespace embody::avatar

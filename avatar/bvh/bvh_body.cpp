@@ -1,0 +1,312 @@
+// A BVH clip's axes, height and reference frame, measured on the motion (bvh_body.h).
+#include "avatar/bvh/bvh_body.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+
+#include "avatar/bvh/bvh_body_internal.h"
+
+namespace embody::avatar {
+namespace {
+
+constexpr double kSnapUpDegrees = 25.0, kSnapForwardDegrees = 30.0;
+constexpr double kHeadJointRatio = 0.91;        // skull base over the height, without a head-top joint
+constexpr double kReferenceJumpHeightsPerS = 5.7;  // 10 m/s for a 1.75 m performer
+constexpr size_t kMaxStatFrames = 4096;           // frames read for the statistics (evenly spaced)
+
+std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, f, a, b, c);
+  return buf;
+}
+
+// The signed coordinate axis within `degrees` of v, else v itself (v unit).
+glm::dvec3 snapAxis(const glm::dvec3& v, double degrees) {
+  int best = 0;
+  for (int i = 1; i < 3; ++i)
+    if (std::abs(v[i]) > std::abs(v[best])) best = i;
+  if (std::abs(v[best]) < std::cos(glm::radians(degrees))) return v;
+  glm::dvec3 a(0.0);
+  a[best] = v[best] > 0 ? 1.0 : -1.0;
+  return a;
+}
+
+// Joint j and every joint below it (parents come first in a clip).
+std::vector<bool> subtree(const BvhClip& clip, int root) {
+  std::vector<bool> in(clip.joints.size(), false);
+  if (root < 0) return in;
+  in[static_cast<size_t>(root)] = true;
+  for (size_t j = static_cast<size_t>(root) + 1; j < clip.joints.size(); ++j)
+    if (clip.joints[j].parent >= 0) in[j] = in[static_cast<size_t>(clip.joints[j].parent)];
+  return in;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size() - 1) + 0.5));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+// Runs fn(frame, globals) over frames [from, to), at most kMaxStatFrames evenly spaced.
+template <class Fn>
+void forFrames(const BvhClip& clip, size_t from, size_t to, Fn fn) {
+  if (to <= from) return;
+  const size_t stride = (to - from + kMaxStatFrames - 1) / kMaxStatFrames;
+  std::vector<BvhGlobal> g;
+  for (size_t f = from; f < to; f += stride) {
+    bvhGlobals(clip, clip.frame(f), g);
+    fn(f, g);
+  }
+}
+
+struct BodyJoints {
+  int hips, head, feet[2], hands[2];
+  std::vector<std::pair<int, int>> lateralPairs;  // (left, right): upper legs, upper arms, ...
+  explicit BodyJoints(const HumanoidMap& m)
+      : hips(m.joint(HumanBone::hips)),
+        head(m.joint(HumanBone::head)),
+        feet{m.joint(HumanBone::leftFoot), m.joint(HumanBone::rightFoot)},
+        hands{m.joint(HumanBone::leftHand), m.joint(HumanBone::rightHand)} {
+    for (auto [l, r] : {std::pair{HumanBone::leftUpperLeg, HumanBone::rightUpperLeg},
+                        std::pair{HumanBone::leftUpperArm, HumanBone::rightUpperArm},
+                        std::pair{HumanBone::leftShoulder, HumanBone::rightShoulder},
+                        std::pair{HumanBone::leftFoot, HumanBone::rightFoot}})
+      if (m.has(l) && m.has(r)) lateralPairs.emplace_back(m.joint(l), m.joint(r));
+    if (lateralPairs.empty() && m.has(HumanBone::leftHand) && m.has(HumanBone::rightHand))
+      lateralPairs.emplace_back(m.joint(HumanBone::leftHand), m.joint(HumanBone::rightHand));
+  }
+  // The point under the head: between the feet, else the hips.
+  int base() const { return feet[0] >= 0 ? feet[0] : (feet[1] >= 0 ? feet[1] : hips); }
+  glm::dvec3 basePoint(const std::vector<BvhGlobal>& g) const {
+    if (feet[0] >= 0 && feet[1] >= 0)
+      return 0.5 * (g[static_cast<size_t>(feet[0])].position + g[static_cast<size_t>(feet[1])].position);
+    return g[static_cast<size_t>(base())].position;
+  }
+};
+
+// Straight-limb length hips -> head plus hips -> foot from the offsets: a frame-free size for
+// thresholds before the height is measured.
+double boneLengthSize(const BvhClip& clip, const BodyJoints& b) {
+  auto chain = [&](int from, int to) {
+    double len = 0.0;
+    for (int j = to; j > from && j >= 0; j = clip.joints[static_cast<size_t>(j)].parent)
+      len += glm::length(clip.joints[static_cast<size_t>(j)].offset);
+    return len;
+  };
+  double size = (b.head >= 0 ? chain(b.hips, b.head) : 0.0) + (b.base() != b.hips ? chain(b.hips, b.base()) : 0.0);
+  if (size <= 1e-9)
+    for (const auto& j : clip.joints) size += glm::length(j.offset);
+  return size;
+}
+
+size_t referenceFrame(const BvhClip& clip, const BodyJoints& b, double size) {
+  if (clip.frameCount < 3) return 0;
+  std::vector<int> joints{b.hips, b.head, b.feet[0], b.feet[1], b.hands[0], b.hands[1]};
+  std::vector<BvhGlobal> g[3];
+  for (size_t f = 0; f < 3; ++f) bvhGlobals(clip, clip.frame(f), g[f]);
+  auto fastest = [&](size_t a) {
+    double d = 0.0;
+    for (int j : joints)
+      if (j >= 0) d = std::max(d, glm::length(g[a + 1][static_cast<size_t>(j)].position - g[a][static_cast<size_t>(j)].position));
+    return d / clip.frameTime;
+  };
+  const double limit = kReferenceJumpHeightsPerS * size / 0.88;  // the bone size is ~0.88 of the height
+  return fastest(0) > limit && fastest(1) < limit ? 1 : 0;
+}
+
+struct UpEstimate {
+  glm::dvec3 up{0, 1, 0};
+  double resultant = 0.0, agreement = 0.0;
+};
+
+UpEstimate measureUp(const BvhClip& clip, const BodyJoints& b, size_t first) {
+  std::vector<glm::dvec3> dirs;
+  forFrames(clip, first, clip.frameCount, [&](size_t, const std::vector<BvhGlobal>& g) {
+    const glm::dvec3 v = g[static_cast<size_t>(b.head)].position - b.basePoint(g);
+    if (glm::length(v) > 1e-12) dirs.push_back(glm::normalize(v));
+  });
+  UpEstimate e;
+  glm::dvec3 sum(0.0);
+  for (const auto& d : dirs) sum += d;
+  if (dirs.empty() || glm::length(sum) < 1e-12) return e;
+  e.resultant = glm::length(sum) / static_cast<double>(dirs.size());
+  e.up = glm::normalize(sum);
+  size_t agree = 0;
+  for (const auto& d : dirs) agree += glm::dot(d, e.up) > std::cos(glm::radians(40.0)) ? 1 : 0;
+  e.agreement = static_cast<double>(agree) / static_cast<double>(dirs.size());
+  return e;
+}
+
+// The left direction (left minus right limbs) across `up`, summed over frames [from, to).
+glm::dvec3 lateralSum(const BvhClip& clip, const BodyJoints& b, const glm::dvec3& up, size_t from, size_t to,
+                      double* resultant) {
+  glm::dvec3 sum(0.0);
+  size_t n = 0;
+  forFrames(clip, from, to, [&](size_t, const std::vector<BvhGlobal>& g) {
+    glm::dvec3 left(0.0);
+    for (auto [l, r] : b.lateralPairs) left += g[static_cast<size_t>(l)].position - g[static_cast<size_t>(r)].position;
+    left -= up * glm::dot(left, up);
+    if (glm::length(left) < 1e-12) return;
+    sum += glm::normalize(left);
+    ++n;
+  });
+  if (resultant) *resultant = n ? glm::length(sum) / static_cast<double>(n) : 0.0;
+  return sum;
+}
+
+Status chooseUp(const BvhClip& clip, const BodyJoints& b, const BvhBodyOptions& o, BvhBody& body) {
+  if (!o.up.empty()) {
+    auto a = parseBvhAxis(o.up);
+    if (!a) return Error{"--bvh-up: " + a.error()};
+    body.up = *a;
+    body.upFrom = "--bvh-up";
+    body.upConfidence = 1.0;
+    return {};
+  }
+  if (b.head < 0 || b.base() < 0 || b.base() == b.head)
+    return Error{"cannot tell which way is up: no head joint, or no feet and hips below it; give --bvh-up +Y (or +Z, ...)"};
+  const UpEstimate e = measureUp(clip, b, body.firstFrame);
+  if (e.resultant < 0.5 || e.agreement < 0.5)
+    return Error{fmt("axes ambiguous: the head is above the feet in only %.0f%% of the frames along any direction; "
+                     "give --bvh-up (+Y, +Z, ...) and --bvh-forward",
+                     100.0 * e.agreement)};
+  body.up = snapAxis(e.up, kSnapUpDegrees);
+  body.upFrom = "motion";
+  body.upConfidence = e.agreement;
+  const double off = glm::degrees(std::acos(std::clamp(glm::dot(body.up, e.up), -1.0, 1.0)));
+  if (off > 3.0) body.notes.push_back(fmt("up: the head leans %.0f deg from the axis used, on average", off));
+  return {};
+}
+
+Status chooseForward(const BvhClip& clip, const BodyJoints& b, const BvhBodyOptions& o, BvhBody& body) {
+  if (!o.forward.empty()) {
+    auto a = parseBvhAxis(o.forward);
+    if (!a) return Error{"--bvh-forward: " + a.error()};
+    if (std::abs(glm::dot(*a, body.up)) > 0.1)
+      return Error{"--bvh-forward " + o.forward + " is not perpendicular to the up axis " + bvhAxisName(body.up)};
+    body.forward = glm::normalize(*a - body.up * glm::dot(*a, body.up));
+    body.forwardFrom = "--bvh-forward";
+    body.forwardConfidence = 1.0;
+    return {};
+  }
+  if (b.lateralPairs.empty())
+    return Error{"cannot tell which way the performer faces: no left/right limbs mapped; give --bvh-forward (+Z, -X, ...)"};
+  const size_t window = std::max<size_t>(2, static_cast<size_t>(std::lround(0.5 / clip.frameTime)));
+  double resultant = 0.0;
+  const glm::dvec3 left = lateralSum(clip, b, body.up, body.firstFrame, std::min(clip.frameCount, body.firstFrame + window), &resultant);
+  if (glm::length(left) < 1e-12 || resultant < 0.5)
+    return Error{"axes ambiguous: left and right limbs do not tell a facing at the start of the clip; give --bvh-forward"};
+  const glm::dvec3 facing = glm::normalize(glm::cross(glm::normalize(left), body.up));
+  glm::dvec3 snapped = snapAxis(facing, kSnapForwardDegrees);
+  if (std::abs(glm::dot(snapped, body.up)) > 1e-6) snapped = facing;  // up not axis-aligned
+  body.forward = snapped;
+  body.forwardFrom = "motion";
+  body.forwardConfidence = resultant;
+  return {};
+}
+
+// Where the hips travel over the clip, against the facing (a check, not a decision).
+void describeWalking(const BvhClip& clip, const BodyJoints& b, BvhBody& body) {
+  std::vector<BvhGlobal> g;
+  bvhGlobals(clip, clip.frame(body.firstFrame), g);
+  const glm::dvec3 start = g[static_cast<size_t>(b.hips)].position;
+  bvhGlobals(clip, clip.frame(clip.frameCount - 1), g);
+  glm::dvec3 travel = g[static_cast<size_t>(b.hips)].position - start;
+  travel -= body.up * glm::dot(travel, body.up);
+  if (glm::length(travel) < 0.3 * body.heightUnits) {
+    body.walking = "stays in place";
+    return;
+  }
+  double r = 0.0;
+  const glm::dvec3 left = lateralSum(clip, b, body.up, body.firstFrame, clip.frameCount, &r);
+  const double c = glm::dot(glm::normalize(travel), glm::normalize(glm::cross(left, body.up)));
+  body.walking = c > 0.5 ? "walks forward" : (c < -0.5 ? "walks backwards" : "moves sideways or turns");
+}
+
+void measureHeight(const BvhClip& clip, const BodyJoints& b, BvhBody& body) {
+  const std::vector<bool> headPart = subtree(clip, b.head);
+  std::vector<bool> footPart(clip.joints.size(), false);
+  for (int f : b.feet) {
+    const auto s = subtree(clip, f);
+    for (size_t j = 0; j < s.size(); ++j) footPart[j] = footPart[j] || s[j];
+  }
+  const bool anyFoot = b.feet[0] >= 0 || b.feet[1] >= 0;
+  std::vector<double> top, headJoint;
+  forFrames(clip, body.firstFrame, clip.frameCount, [&](size_t, const std::vector<BvhGlobal>& g) {
+    double hi = -1e300, sole = 1e300;
+    for (size_t j = 0; j < g.size(); ++j) {
+      const double h = glm::dot(g[j].position, body.up);
+      if (headPart[j]) hi = std::max(hi, h);
+      if (!anyFoot || footPart[j]) sole = std::min(sole, h);
+    }
+    top.push_back(hi - sole);
+    headJoint.push_back(glm::dot(g[static_cast<size_t>(b.head)].position, body.up) - sole);
+  });
+  body.headJointUnits = percentile(headJoint, 0.95);
+  body.heightUnits = percentile(top, 0.95);
+  if (body.heightUnits - body.headJointUnits < 0.05 * body.heightUnits) {
+    body.heightUnits = body.headJointUnits / kHeadJointRatio;
+    body.notes.push_back("no joint at the top of the head: the head joint taken at 0.91 of the height");
+  }
+}
+
+}  // namespace
+
+Result<glm::dvec3> parseBvhAxis(std::string_view text) {
+  std::string_view t = text;
+  double sign = 1.0;
+  if (!t.empty() && (t[0] == '+' || t[0] == '-')) {
+    sign = t[0] == '-' ? -1.0 : 1.0;
+    t.remove_prefix(1);
+  }
+  if (t.size() == 1) {
+    const char c = static_cast<char>(std::toupper(static_cast<unsigned char>(t[0])));
+    if (c >= 'X' && c <= 'Z') {
+      glm::dvec3 a(0.0);
+      a[c - 'X'] = sign;
+      return a;
+    }
+  }
+  return Error{"'" + std::string(text) + "' is not an axis (+X, -X, +Y, -Y, +Z, -Z)"};
+}
+
+std::string bvhAxisName(const glm::dvec3& v) {
+  for (int i = 0; i < 3; ++i)
+    if (std::abs(std::abs(v[i]) - 1.0) < 1e-9) return std::string(v[i] > 0 ? "+" : "-") + "XYZ"[i];
+  return fmt("(%.2f, %.2f, %.2f)", v.x, v.y, v.z);
+}
+
+Result<BvhBody> analyseBvhBody(const BvhClip& clip, const BvhBodyOptions& options) {
+  if (clip.joints.empty() || clip.frameCount == 0) return Error{"BVH clip has no joints or no frames"};
+  BvhBody body;
+  body.skeleton = bvhSkeleton(clip);
+  auto mapped = mapBvhJoints(clip, body.skeleton, 0, options.boneMapJson);
+  if (!mapped) return Error{mapped.error()};
+  body.humanoid = std::move(*mapped);
+  if (!body.humanoid.has(HumanBone::hips)) {
+    body.humanoid.bones[static_cast<int>(HumanBone::hips)] = 0;  // the root is the pelvis in every common rig
+    body.notes.push_back("hips: no joint named or shaped like the hips; using the root joint '" + clip.joints[0].name + "'");
+  }
+  const BodyJoints b(body.humanoid);
+  body.firstFrame = referenceFrame(clip, b, boneLengthSize(clip, b));
+  if (body.firstFrame > 0) body.notes.push_back("frame 0 is a reference pose (a body joint jumps into frame 1); skipped");
+  if (auto s = chooseUp(clip, b, options, body); !s.ok()) return Error{s.error()};
+  if (auto s = chooseForward(clip, b, options, body); !s.ok()) return Error{s.error()};
+  body.upAxis = bvhAxisName(body.up);
+  body.forwardAxis = bvhAxisName(body.forward);
+  const glm::dvec3 left = glm::cross(body.up, body.forward);
+  body.toXr = glm::transpose(glm::dmat3(-left, body.up, -body.forward));  // rows: right, up, back
+  if (b.head >= 0)
+    measureHeight(clip, b, body);
+  if (!(body.heightUnits > 1e-9)) {
+    body.heightUnits = boneLengthSize(clip, b) / 0.88;
+    body.notes.push_back("height from the bone lengths (no head or no standing frame)");
+  }
+  describeWalking(clip, b, body);
+  return body;
+}
+
+}  // namespace embody::avatar

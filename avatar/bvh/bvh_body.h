@@ -1,0 +1,72 @@
+#pragma once
+// The body a BVH clip carries: which joints are the humanoid's, which way is up and forward in
+// the file, how tall the performer is, and whether frame 0 is a reference pose. Shared by the
+// tracking side (tracking/bvh_source.h: trackers from a clip) and avatar-side code (a clip's
+// skeleton as an avatar).
+//
+// - Joints: the avatar name table (avatar/humanoid/humanoid_map.h, one table for every
+//   convention); when names leave a body joint unmapped, the topology mapper runs on the clip's
+//   skeleton as it stands in the first motion frame, tried with each axis as up; a user bone map
+//   (VRM bone name -> BVH joint name) wins over both.
+// - Up is measured on the motion, not the rest pose: the direction from the feet (else the hips)
+//   to the head, averaged over the frames; the rest skeleton may lie down or have its bones along
+//   any local axis. Snapped to the nearest signed axis within 25 degrees.
+// - Forward: the way the performer faces over the first half second of motion, from the left
+//   minus right hips/shoulders (left and right from the names), snapped within 30 degrees. The
+//   walking direction is reported as a check.
+// - Height: sole to the top of the head, the 95th percentile over the motion frames (people
+//   stand up at some point; a jump lifts the feet with the head). Without a joint above the head
+//   joint, the head joint is taken at 0.91 of the height.
+// - Frame 0 is a reference pose (a T-pose before the motion, as in CMU's converted clips) when a
+//   body joint jumps faster than 5.7 heights/s (10 m/s at 1.75 m) into frame 1 and not after.
+// Axes that stay ambiguous (the head is not above the feet in most frames along any direction,
+// no left/right limbs) are an Error naming --bvh-up / --bvh-forward.
+#include <glm/glm.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "avatar/bvh/bvh.h"
+#include "avatar/humanoid/humanoid_map.h"
+#include "avatar/skeleton.h"
+#include "core/result.h"
+
+namespace embody::avatar {
+
+struct BvhBodyOptions {
+  std::string up;           // "" = from the motion, else "+Y", "-Z", ... in file axes
+  std::string forward;      // "" = from the motion, else the way the performer faces at the start
+  std::string boneMapJson;  // {"head": "JointName", ...}; "" for none
+};
+
+struct BvhBody {
+  Skeleton skeleton;     // the clip's joints (same indices as clip.joints) with the rest offsets
+  HumanoidMap humanoid;  // which joint plays which bone
+  glm::dvec3 up{0, 1, 0}, forward{0, 0, 1};  // unit, file axes
+  std::string upAxis, forwardAxis;           // "+Y", "-Z", or "(0.00, 0.97, 0.24)" when not axis-aligned
+  std::string upFrom, forwardFrom;           // "motion", "--bvh-up", "--bvh-forward"
+  double upConfidence = 0.0;       // fraction of frames with the head within 40 deg of straight above the feet
+  double forwardConfidence = 0.0;  // agreement of the facing over the first half second (1 = steady)
+  std::string walking;             // "walks forward", "walks backwards", "sidesteps", "stays in place"
+  double heightUnits = 0.0;        // standing height, sole to the top of the head, file units
+  double headJointUnits = 0.0;     // the head joint above the sole when standing, file units
+  size_t firstFrame = 0;           // 1 when frame 0 is a reference pose, else 0
+  glm::dmat3 toXr{1.0};            // file axes -> +X right, +Y up, +Z back (OpenXR's)
+  std::vector<std::string> notes;
+
+  int joint(HumanBone b) const { return humanoid.joint(b); }
+};
+
+// Parses "+X", "-y", "Z" (a sign is optional) into a unit axis.
+Result<glm::dvec3> parseBvhAxis(std::string_view text);
+// "+Y" for a signed coordinate axis, else the vector with two decimals.
+std::string bvhAxisName(const glm::dvec3& axis);
+
+// The clip's joints as a Skeleton: local rest translation = OFFSET (End Sites included).
+Skeleton bvhSkeleton(const BvhClip& clip);
+
+// Errors: a malformed axis or bone map, --bvh-forward not perpendicular to the up axis, axes
+// that stay ambiguous. Missing joints are not errors here: humanoid.bones says what is mapped.
+Result<BvhBody> analyseBvhBody(const BvhClip& clip, const BvhBodyOptions& options = {});
+
+}  // namespace embody::avatar

@@ -1,0 +1,50 @@
+#pragma once
+// Invariants every loaded avatar keeps, whatever file it came from (checked by the avatar fuzz
+// targets after a load is accepted).
+#include <cmath>
+
+#include "avatar/avatar_asset.h"
+#include "fuzz/fuzz_target.h"
+
+namespace embody::fuzz {
+
+inline bool finite(const glm::vec3& v) { return std::isfinite(v.x + v.y + v.z); }
+
+inline void checkIndexRange(const std::vector<uint32_t>& indices, const std::vector<avatar::Primitive>& prims,
+                            size_t vertexCount) {
+  for (uint32_t i : indices) EMBODY_FUZZ_CHECK(i < vertexCount);
+  for (const auto& p : prims)
+    EMBODY_FUZZ_CHECK(static_cast<size_t>(p.firstIndex) + p.indexCount <= indices.size());
+}
+
+inline void checkAvatar(const avatar::AvatarAsset& a) {
+  const size_t joints = a.skeleton.joints.size();
+  for (size_t j = 0; j < joints; ++j) EMBODY_FUZZ_CHECK(a.skeleton.joints[j].parent < static_cast<int>(j));
+  for (int j : a.gltfNodeToJoint) EMBODY_FUZZ_CHECK(j < static_cast<int>(joints));
+  const auto& m = a.mesh;
+  checkIndexRange(m.indices, m.primitives, m.vertices.size());
+  checkIndexRange(m.firstPersonIndices, m.firstPersonPrimitives, m.vertices.size());
+  for (const auto& v : m.vertices) {
+    EMBODY_FUZZ_CHECK(finite(v.position) && finite(v.normal));
+    for (int k = 0; k < 4; ++k) {
+      EMBODY_FUZZ_CHECK(std::isfinite(v.weights0[k]) && std::isfinite(v.weights1[k]));
+      if (v.weights0[k] > 0.0f) EMBODY_FUZZ_CHECK(v.joints0[k] < joints);
+      if (v.weights1[k] > 0.0f) EMBODY_FUZZ_CHECK(v.joints1[k] < joints);
+    }
+  }
+  for (const auto& p : m.primitives)
+    EMBODY_FUZZ_CHECK(p.material < static_cast<int>(a.materials.size()));
+  for (const auto& mat : a.materials) {
+    EMBODY_FUZZ_CHECK(mat.baseColorImage < static_cast<int>(a.images.size()));
+    EMBODY_FUZZ_CHECK(mat.emissiveImage < static_cast<int>(a.images.size()));
+    EMBODY_FUZZ_CHECK(std::isfinite(mat.baseColorFactor.r + mat.baseColorFactor.g + mat.baseColorFactor.b +
+                                    mat.baseColorFactor.a + mat.emissiveStrength + mat.alphaCutoff));
+  }
+  for (const auto& img : a.images)
+    EMBODY_FUZZ_CHECK(img.rgba.size() == static_cast<size_t>(img.width) * static_cast<size_t>(img.height) * 4);
+  for (int j : a.humanoid.bones) EMBODY_FUZZ_CHECK(j < static_cast<int>(joints));
+  for (const auto& s : a.humanoid.spine) EMBODY_FUZZ_CHECK(s.joint < static_cast<int>(joints));
+  EMBODY_FUZZ_CHECK(a.firstPerson.headJoint < static_cast<int>(joints));
+}
+
+}  // namespace embody::fuzz

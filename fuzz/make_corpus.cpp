@@ -1,0 +1,189 @@
+// Writes the seed corpus (fuzz/corpus/<target>/) from the project's own fixtures: the test glTF
+// builders (tests/avatar), the default mannequin, the embedded spine models, the synthetic
+// motions. Nothing third-party. Run after a format changes: embody_fuzz_corpus fuzz/corpus
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "avatar/body/calibration.h"
+#include "avatar/procedural/default_avatar.h"
+#include "avatar/humanoid_test_files.h"
+#include "ik/spine/spine_description.h"
+#include "tracking/pose_source.h"
+#include "tracking/trace.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace embody;
+
+namespace {
+
+fs::path gRoot;
+
+void write(const std::string& rel, const std::string& bytes) {
+  const fs::path p = gRoot / rel;
+  fs::create_directories(p.parent_path());
+  std::ofstream(p, std::ios::binary) << bytes;
+  std::printf("%s (%zu bytes)\n", p.c_str(), bytes.size());
+}
+void write(const std::string& rel, const std::vector<uint8_t>& bytes) {
+  write(rel, std::string(bytes.begin(), bytes.end()));
+}
+
+std::string base64(const std::vector<uint8_t>& in) {
+  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (size_t i = 0; i < in.size(); i += 3) {
+    const uint32_t v = (in[i] << 16) | (i + 1 < in.size() ? in[i + 1] << 8 : 0) | (i + 2 < in.size() ? in[i + 2] : 0);
+    out += k[(v >> 18) & 63];
+    out += k[(v >> 12) & 63];
+    out += i + 1 < in.size() ? k[(v >> 6) & 63] : '=';
+    out += i + 2 < in.size() ? k[v & 63] : '=';
+  }
+  return out;
+}
+
+void gltfSeeds() {
+  test::TriangleFile tri;
+  write("gltf/triangle.glb", tri.glb());
+  json doc = tri.doc;
+  doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64(tri.bin);
+  write("gltf/triangle.gltf", doc.dump());
+  test::HumanoidFile human;
+  write("gltf/humanoid.glb", human.glb());
+  test::HumanoidFile vrm1;
+  json bones = json::object();
+  for (const auto& [bone, node] : vrm1.nodeOfBone) bones[bone] = {{"node", node}};
+  vrm1.doc["extensionsUsed"] = {"VRMC_vrm"};
+  vrm1.doc["extensions"]["VRMC_vrm"] = {
+      {"specVersion", "1.0"},
+      {"humanoid", {{"humanBones", bones}}},
+      {"firstPerson", {{"meshAnnotations", {{{"node", vrm1.hairNode}, {"type", "thirdPersonOnly"}},
+                                            {{"node", vrm1.innerNode}, {"type", "firstPersonOnly"}}}}}}};
+  write("gltf/humanoid_vrm1.vrm", vrm1.glb());
+}
+
+// Extensions alone, over the default mannequin's joints (the vrm target's skeleton).
+void vrmSeeds() {
+  const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
+  json v1 = json::object(), v0 = json::array();
+  for (int b = 0; b < avatar::kHumanBoneCount; ++b) {
+    const int j = a.humanoid.bones[static_cast<size_t>(b)];
+    if (j < 0) continue;
+    const std::string name(avatar::humanBoneName(static_cast<avatar::HumanBone>(b)));
+    v1[name] = {{"node", j}};
+    v0.push_back({{"bone", name}, {"node", j}});
+  }
+  const int head = a.humanoid.joint(avatar::HumanBone::head);
+  write("vrm/vrm1.json",
+        json{{"extensionsUsed", {"VRMC_vrm"}},
+             {"extensions",
+              {{"VRMC_vrm",
+                {{"specVersion", "1.0"},
+                 {"humanoid", {{"humanBones", v1}}},
+                 {"firstPerson", {{"meshAnnotations", {{{"node", head}, {"type", "thirdPersonOnly"}}}}}}}}}}}
+            .dump(1));
+  write("vrm/vrm0.json",
+        json{{"extensions",
+              {{"VRM",
+                {{"humanoid", {{"humanBones", v0}}},
+                 {"firstPerson",
+                  {{"firstPersonBone", head},
+                   {"meshAnnotations", {{{"mesh", 0}, {"firstPersonFlag", "ThirdPersonOnly"}}}}}}}}}}}
+            .dump(1));
+  json byName = json::object(), byIndex = json::object();
+  for (int b = 0; b < avatar::kHumanBoneCount; ++b) {
+    const int j = a.humanoid.bones[static_cast<size_t>(b)];
+    if (j < 0) continue;
+    const std::string name(avatar::humanBoneName(static_cast<avatar::HumanBone>(b)));
+    byName[name] = a.skeleton.joints[static_cast<size_t>(j)].name;
+    byIndex[name] = j;
+  }
+  write("bone_map/by_name.json", byName.dump(1));
+  write("bone_map/by_index.json", byIndex.dump(1));
+  write("bone_map/partial.json", json{{"hips", a.skeleton.joints[0].name}, {"head", head}}.dump());
+}
+
+// A BVH of the default mannequin's skeleton (offsets in centimetres), three frames.
+void bvhSeeds() {
+  const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
+  const auto& joints = a.skeleton.joints;
+  std::string out = "HIERARCHY\n";
+  std::vector<int> open;
+  int channels = 0;
+  auto close = [&](int untilParent) {
+    while (!open.empty() && open.back() != untilParent) {
+      out += std::string(2 * open.size() - 2, ' ') + "}\n";
+      open.pop_back();
+    }
+  };
+  for (size_t j = 0; j < joints.size(); ++j) {
+    close(joints[j].parent);
+    const std::string pad(2 * open.size(), ' ');
+    const glm::vec3 t = joints[j].rest.translation * 100.0f;
+    out += pad + (joints[j].parent < 0 ? "ROOT " : "JOINT ") + joints[j].name + "\n" + pad + "{\n";
+    char line[160];
+    std::snprintf(line, sizeof line, "%s  OFFSET %.3f %.3f %.3f\n", pad.c_str(), t.x, t.y, t.z);
+    out += line;
+    out += pad + (joints[j].parent < 0 ? "  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n"
+                                       : "  CHANNELS 3 Zrotation Xrotation Yrotation\n");
+    channels += joints[j].parent < 0 ? 6 : 3;
+    open.push_back(static_cast<int>(j));
+  }
+  close(-2);
+  out += "MOTION\nFrames: 3\nFrame Time: 0.0333333\n";
+  for (int f = 0; f < 3; ++f) {
+    for (int c = 0; c < channels; ++c) out += (c == 1 ? "95.0" : std::to_string(2.5 * f * ((c % 3) - 1))) + " ";
+    out += "\n";
+  }
+  write("bvh/mannequin.bvh", out);
+  write("bvh/end_site.bvh",
+        "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation "
+        "Xrotation\n  JOINT Head\n  {\n    OFFSET 0 60 0\n    CHANNELS 3 Zrotation Yrotation Xrotation\n    End Site\n"
+        "    {\n      OFFSET 0 10 0\n    }\n  }\n}\nMOTION\nFrames: 2\nFrame Time: 0.1\n0 90 0 0 0 0 0 0 0\n"
+        "1 90 0 10 0 0 5 0 0\n");
+}
+
+void traceSeeds() {
+  for (const char* motion : {"synthetic:idle", "synthetic:reach"}) {
+    auto src = tracking::openPoseSource(motion);
+    if (!src.ok()) continue;
+    std::string out = json{{"embody_trace", 1}, {"source", motion}, {"user_height", 1.75}}.dump() + "\n";
+    for (int i = 0; i < 8; ++i)
+      out += tracking::formatTraceLine(src.value()->sample(i / 30.0), tracking::TrackerMask::all()) + "\n";
+    write(std::string("trace/") + (motion + 10) + ".jsonl", out);
+  }
+  write("trace/invalid_trackers.jsonl",
+        "{\"t\": 0, \"head\": {\"p\": [0, 1.6, 0], \"q\": [0, 0, 0, 1], \"valid\": true}, \"left\": {\"valid\": false}}\n"
+        "{\"t\": 0.1, \"head\": {\"p\": [0, 1.6, null], \"q\": [0, 0, 0, 1]}, \"right\": {\"p\": [0.3, 1, -0.3], "
+        "\"q\": [0, 0, 0, 1], \"trigger\": 0.5}}\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: embody_fuzz_corpus OUT_DIR (fuzz/corpus)\n");
+    return 2;
+  }
+  gRoot = argv[1];
+  gltfSeeds();
+  vrmSeeds();
+  bvhSeeds();
+  traceSeeds();
+  write("spine/full.json", ik::spine::toJson(ik::spine::defaultFullSpine()).dump(1));
+  write("spine/simplified.json", ik::spine::toJson(ik::spine::defaultSimplifiedSpine()).dump(1));
+  avatar::CalibrationInput in;
+  in.userHeight = 1.8;
+  in.armSpan = 1.82;
+  auto profile = avatar::calibrate(avatar::buildDefaultAvatar(), in);
+  if (profile.ok()) {
+    const fs::path p = gRoot / "profile/calibrated.json";
+    fs::create_directories(p.parent_path());
+    if (!avatar::saveProfile(profile.value(), p.string()).ok()) return 1;
+  }
+  write("profile/minimal.json", json{{"user_height_m", 1.7}, {"scale", 1.0}}.dump());
+  return 0;
+}

@@ -1,0 +1,112 @@
+// The whole runtime frame allocates nothing after warm-up: pose source -> One Euro filter ->
+// tracking-loss guard -> tasks -> budgeted solve -> skeleton pose -> skinning palette, for the
+// default mannequin and glTF avatars, through the faults the guard handles (a lost hand, a NaN
+// burst, the head lost while the hands stay live, a 10 m teleport).
+#include <catch2/catch.hpp>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <limits>
+
+#include "allocation_counter.h"
+#include "avatar/avatar_loader.h"
+#include "avatar/gltf/gltf_loader.h"
+#include "avatar/humanoid_test_files.h"
+#include "avatar/procedural/default_avatar.h"
+#include "runtime/tracked_avatar_body.h"
+#include "test_paths.h"
+#include "tracking/pose_source.h"
+
+using namespace embody;
+using tracking::TrackerId;
+
+namespace {
+
+// What a frame of `embody xr` does between xrWaitFrame and recording the draw.
+struct RuntimeFrame {
+  const avatar::AvatarAsset& asset;
+  tracking::PoseSource& source;
+  runtime::TrackedAvatarBody& body;
+  avatar::SkeletonPose pose;
+  std::vector<glm::mat4> globals, palette;
+
+  void run(int frame) {
+    tracking::PoseSample s = source.sample(frame / 72.0);
+    injectFault(frame, s);
+    body.solve(s, pose);
+    avatar::computeGlobals(asset.skeleton, pose, globals);
+    avatar::computeSkinningPalette(asset, globals, palette);
+  }
+
+  static void injectFault(int frame, tracking::PoseSample& s) {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    switch ((frame / 12) % 6) {
+      case 1: s[TrackerId::LeftHand].valid = false; break;
+      case 2: s[TrackerId::RightHand].position = glm::vec3(nan); break;
+      case 3: s[TrackerId::Head].valid = false; break;
+      case 4: s[TrackerId::LeftHand].position += glm::vec3(10.0f, 0.0f, 0.0f); break;
+      default: break;
+    }
+  }
+};
+
+long allocationsPerFrameLoop(const avatar::AvatarAsset& asset, const char* motion, bool threePoint) {
+  auto source = tracking::openPoseSource(motion);
+  REQUIRE(source.ok());
+  runtime::TrackedBodyOptions o;
+  o.body.trackers = threePoint ? tracking::TrackerMask::threePoint() : tracking::TrackerMask::all();
+  auto body = runtime::TrackedAvatarBody::create(asset, o);
+  REQUIRE(body.ok());
+  RuntimeFrame f{asset, **source, **body, avatar::SkeletonPose::rest(asset.skeleton), {}, {}};
+  // Warm-up: every fault once (the guard's and the solver's buffers reach their sizes).
+  for (int i = 0; i < 96; ++i) f.run(i);
+  test::CountAllocations counter;
+  for (int i = 96; i < 96 + 144; ++i) f.run(i);
+  const long n = counter.counts().count;
+  CHECK(std::isfinite(f.palette.at(0)[3][1]));
+  return n;
+}
+
+const avatar::AvatarAsset& mannequin() {
+  static const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
+  return a;
+}
+
+}  // namespace
+
+TEST_CASE("a runtime frame allocates nothing: default mannequin, three-point", "[reliability][allocation]") {
+  CHECK(allocationsPerFrameLoop(mannequin(), "synthetic:reach", true) == 0);
+}
+
+TEST_CASE("a runtime frame allocates nothing: default mannequin, six trackers", "[reliability][allocation]") {
+  CHECK(allocationsPerFrameLoop(mannequin(), "synthetic:squat", false) == 0);
+}
+
+TEST_CASE("a runtime frame allocates nothing: a generated glTF humanoid", "[reliability][allocation]") {
+  test::HumanoidFile file;
+  auto asset = avatar::loadGltfFromMemory(file.glb(), ".");
+  REQUIRE(asset.ok());
+  REQUIRE(avatar::prepareAvatar(asset.value(), "").ok());
+  REQUIRE(asset->humanoid.usable());
+  CHECK(allocationsPerFrameLoop(asset.value(), "synthetic:reach", true) == 0);
+}
+
+TEST_CASE("a runtime frame allocates nothing: CesiumMan", "[reliability][allocation]") {
+  EMBODY_REQUIRE_SHARED_ASSET(path, "CesiumMan.glb");
+  auto asset = avatar::loadAvatarFile(path);
+  REQUIRE(asset.ok());
+  CHECK(allocationsPerFrameLoop(asset.value(), "synthetic:reach", true) == 0);
+}
+
+TEST_CASE("the allocation counter sees operator new and Eigen's malloc", "[reliability][allocation]") {
+  test::AllocationCounts counts;
+  {
+    test::CountAllocations counter;
+    std::vector<int> v(1000);
+    Eigen::MatrixXd m = Eigen::MatrixXd::Identity(40, 40);
+    CHECK(v.size() + static_cast<size_t>(m.rows()) == 1040);
+    counts = counter.counts();
+  }
+  CHECK(counts.count == 2);
+  CHECK(counts.largestBytes == 40 * 40 * sizeof(double));
+}

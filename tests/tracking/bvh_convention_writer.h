@@ -1,0 +1,50 @@
+#pragma once
+// Test-only: one walking clip (a canonical humanoid, Y up, facing +Z, centimetres) written as BVH
+// text in the conventions of the common mocap tools: their joint names and helper bones, world
+// axes, bones along a local axis (joint orients in the rotations), units, channel orders, frame
+// times and an optional T-pose first frame. The conversions are exact rigid re-expressions of
+// the same motion, so every convention must give the same trackers.
+#include <array>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+namespace embody::test {
+
+enum Role {
+  kHips, kSpine, kChest, kUpperChest, kNeck, kHead,
+  kLShoulder, kLUpperArm, kLLowerArm, kLHand,
+  kRShoulder, kRUpperArm, kRLowerArm, kRHand,
+  kLUpperLeg, kLLowerLeg, kLFoot, kLToes,
+  kRUpperLeg, kRLowerLeg, kRFoot, kRToes,
+  kRoleCount
+};
+
+struct HelperBone {
+  std::string name;
+  Role parent;
+  glm::dvec3 offset;  // canonical centimetres, Y up
+};
+
+struct BvhConvention {
+  std::string name;
+  std::array<std::string, kRoleCount> names;
+  std::vector<HelperBone> helpers;  // twist, roll, finger, IK bones: leaves that must not be mapped
+  glm::dquat world{1, 0, 0, 0};     // canonical world -> the file's world
+  glm::dvec3 boneAxis{0.0};         // non-zero: bones run along this local axis (joint orients)
+  double unitsPerCm = 1.0;
+  std::string rotationOrder = "ZYX";  // as listed in CHANNELS
+  std::string positionOrder = "XYZ";
+  double frameTime = 1.0 / 120.0;
+  bool tposeFirst = false;
+};
+
+// The canonical clip's frames (no T-pose) and its conventions.
+constexpr int kConventionClipFrames = 48;
+const std::vector<BvhConvention>& bvhConventions();
+// The clip in a convention as BVH text; `frames` motion frames (a T-pose is added before them).
+std::string writeConventionClip(const BvhConvention& c, int frames = kConventionClipFrames);
+
+}  // namespace embody::test
