@@ -133,10 +133,14 @@ TEST_CASE("three-point walk: the avatar steps foot by foot, planted feet do not 
   o.userHeight = 1.75f;
   o.trackers = tracking::TrackerMask::threePoint();
   const int frames = int(src->duration() * 60.0);
-  const Run r = drive(defaultAvatar(), *src, o, frames, 60.0, kGenerousBudget);
+  int recoveries = 0;
+  const Run r = drive(defaultAvatar(), *src, o, frames, 60.0, kGenerousBudget, {},
+                      [&](const AvatarBodySolver& s, const SolvedFrame&) { recoveries = s.collapseGuard().recoveries(); });
   INFO("head p95 " << r.summary.headErrorP95 << " hand p95 " << r.summary.handErrorP95 << " steps " << r.steps);
   CHECK(r.nonFinitePoses == 0);
   CHECK(r.summary.headErrorP95 <= 0.01);
+  // A walk is no collapse: stepping feet pass each other along the stride, never across it.
+  CHECK(recoveries == 0);
   // Lift-offs (planted -> swinging), in order, and the ankle's rise above its planted height.
   std::vector<int> liftOffs;
   double worstSlide = 0.0, maxRise[2] = {0.0, 0.0};
