@@ -61,7 +61,7 @@ tsan: deps
 # kept corpus in fuzz/corpus; results in out/fuzz/summary.md (docs/reliability.md). CI's smoke is
 # the gcc replay in `make test` (ctest -R '^fuzz:').
 FUZZ_SECONDS ?= 60
-FUZZ_TARGETS ?= gltf vrm bone_map bvh trace spine profile
+FUZZ_TARGETS ?= gltf vrm bone_map bvh trace spine profile xr_poses
 fuzz: deps
 	CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMBODY_FUZZ=ON \
 	  -DEMBODY_BUILD_TESTS=OFF -DEMBODY_BUILD_BENCH=OFF $(WERROR)

@@ -122,9 +122,30 @@ Result<avatar::Image> renderView(engine::AvatarRenderer& renderer, const avatar:
   return sideBySide((*pair)[0], (*pair)[1]);
 }
 
+// Frames whose solved body stands the right way up: the eyes above the pelvis, the pelvis above
+// both ankles, each by a tenth of the avatar's height along its up axis. A squat, a bow or
+// a seat still counts; a body lying down, folded in a heap or upside down does not. The figure a
+// user checks a new avatar or clip with (docs/tracking.md), beside the tracker errors.
+struct UprightCount {
+  size_t frames = 0, upright = 0;
+
+  void add(const runtime::AvatarBodySolver& solver) {
+    const runtime::LowerBodyPosture p = solver.posture();
+    const Eigen::Vector3d& up = solver.up();
+    const double margin = 0.1 * solver.avatarHeight();  // posture() is in avatar space
+    const double pelvis = up.dot(p.pelvis);
+    bool ok = up.dot(p.eye) > pelvis + margin;
+    for (const auto& ankle : p.ankle)
+      if (!ankle.isZero()) ok = ok && pelvis > up.dot(ankle) + margin;  // zero: the avatar has no such leg
+    ++frames;
+    upright += ok ? 1 : 0;
+  }
+};
+
 // stats.json: the runtime's summary, the job and the body the solver built.
 void writeStats(const RenderJob& job, const std::string& motion, float userHeight, const runtime::StatsSummary& sum,
-                const runtime::AvatarBodySolver& body, uint64_t samplesSkipped, const runtime::SeatedStats& seated) {
+                const runtime::AvatarBodySolver& body, uint64_t samplesSkipped, const runtime::SeatedStats& seated,
+                const UprightCount& upright) {
   nlohmann::json j;
   runtime::toJson(j, sum);
   j["avatar"] = job.avatar;
@@ -142,7 +163,8 @@ void writeStats(const RenderJob& job, const std::string& motion, float userHeigh
                {"three_point", body.threePoint()},
                {"steps", body.feet().steps()},
                {"collapsed_frames", body.collapseGuard().collapsedFrames()},
-               {"recoveries", body.collapseGuard().recoveries()}};
+               {"recoveries", body.collapseGuard().recoveries()},
+               {"upright_frames", upright.upright}};
   j["ik"]["samples_skipped"] = samplesSkipped;
   if (job.seated) seated.toJson(j);
   std::ofstream(job.out / "stats.json") << j.dump(2) << "\n";
@@ -199,6 +221,7 @@ struct FrameLoop {
   int frames = 0;
   runtime::StatsRecorder stats;
   runtime::SeatedStats seated = runtime::SeatedStats();
+  UprightCount upright;
   std::vector<avatar::Image> thumbs;
 
   std::string run() {
@@ -222,6 +245,7 @@ struct FrameLoop {
       exported.add(solved.pose);
       // The IK thread is idle until the next submit (waitForFrames synchronised with its solve).
       if (job.seated) seated.add(solver);
+      upright.add(solver);
       const auto t0 = Clock::now();
       Result<avatar::Image> image = renderView(renderer, solved.pose, job, fo);
       if (!image) return image.error();
@@ -303,12 +327,13 @@ int runRenderJob(const RenderJob& job) {
   }
   if (auto s = engine::writePng((job.out / "contact_sheet.png").string(), contactSheet(loop.thumbs)); !s) return runtimeError(s.error());
   const runtime::StatsSummary sum = loop.stats.summary();
-  writeStats(job, source.name(), inputs->userHeight, sum, **solver, ik.samplesSkipped(), loop.seated);
+  writeStats(job, source.name(), inputs->userHeight, sum, **solver, ik.samplesSkipped(), loop.seated, loop.upright);
   std::printf("wrote %d frames, contact_sheet.png and stats.json to %s\n", job.writeFrames ? frames : 0, job.out.c_str());
   std::printf("ik: p50 %.2f ms, p99 %.2f ms (budget %.2f ms), %zu deadline misses, %.1f iterations\n", sum.ikP50Ms,
               sum.ikP99Ms, sum.budgetMs, sum.deadlineMisses, sum.iterationsMean);
-  std::printf("tracking: head error p95 %s, hand error p95 %s; render p50 %.1f ms\n", millimetres(sum.headErrorP95).c_str(),
-              millimetres(sum.handErrorP95).c_str(), sum.renderP50Ms);
+  std::printf("tracking: head error p95 %s, hand error p95 %s; body upright in %zu of %zu frames; render p50 %.1f ms\n",
+              millimetres(sum.headErrorP95).c_str(), millimetres(sum.handErrorP95).c_str(), loop.upright.upright,
+              loop.upright.frames, sum.renderP50Ms);
   if (job.validate && instance->validationEnabled()) std::fprintf(stderr, "validation messages: %u\n", instance->messageCount());
   return 0;
 }

@@ -32,6 +32,7 @@
 #include "runtime/ik_thread.h"
 #include "test_paths.h"
 #include "tracking/pose_source.h"
+#include "tracking/space_transform.h"
 #include "tracking/synthetic_source.h"
 
 using namespace embody;
@@ -109,8 +110,7 @@ std::vector<Slot> schedule(const Options& o, int sources) {
 // after every recenter and clock jump so far.
 struct FaultInjector {
   const std::vector<Slot>& slots;
-  glm::quat recenterRotation{1, 0, 0, 0};
-  glm::vec3 recenterOffset{0.0f};
+  tracking::SpaceTransform playSpace;  // every recenter so far
   double clockOffset = 0.0;
   size_t applied = 0;  // slots whose persistent fault has been applied
 
@@ -119,17 +119,14 @@ struct FaultInjector {
     if (t >= s.faultStart && applied <= k) {
       applied = k + 1;
       if (s.fault == Fault::Recenter) {
-        recenterRotation = glm::angleAxis(glm::radians(90.0f), glm::vec3(0, 1, 0)) * recenterRotation;
-        recenterOffset = glm::angleAxis(glm::radians(90.0f), glm::vec3(0, 1, 0)) * recenterOffset +
-                         glm::vec3(1.0f, 0.0f, 0.5f);
+        const tracking::SpaceTransform turnAndMove{glm::angleAxis(glm::radians(90.0f), glm::vec3(0, 1, 0)),
+                                                   glm::vec3(1.0f, 0.0f, 0.5f)};
+        playSpace = turnAndMove.after(playSpace);
       }
       if (s.fault == Fault::ClockJump) clockOffset += s.clockJump;
     }
     sample.time += clockOffset;
-    for (auto& p : sample.trackers) {
-      p.position = recenterRotation * p.position + recenterOffset;
-      p.orientation = recenterRotation * p.orientation;
-    }
+    playSpace.apply(sample);
     if (t < s.faultStart || t >= s.faultEnd) return;
     const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
     switch (s.fault) {

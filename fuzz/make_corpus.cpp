@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -21,6 +22,11 @@ using namespace embody;
 namespace {
 
 fs::path gRoot;
+
+const char* const kInvalidTrackersTrace =
+    "{\"t\": 0, \"head\": {\"p\": [0, 1.6, 0], \"q\": [0, 0, 0, 1], \"valid\": true}, \"left\": {\"valid\": false}}\n"
+    "{\"t\": 0.1, \"head\": {\"p\": [0, 1.6, null], \"q\": [0, 0, 0, 1]}, \"right\": {\"p\": [0.3, 1, -0.3], "
+    "\"q\": [0, 0, 0, 1], \"trigger\": 0.5}}\n";
 
 void write(const std::string& rel, const std::string& bytes) {
   const fs::path p = gRoot / rel;
@@ -146,6 +152,7 @@ void bvhSeeds() {
         "1 90 0 10 0 0 5 0 0\n");
 }
 
+// Traces in the JSON Lines format both tracking/trace and the headless runtime read.
 void traceSeeds() {
   for (const char* motion : {"synthetic:idle", "synthetic:reach"}) {
     auto src = tracking::openPoseSource(motion);
@@ -155,10 +162,34 @@ void traceSeeds() {
       out += tracking::formatTraceLine(src.value()->sample(i / 30.0), tracking::TrackerMask::all()) + "\n";
     write(std::string("trace/") + (motion + 10) + ".jsonl", out);
   }
-  write("trace/invalid_trackers.jsonl",
-        "{\"t\": 0, \"head\": {\"p\": [0, 1.6, 0], \"q\": [0, 0, 0, 1], \"valid\": true}, \"left\": {\"valid\": false}}\n"
-        "{\"t\": 0.1, \"head\": {\"p\": [0, 1.6, null], \"q\": [0, 0, 0, 1]}, \"right\": {\"p\": [0.3, 1, -0.3], "
-        "\"q\": [0, 0, 0, 1], \"trigger\": 0.5}}\n");
+  write("trace/invalid_trackers.jsonl", kInvalidTrackersTrace);
+}
+
+// The headless runtime's EMBODY_XR_POSES: its trace lines ({"t", "head", "left", "right"} with a
+// per-hand trigger; header lines such as embody_trace's are not samples there) and BVH clips
+// with Head/LeftHand/RightHand joints: a minimal one and the CMU-convention fixture of
+// tests/tracking/fixtures (written for this project).
+void xrPosesSeeds() {
+  auto src = tracking::openPoseSource("synthetic:figure8");
+  if (src.ok()) {
+    std::string out;
+    for (int i = 0; i < 8; ++i) {
+      json line = json::parse(tracking::formatTraceLine(src.value()->sample(i / 30.0), tracking::TrackerMask::all()));
+      if (line.contains("left")) line["left"]["trigger"] = 0.125 * i;
+      out += line.dump() + "\n";
+    }
+    write("xr_poses/figure8.jsonl", out);
+  }
+  write("xr_poses/invalid_trackers.jsonl", kInvalidTrackersTrace);
+  write("xr_poses/three_point.bvh",
+        "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation "
+        "Xrotation\n  JOINT Head\n  {\n    OFFSET 0 70 0\n    CHANNELS 3 Zrotation Yrotation Xrotation\n"
+        "    End Site\n    {\n      OFFSET 0 10 0\n    }\n  }\n  JOINT LeftHand\n  {\n    OFFSET 30 40 20\n"
+        "    CHANNELS 3 Zrotation Xrotation Yrotation\n  }\n  JOINT RightHand\n  {\n    OFFSET -30 40 20\n"
+        "    CHANNELS 3 Zrotation Xrotation Yrotation\n  }\n}\nMOTION\nFrames: 2\nFrame Time: 0.1\n"
+        "0 95 0 0 0 0 0 0 0 0 0 0 0 0 0\n1 95 0 10 0 0 5 0 0 0 20 0 0 -20 0\n");
+  std::ifstream fixture(fs::path(EMBODY_SOURCE_DIR) / "tests/tracking/fixtures/cmu.bvh", std::ios::binary);
+  if (fixture) write("xr_poses/cmu_fixture.bvh", std::string(std::istreambuf_iterator<char>(fixture), {}));
 }
 
 }  // namespace
@@ -173,6 +204,7 @@ int main(int argc, char** argv) {
   vrmSeeds();
   bvhSeeds();
   traceSeeds();
+  xrPosesSeeds();
   write("spine/full.json", ik::spine::toJson(ik::spine::defaultFullSpine()).dump(1));
   write("spine/simplified.json", ik::spine::toJson(ik::spine::defaultSimplifiedSpine()).dump(1));
   avatar::CalibrationInput in;

@@ -60,6 +60,7 @@ void IkThread::run() {
       done_.notify_all();
       continue;
     }
+    if (resetRequested_.exchange(false, std::memory_order_acq_rel) && stage_) stage_->reset();
     process_(input_.front(), output_.back());
     output_.publish();
     {

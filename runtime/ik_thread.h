@@ -34,6 +34,12 @@ class IkThread {
   // Tracking side (one thread): hands over the newest sample.
   void submit(const tracking::PoseSample& sample);
 
+  // Any thread: the stage starts afresh (filter, loss guard, warm start: IkStage::reset) before
+  // its next solve. After a recenter the trackers jump by design; without this the filter would
+  // glide the body across the room and the warm start would begin from the old place. A thread
+  // built with a Process owns its state and ignores this.
+  void requestReset() { resetRequested_.store(true, std::memory_order_release); }
+
   // Render side (one thread): takes the newest completed frame; true when it is new.
   bool acquire() { return output_.acquire(); }
   const SolvedFrame& frame() const { return output_.front(); }
@@ -60,6 +66,7 @@ class IkThread {
   std::atomic<uint32_t> solved_{0};
   std::atomic<uint32_t> skipped_{0};
   std::atomic<bool> running_{false};
+  std::atomic<bool> resetRequested_{false};
   std::thread thread_;
   std::mutex doneMutex_;  // only for the join's timed wait (done_); the hand-offs stay lock-free
   std::condition_variable done_;

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "tracking/space_transform.h"
+
 namespace embody::xr {
 
 float headingOf(const Pose& p) {
@@ -29,10 +31,9 @@ bool AvatarPlacement::calibrate(const Pose& head) {
 }
 
 void AvatarPlacement::recenter(const Pose& head) {
-  // New world = tracking moved so the head is over the origin (height kept) and turned to -Z.
-  const Pose yawOnly{{head.position.x, 0.0f, head.position.z},
-                     glm::angleAxis(headingOf(head), glm::vec3(0, 1, 0))};
-  recenter_ = yawOnly.inverse();
+  // The one recenter rule (tracking/space_transform.h): the head over the origin, facing -Z.
+  const tracking::SpaceTransform move = tracking::recenterOn({head.position, head.orientation, true});
+  recenter_ = Pose{move.translation, move.rotation};
 }
 
 glm::mat4 AvatarPlacement::root(const Pose& head) const {

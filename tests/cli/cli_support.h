@@ -1,10 +1,18 @@
 #pragma once
-// Runs the built `embody` binary (path from CTest's EMBODY_BIN) and captures its output.
+// Runs the built `embody` binary (path from CTest's EMBODY_BIN) and captures its output; the
+// output folders, JSON and PNG readers the CLI tests share.
 #include <array>
+#include <catch2/catch.hpp>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <sys/wait.h>
+#include <utility>
+
+#include "test_paths.h"
 
 namespace embody::test {
 
@@ -42,6 +50,29 @@ inline CommandResult runEmbody(const std::string& args, bool mergeStderr = false
 // stderr only (stdout discarded).
 inline CommandResult runEmbodyStderr(const std::string& args) {
   return runShell(embodyBinary() + " " + args + " 2>&1 >/dev/null");
+}
+
+// A test's output folder under the build tree (test-output/cli/NAME), removed first.
+inline std::filesystem::path outDir(const std::string& name) {
+  const std::filesystem::path d = std::filesystem::path(kBinaryDir) / "test-output" / "cli" / name;
+  std::filesystem::remove_all(d);
+  return d;
+}
+
+inline nlohmann::json readJson(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  REQUIRE(in.good());
+  return nlohmann::json::parse(in);
+}
+
+// Width/height from a PNG's IHDR chunk (bytes 16..23, big-endian); {0, 0} when unreadable.
+inline std::pair<uint32_t, uint32_t> pngSize(const std::filesystem::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  unsigned char h[24] = {};
+  f.read(reinterpret_cast<char*>(h), sizeof(h));
+  if (!f) return {0, 0};
+  auto be = [&](int o) { return uint32_t(h[o]) << 24 | uint32_t(h[o + 1]) << 16 | uint32_t(h[o + 2]) << 8 | h[o + 3]; };
+  return {be(16), be(20)};
 }
 
 }  // namespace embody::test

@@ -11,26 +11,17 @@
 #include "cli/cli_support.h"
 #include "test_paths.h"
 
+using embody::test::outDir;
+using embody::test::pngSize;
+using embody::test::readJson;
 using embody::test::runEmbody;
 namespace fs = std::filesystem;
 
 namespace {
 
-fs::path outDir(const std::string& name) {
-  const fs::path d = fs::path(embody::test::kBinaryDir) / "test-output" / "cli" / name;
-  fs::remove_all(d);
-  return d;
-}
-
 std::string fileText(const fs::path& p) {
   std::ifstream f(p, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(f), {});
-}
-
-nlohmann::json readJson(const fs::path& p) {
-  std::ifstream in(p);
-  REQUIRE(in.good());
-  return nlohmann::json::parse(in);
 }
 
 // The HIERARCHY lines that name joints and channels, and the offsets as numbers.

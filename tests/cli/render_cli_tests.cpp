@@ -5,33 +5,14 @@
 #include "cli/cli_support.h"
 #include "test_paths.h"
 
+using embody::test::outDir;
+using embody::test::pngSize;
+using embody::test::readJson;
 using embody::test::runEmbody;
 namespace fs = std::filesystem;
 
-namespace {
-
-// Width/height from a PNG's IHDR chunk (bytes 16..23, big-endian).
-std::pair<uint32_t, uint32_t> pngSize(const fs::path& p) {
-  std::FILE* f = std::fopen(p.c_str(), "rb");
-  if (!f) return {0, 0};
-  unsigned char h[24] = {};
-  const size_t n = std::fread(h, 1, sizeof(h), f);
-  std::fclose(f);
-  if (n != sizeof(h)) return {0, 0};
-  auto be = [&](int o) { return uint32_t(h[o]) << 24 | uint32_t(h[o + 1]) << 16 | uint32_t(h[o + 2]) << 8 | h[o + 3]; };
-  return {be(16), be(20)};
-}
-
-fs::path freshDir(const std::string& name) {
-  const fs::path d = fs::path(embody::test::kBinaryDir) / "test-output" / "cli" / name;
-  fs::remove_all(d);
-  return d;
-}
-
-}  // namespace
-
 TEST_CASE("embody render writes one validated frame of the default avatar", "[cli][render]") {
-  const auto out = freshDir("render_default");
+  const auto out = outDir("render_default");
   auto r = runEmbody("render --avatar default --out " + out.string() + " --width 96 --height 64 --gizmos --skeleton "
                      "--validate --device lavapipe", true);
   INFO(r.output);
@@ -43,7 +24,7 @@ TEST_CASE("embody render writes one validated frame of the default avatar", "[cl
 
 TEST_CASE("embody render draws CesiumMan in first person and as a stereo pair", "[cli][render]") {
   EMBODY_REQUIRE_SHARED_ASSET(path, "CesiumMan.glb");
-  const auto out = freshDir("render_cesium");
+  const auto out = outDir("render_cesium");
   auto fp = runEmbody("render --avatar " + path + " --out " + out.string() + " --view first-person --width 64 "
                       "--height 64 --validate", true);
   INFO(fp.output);
@@ -59,7 +40,7 @@ TEST_CASE("embody render draws CesiumMan in first person and as a stereo pair", 
 }
 
 TEST_CASE("embody render reports bad input with exit codes 1 and 2", "[cli][render]") {
-  const auto out = freshDir("render_errors");
+  const auto out = outDir("render_errors");
   auto missingFile = runEmbody("render --avatar /nonexistent/avatar.glb --out " + out.string(), true);
   CHECK(missingFile.exitCode == 1);
   CHECK(missingFile.output.find("error:") != std::string::npos);

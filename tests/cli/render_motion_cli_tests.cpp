@@ -9,32 +9,13 @@
 #include "cli/cli_support.h"
 #include "test_paths.h"
 
+using embody::test::outDir;
+using embody::test::pngSize;
+using embody::test::readJson;
 using embody::test::runEmbody;
 namespace fs = std::filesystem;
 
 namespace {
-
-fs::path outDir(const std::string& name) {
-  const fs::path d = fs::path(embody::test::kBinaryDir) / "test-output" / "cli" / name;
-  fs::remove_all(d);
-  return d;
-}
-
-nlohmann::json readJson(const fs::path& p) {
-  std::ifstream in(p);
-  REQUIRE(in.good());
-  return nlohmann::json::parse(in);
-}
-
-// Width/height from a PNG's IHDR chunk.
-std::pair<uint32_t, uint32_t> pngSize(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  unsigned char h[24] = {};
-  f.read(reinterpret_cast<char*>(h), sizeof(h));
-  if (!f) return {0, 0};
-  auto be = [&](int o) { return uint32_t(h[o]) << 24 | uint32_t(h[o + 1]) << 16 | uint32_t(h[o + 2]) << 8 | h[o + 3]; };
-  return {be(16), be(20)};
-}
 
 // An IK budget for these runs: generous in a release build. Sanitizer builds run the solver many
 // times slower (ThreadSanitizer about 20x: 50 ms bought 6 iterations a frame, too few to bring
@@ -88,6 +69,30 @@ TEST_CASE("embody render --motion synthetic:figure8: frames, contact sheet and n
   CHECK(rr.exitCode == 0);
   CHECK(pngSize(replay / "frame_00003.png") == std::pair<uint32_t, uint32_t>(64, 64));
   CHECK(readJson(replay / "stats.json")["calibration"]["from_first_head_sample"] == true);
+}
+
+TEST_CASE("embody render counts the frames whose body stands upright: all when standing, none lying down", "[cli][render]") {
+  const auto out = outDir("render_upright");
+  fs::create_directories(out);
+  // A person lying on their back on the floor: the head 15 cm up looking at the sky, hands beside.
+  const fs::path lying = out / "lying.jsonl";
+  {
+    std::ofstream f(lying);
+    for (int i = 0; i <= 10; ++i)
+      f << "{\"t\": " << 0.1 * i << R"(, "head": {"p": [0, 0.15, 0], "q": [0.7071, 0, 0, 0.7071]},)"
+        << R"( "left": {"p": [-0.3, 0.1, 0.4], "q": [0, 0, 0, 1]}, "right": {"p": [0.3, 0.1, 0.4], "q": [0, 0, 0, 1]}})" << "\n";
+  }
+  for (const auto& [motion, standing] : {std::pair{std::string("synthetic:squat"), true}, std::pair{lying.string(), false}}) {
+    const auto dir = out / (standing ? "standing" : "lying");
+    auto r = runEmbody("render --motion " + motion + " --user-height 1.75 --frames 20 --fps 10 --size 32x32 --ik-iterations 10 --out " +
+                       dir.string(), true);
+    INFO(r.output);
+    REQUIRE(r.exitCode == 0);
+    const auto j = readJson(dir / "stats.json");
+    const int upright = j["body"]["upright_frames"].get<int>();
+    CHECK(upright == (standing ? 20 : 0));
+    CHECK(r.output.find("body upright in " + std::to_string(upright) + " of 20 frames") != std::string::npos);
+  }
 }
 
 TEST_CASE("embody render --three-point on the BVH walk steps and keeps the head on target", "[cli][render]") {

@@ -1,6 +1,6 @@
 // The whole runtime frame allocates nothing after warm-up: pose source -> One Euro filter ->
 // tracking-loss guard -> tasks -> budgeted solve -> skeleton pose -> skinning palette, for the
-// default mannequin and glTF avatars, through the faults the guard handles (a lost hand, a NaN
+// default mannequin, glTF avatars and a BVH clip's own skeleton (`--avatar CLIP.bvh`), through the faults the guard handles (a lost hand, a NaN
 // burst, the head lost while the hands stay live, a 10 m teleport).
 #include <catch2/catch.hpp>
 
@@ -15,6 +15,7 @@
 #include "avatar/procedural/default_avatar.h"
 #include "runtime/tracked_avatar_body.h"
 #include "test_paths.h"
+#include "tracking/bvh_avatar.h"
 #include "tracking/pose_source.h"
 
 using namespace embody;
@@ -96,6 +97,20 @@ TEST_CASE("a runtime frame allocates nothing: CesiumMan", "[reliability][allocat
   auto asset = avatar::loadAvatarFile(path);
   REQUIRE(asset.ok());
   CHECK(allocationsPerFrameLoop(asset.value(), "synthetic:reach", true) == 0);
+}
+
+// `--avatar CLIP.bvh`: the clip's skeleton with a capsule mesh per bone, driven by a synthetic
+// motion and by the clip itself (as `--avatar CLIP.bvh --motion CLIP.bvh` does).
+TEST_CASE("a runtime frame allocates nothing: a BVH clip as the avatar", "[reliability][allocation]") {
+  for (const char* convention : {"cmu", "unreal"}) {
+    INFO(convention);
+    const std::string clip = std::string(test::kSourceDir) + "/tests/tracking/fixtures/" + convention + ".bvh";
+    auto bvh = tracking::loadBvhAvatar(clip, {});
+    REQUIRE(bvh.ok());
+    REQUIRE(bvh->asset.humanoid.usable());
+    CHECK(allocationsPerFrameLoop(bvh->asset, "synthetic:reach", true) == 0);
+    CHECK(allocationsPerFrameLoop(bvh->asset, clip.c_str(), false) == 0);
+  }
 }
 
 TEST_CASE("the allocation counter sees operator new and Eigen's malloc", "[reliability][allocation]") {

@@ -93,6 +93,37 @@ TEST_CASE("IK thread: each submitted sample is solved and published in order") {
   CHECK(ik.framesSolved() == 20);
 }
 
+TEST_CASE("IK thread: a requested reset restarts filter and warm start before the next solve (a recenter)") {
+  ManualClock clock;
+  test::FakeSolver solver(&clock, [](int) { return 100e-6; }, 4);
+  IkThread ik(solver, clock, {}, test::posedSkeleton(4));
+  ik.start();
+  auto src = tracking::SyntheticSource::create("idle").value();
+  uint32_t n = 0;
+  auto solveShifted = [&](double t, const glm::vec3& shift) {
+    tracking::PoseSample s = src->sample(t);
+    for (auto& p : s.trackers) p.position += shift;
+    ik.submit(s);
+    REQUIRE(ik.waitForFrames(++n, 10.0));
+    REQUIRE(ik.acquire());
+    return std::pair{s[tracking::TrackerId::Head].position, ik.frame().targets.pose[tracking::TrackerId::Head].position};
+  };
+  for (int i = 0; i < 10; ++i) solveShifted(i / 90.0, glm::vec3(0.0f));
+  // Without a reset a 0.3 m jump of the whole space is smoothed: the filtered head lags behind.
+  const auto [raw1, filtered1] = solveShifted(10 / 90.0, glm::vec3(0.3f, 0.0f, 0.0f));
+  CHECK(glm::distance(raw1, filtered1) > 0.01f);
+  CHECK(solver.solves - solver.warmSolves == 1);
+  // After requestReset the next sample passes the fresh filter as it is, and the solve is cold.
+  ik.requestReset();
+  const auto [raw2, filtered2] = solveShifted(11 / 90.0, glm::vec3(0.6f, 0.0f, 0.0f));
+  CHECK(glm::distance(raw2, filtered2) < 1e-6f);
+  CHECK(solver.solves - solver.warmSolves == 2);
+  // It happens once: the sample after that is warm and filtered again.
+  solveShifted(12 / 90.0, glm::vec3(0.9f, 0.0f, 0.0f));
+  CHECK(solver.solves - solver.warmSolves == 2);
+  ik.stop();
+}
+
 TEST_CASE("IK thread between a tracking thread and a render thread: newest whole frames, no waiting") {
   const Clock& clock = steadyClock();
   // Real work on the IK thread: a few microseconds per iteration, up to the 1 ms budget.

@@ -13,6 +13,9 @@
 
 #include "engine/image_io.h"
 #include "test_paths.h"
+#include "tracking/space_transform.h"
+#include "tracking/synthetic_source.h"
+#include "tracking/trace.h"
 
 namespace fs = std::filesystem;
 
@@ -78,6 +81,33 @@ int countAvatar(const embody::avatar::Image& img, int x0, int y0, int x1, int y1
 
 bool sameColor(const uint8_t* a, const uint8_t* b) {
   return std::abs(a[0] - b[0]) <= 2 && std::abs(a[1] - b[1]) <= 2 && std::abs(a[2] - b[2]) <= 2;
+}
+
+// Records synthetic:idle as a trace, with the whole tracking space moved by `move` (another room
+// setup: the user stands elsewhere, facing elsewhere).
+void writeMovedIdle(const std::string& path, const embody::tracking::SpaceTransform& move) {
+  using namespace embody::tracking;
+  auto src = SyntheticSource::create("idle").value();
+  TraceWriter w;
+  REQUIRE(w.open(path, TrackerMask::threePoint(), "synthetic:idle", 1.75f).ok());
+  for (int i = 0; i <= 90; ++i) {
+    PoseSample s = src->sample(i / 90.0);
+    move.apply(s);
+    REQUIRE(w.write(s).ok());
+  }
+  REQUIRE(w.close().ok());
+}
+
+// Pixels whose colour differs by more than `tolerance` in some channel, as a fraction of the image.
+double differingFraction(const embody::avatar::Image& a, const embody::avatar::Image& b, int tolerance) {
+  size_t n = 0;
+  for (size_t i = 0; i + 3 < a.rgba.size(); i += 4)
+    for (size_t c = 0; c < 3; ++c)
+      if (std::abs(int(a.rgba[i + c]) - int(b.rgba[i + c])) > tolerance) {
+        ++n;
+        break;
+      }
+  return double(n) / double(a.rgba.size() / 4);
 }
 
 }  // namespace
@@ -158,4 +188,34 @@ TEST_CASE("embody demo opens the mirror window when a display is available", "[w
   CHECK(fs::exists(dir + "/stats.json"));
   CHECK(r.output.find("embody mirror:") != std::string::npos);
   CHECK(r.output.find("mirror: 900 frames shown") != std::string::npos);
+}
+
+TEST_CASE("embody mirror --recenter: a user standing elsewhere, facing elsewhere, is seen as at the origin", "[window]") {
+  if (!canRun()) {
+    WARN("SKIPPED: no display and no xvfb-run (Debian package xvfb)");
+    return;
+  }
+  const std::string dir = outDir("recenter");
+  writeMovedIdle(dir + "/here.jsonl", {});
+  writeMovedIdle(dir + "/elsewhere.jsonl", {glm::angleAxis(glm::radians(120.0f), glm::vec3(0, 1, 0)), {3.0f, 0.0f, -2.0f}});
+  auto mirror = [&](const std::string& motion, const std::string& flags, const std::string& shot) {
+    const Run r = shell(withDisplay() + embodyBin() + " mirror --motion " + dir + "/" + motion +
+                        " --frames 12 --ik-iterations 20 --size 192x192 --no-grid " + flags + " --screenshot " + dir +
+                        "/" + shot);
+    INFO(r.output);
+    REQUIRE(r.exitCode == 0);
+    auto img = embody::engine::readPng(dir + "/" + shot);
+    REQUIRE(img.ok());
+    return std::pair{r.output, *img};
+  };
+  const auto [hereOut, here] = mirror("here.jsonl", "--recenter", "here.png");
+  const auto [movedOut, moved] = mirror("elsewhere.jsonl", "--recenter", "elsewhere_recentered.png");
+  const auto [rawOut, raw] = mirror("elsewhere.jsonl", "", "elsewhere.png");
+  CHECK(movedOut.find("recentered: the head at (") != std::string::npos);
+  CHECK(movedOut.find("; 1 recenters") != std::string::npos);
+  CHECK(rawOut.find("; 0 recenters") != std::string::npos);
+  // Recentered, the moved user looks as the one at the origin does (the orbit camera is fixed in
+  // the world, so the body's heading shows); not recentered, the body is seen from another side.
+  CHECK(differingFraction(here, moved, 24) < 0.003);
+  CHECK(differingFraction(here, raw, 24) > 0.02);
 }

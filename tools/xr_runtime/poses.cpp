@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <istream>
 #include <nlohmann/json.hpp>
 
 #include "tools/xr_runtime/runtime.h"
@@ -55,8 +56,19 @@ TrackedPose readTracked(const nlohmann::json& j) {
   const float n = glm::length(quat);
   if (!finite(t.pose.p) || !std::isfinite(n) || n < 1e-6f) return t;
   t.pose.q = quat / n;
-  t.valid = j.value("valid", true);
+  const auto valid = j.find("valid");
+  t.valid = valid == j.end() || (valid->is_boolean() && valid->get<bool>());
   return t;
+}
+
+// The hand's "trigger" (0..1); anything else (missing, not a number, out of range) clamps.
+float readTrigger(const nlohmann::json& sample, const char* hand) {
+  const auto h = sample.find(hand);
+  if (h == sample.end() || !h->is_object()) return 0.0f;
+  const auto t = h->find("trigger");
+  if (t == h->end() || !t->is_number()) return 0.0f;
+  const double v = t->get<double>();
+  return std::isfinite(v) ? static_cast<float>(std::clamp(v, 0.0, 1.0)) : 0.0f;
 }
 
 TrackedPose interpolate(const TrackedPose& a, const TrackedPose& b, float u) {
@@ -70,55 +82,51 @@ glm::quat yawPitch(float yaw, float pitch) {
 
 }  // namespace
 
-void PoseProvider::loadFromEnvironment() {
-  const char* path = std::getenv("EMBODY_XR_POSES");
-  if (!path || !*path) return;
-  const std::string p = path;
-  if (p.size() > 4 && (p.substr(p.size() - 4) == ".bvh" || p.substr(p.size() - 4) == ".BVH")) {
-    std::vector<BodySample> samples;
-    error_ = loadBvhSamples(p, samples);
-    if (error_.empty()) {
-      samples_ = std::move(samples);
-      source_ = p;
-    }
-    return;
-  }
-  std::ifstream in(path);
-  if (!in) {
-    error_ = std::string("cannot open EMBODY_XR_POSES file ") + path;
-    return;
-  }
-  std::vector<BodySample> samples;
+std::string parseTraceSamples(std::istream& in, const std::string& name, std::vector<BodySample>& out) {
+  out.clear();
   std::string line;
   int lineNo = 0;
   while (std::getline(in, line)) {
     ++lineNo;
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    const auto where = name + ":" + std::to_string(lineNo) + ": ";
     const auto j = nlohmann::json::parse(line, nullptr, false);
-    if (j.is_discarded() || !j.is_object() || !j.contains("t") || !j["t"].is_number()) {
-      error_ =
-          std::string(path) + ":" + std::to_string(lineNo) + ": not a trace sample ({\"t\": seconds, ...})";
-      return;
-    }
+    if (j.is_discarded() || !j.is_object() || !j.contains("t") || !j["t"].is_number())
+      return where + "not a trace sample ({\"t\": seconds, ...})";
     BodySample s;
     s.t = j["t"].get<double>();
-    if (!std::isfinite(s.t) || (!samples.empty() && s.t < samples.back().t)) {
-      error_ = std::string(path) + ":" + std::to_string(lineNo) + ": time goes backwards or is not finite";
-      return;
-    }
+    // Times stay within a day of each other, so sample() can subtract and divide them.
+    if (!std::isfinite(s.t) || (!out.empty() && (s.t < out.back().t || s.t - out.front().t > 86400.0)))
+      return where + "time goes backwards, jumps past a day or is not finite";
     if (j.contains("head")) s.head = readTracked(j["head"]);
     if (j.contains("left")) s.left = readTracked(j["left"]);
     if (j.contains("right")) s.right = readTracked(j["right"]);
-    if (j.contains("left") && j["left"].is_object()) s.leftTrigger = j["left"].value("trigger", 0.0f);
-    if (j.contains("right") && j["right"].is_object()) s.rightTrigger = j["right"].value("trigger", 0.0f);
-    samples.push_back(s);
+    s.leftTrigger = readTrigger(j, "left");
+    s.rightTrigger = readTrigger(j, "right");
+    out.push_back(s);
   }
-  if (samples.empty()) {
-    error_ = std::string(path) + ": no samples";
+  if (out.empty()) return name + ": no samples";
+  return "";
+}
+
+void PoseProvider::use(std::vector<BodySample> samples, std::string source) {
+  samples_ = std::move(samples);
+  source_ = std::move(source);
+}
+
+void PoseProvider::loadFromEnvironment() {
+  const char* path = std::getenv("EMBODY_XR_POSES");
+  if (!path || !*path) return;
+  const std::string p = path;
+  std::ifstream in(p, std::ios::binary);
+  if (!in) {
+    error_ = "cannot open EMBODY_XR_POSES file " + p;
     return;
   }
-  samples_ = std::move(samples);
-  source_ = path;
+  const bool bvh = p.size() > 4 && (p.substr(p.size() - 4) == ".bvh" || p.substr(p.size() - 4) == ".BVH");
+  std::vector<BodySample> samples;
+  error_ = bvh ? parseBvhSamples(in, p, samples) : parseTraceSamples(in, p, samples);
+  if (error_.empty()) use(std::move(samples), p);
 }
 
 BodySample PoseProvider::sample(double seconds) const {

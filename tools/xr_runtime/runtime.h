@@ -23,6 +23,7 @@
 #include <deque>
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
+#include <iosfwd>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -60,8 +61,10 @@ struct BodySample {
 // Where poses come from: a JSON Lines trace (looped) or the synthetic default motion.
 class PoseProvider {
  public:
-  // Reads EMBODY_XR_POSES; on a broken file, error() says why and the synthetic motion is used.
+  // Reads EMBODY_XR_POSES (a .bvh, else a JSON Lines trace); on a broken file, error() says why
+  // and the synthetic motion is used.
   void loadFromEnvironment();
+  void use(std::vector<BodySample> samples, std::string source);  // samples from a parse* below
   BodySample sample(double seconds) const;  // seconds since the session began
   const std::string& error() const { return error_; }
   const std::string& source() const { return source_; }
@@ -71,8 +74,14 @@ class PoseProvider {
   std::string error_, source_ = "synthetic";
 };
 
-// BVH motion capture (head, hands) as samples in OpenXR conventions; "" or why it failed.
-std::string loadBvhSamples(const std::string& path, std::vector<BodySample>& out);
+// The EMBODY_XR_POSES readers: text in, samples out (non-decreasing finite times; a valid pose is
+// finite with a unit quaternion). "" or why it failed, prefixed with `name`. Hostile sizes are
+// errors, not allocations. Fuzzed by fuzz/fuzz_xr_poses.cpp.
+//   JSON Lines: {"t": s, "head"|"left"|"right": {"p": [x,y,z], "q": [x,y,z,w], "valid": b,
+//   "trigger": 0..1}}, the format tracking/trace.h writes.
+std::string parseTraceSamples(std::istream& in, const std::string& name, std::vector<BodySample>& out);
+// BVH motion capture (head, hands) as samples in OpenXR conventions.
+std::string parseBvhSamples(std::istream& in, const std::string& name, std::vector<BodySample>& out);
 
 // The 26 XR_EXT_hand_tracking joints of a hand holding a controller at `grip`; poses in the same
 // space as the grip, radius in metres. `curl` (0..1, the trace's per-hand "trigger") bends each

@@ -1,0 +1,61 @@
+// The headless OpenXR runtime's EMBODY_XR_POSES input (tools/xr_runtime/poses*.cpp). The runtime
+// is self-contained on purpose (it must not share code paths with the application it tests), so
+// it has its own JSON Lines and BVH readers; every input goes through both, then the accepted
+// samples are replayed by PoseProvider the way xrLocateSpace/xrLocateViews read them.
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "fuzz/fuzz_target.h"
+#include "tools/xr_runtime/runtime.h"
+
+namespace {
+
+using embody::xr_runtime::BodySample;
+using embody::xr_runtime::TrackedPose;
+
+void checkPose(const TrackedPose& p) {
+  if (!p.valid) return;
+  EMBODY_FUZZ_CHECK(std::isfinite(p.pose.p.x + p.pose.p.y + p.pose.p.z));
+  const float n = glm::length(p.pose.q);
+  EMBODY_FUZZ_CHECK(std::isfinite(n) && std::abs(n - 1.0f) < 1e-3f);
+}
+
+void checkSample(const BodySample& s) {
+  checkPose(s.head);
+  checkPose(s.left);
+  checkPose(s.right);
+  EMBODY_FUZZ_CHECK(s.leftTrigger >= 0.0f && s.leftTrigger <= 1.0f);
+  EMBODY_FUZZ_CHECK(s.rightTrigger >= 0.0f && s.rightTrigger <= 1.0f);
+}
+
+void checkAccepted(std::vector<BodySample> samples) {
+  EMBODY_FUZZ_CHECK(!samples.empty());
+  for (size_t i = 0; i < samples.size(); ++i) {
+    EMBODY_FUZZ_CHECK(std::isfinite(samples[i].t));
+    if (i > 0) EMBODY_FUZZ_CHECK(samples[i].t >= samples[i - 1].t);
+    checkSample(samples[i]);
+  }
+  const double span = samples.back().t - samples.front().t;
+  embody::xr_runtime::PoseProvider provider;
+  provider.use(std::move(samples), "fuzz");
+  for (double t : {-1.0, 0.0, 0.013, 0.37 * span, span, span + 0.5, 1e6})
+    checkSample(provider.sample(t));
+}
+
+}  // namespace
+
+EMBODY_FUZZ_TARGET(xr_poses) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  std::vector<BodySample> samples;
+  {
+    std::istringstream in(text);
+    if (embody::xr_runtime::parseTraceSamples(in, "fuzz.jsonl", samples).empty()) checkAccepted(samples);
+  }
+  {
+    std::istringstream in(text);
+    if (embody::xr_runtime::parseBvhSamples(in, "fuzz.bvh", samples).empty()) checkAccepted(samples);
+  }
+  return 0;
+}

@@ -1,0 +1,93 @@
+// The headless OpenXR runtime's EMBODY_XR_POSES readers (tools/xr_runtime/poses*.cpp) on hostile
+// input: what the runtime did before was an uncaught exception inside xrCreateInstance (which
+// aborts the application under test), a multi-gigabyte allocation, or a read past the frame.
+// Each case is also an input in fuzz/regressions/xr_poses/, replayed through the fuzz target.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include "reliability/allocation_counter.h"
+#include "test_paths.h"
+#include "tools/xr_runtime/runtime.h"
+
+using namespace embody;
+using xr_runtime::BodySample;
+
+namespace {
+std::string regression(const std::string& name) {
+  std::ifstream f(std::string(test::kSourceDir) + "/fuzz/regressions/xr_poses/" + name, std::ios::binary);
+  REQUIRE(f);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+std::string parseTrace(const std::string& text, std::vector<BodySample>& out) {
+  std::istringstream in(text);
+  return xr_runtime::parseTraceSamples(in, "poses.jsonl", out);
+}
+
+std::string parseBvh(const std::string& text, std::vector<BodySample>& out) {
+  std::istringstream in(text);
+  return xr_runtime::parseBvhSamples(in, "poses.bvh", out);
+}
+}  // namespace
+
+TEST_CASE("xr poses: a trigger or valid flag of the wrong JSON type is read, not thrown",
+          "[reliability][xr_poses]") {
+  std::vector<BodySample> samples;
+  REQUIRE(parseTrace(regression("trigger_not_number.jsonl"), samples).empty());
+  REQUIRE(samples.size() == 2);
+  CHECK(samples[0].leftTrigger == 0.0f);   // "trigger": "pull"
+  CHECK(samples[0].rightTrigger == 1.0f);  // "trigger": 7 clamps to 1
+  CHECK_FALSE(samples[1].head.valid);      // "valid": "yes" is malformed: invalid
+  CHECK(samples[1].left.valid);
+}
+
+TEST_CASE("xr poses: a trace whose times span more than a day is an error naming the line",
+          "[reliability][xr_poses]") {
+  std::vector<BodySample> samples;
+  const std::string e = parseTrace(regression("time_span_overflow.jsonl"), samples);
+  CHECK(e.find("poses.jsonl:2:") == 0);
+  CHECK(e.find("day") != std::string::npos);
+}
+
+TEST_CASE("xr poses: a BVH claiming 2e9 frames is an error without the allocation",
+          "[reliability][xr_poses]") {
+  std::vector<BodySample> samples;
+  const std::string text = regression("frames_claim.bvh");
+  std::string e;
+  test::AllocationCounts counts;
+  {
+    test::CountAllocations counter;
+    e = parseBvh(text, samples);
+    counts = counter.counts();
+  }
+  CHECK(e.find("more than this reader accepts") != std::string::npos);
+  CHECK(counts.largestBytes < (size_t{1} << 20));
+  // Under the limit but beyond the data: the values are read as they come, the file is short.
+  std::string shortFile = regression("frames_claim.bvh");
+  shortFile.replace(shortFile.find("2000000000"), 10, "2000000");
+  CHECK(parseBvh(shortFile, samples).find("short MOTION") != std::string::npos);
+}
+
+TEST_CASE("xr poses: a BVH joint with two CHANNELS lines is refused (it read past the frame)",
+          "[reliability][xr_poses]") {
+  std::vector<BodySample> samples;
+  CHECK(parseBvh(regression("channels_twice.bvh"), samples).find("broken CHANNELS") != std::string::npos);
+}
+
+TEST_CASE("xr poses: an overflowing BVH chain is lost tracking, never a NaN pose",
+          "[reliability][xr_poses]") {
+  std::vector<BodySample> samples;
+  REQUIRE(parseBvh(regression("offset_overflow.bvh"), samples).empty());
+  REQUIRE_FALSE(samples.empty());
+  for (const auto& s : samples)
+    for (const auto* p : {&s.head, &s.left, &s.right}) {
+      CHECK(std::isfinite(p->pose.p.x + p->pose.p.y + p->pose.p.z));
+      CHECK(std::isfinite(p->pose.q.x + p->pose.q.y + p->pose.q.z + p->pose.q.w));
+    }
+  CHECK_FALSE(samples[0].left.valid);  // its parent's offset overflows float
+  CHECK(samples[0].head.valid);
+}
