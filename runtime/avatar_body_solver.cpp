@@ -272,7 +272,8 @@ void AvatarBodySolver::addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskD
                        : spec.tracker == TrackerId::RightFoot ? 1
                        : spec.tracker == TrackerId::LeftHand  ? 2
                                                               : 3;
-      if (!options_.limbPoles || limbMiddle_[k] < 0 || limbRoot_[k] < 0 || !(limb_[k].upper > 0.0)) break;
+      // Joint markers say where every knee and elbow is: a pole would only pull it off.
+      if (!options_.limbPoles || options_.jointMarkers || limbMiddle_[k] < 0 || limbRoot_[k] < 0 || !(limb_[k].upper > 0.0)) break;
       t.name = std::string(k < 2 ? "pole_knee_" : "pole_elbow_") + (k % 2 == 0 ? "left" : "right");
       t.type = ik::TaskType::Position;
       t.joint = limbMiddle_[k];
@@ -301,7 +302,8 @@ void AvatarBodySolver::calibrate(float userHeight) {
 // layout's lowest.
 void AvatarBodySolver::addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks) {
   int lowest = 1;
-  for (const TaskSpec& spec : layout_.tasks) lowest = std::max(lowest, spec.priority);
+  for (const TaskSpec& spec : layout_.tasks)
+    if (spec.kind != TaskKind::LimbPole) lowest = std::max(lowest, spec.priority);  // no poles with markers
   for (size_t a = 0; a < avatar_.skeleton.joints.size(); ++a) {
     const int j = body_.ikJointOfAvatar[a];
     if (j < 0 || body_.avatarJoint[size_t(j)] != int(a)) continue;
@@ -617,9 +619,13 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   return result;
 }
 
-void AvatarBodySolver::seedStanding(const tracking::GuardedSample& targets) {
+bool AvatarBodySolver::seedStanding(const tracking::GuardedSample& targets) {
   const size_t h = size_t(tracking::index(TrackerId::Head));
-  if (!targets.pose[TrackerId::Head].valid || targets.status[h] == TrackerStatus::Absent) return;
+  if (!targets.pose[TrackerId::Head].valid || targets.status[h] == TrackerStatus::Absent) return false;
+  // No standing body fits under a head lower than the standing pelvis (a user lying or sitting
+  // on the floor): the solve goes on from where it is.
+  const double headHeight = up_.dot(targetPoint_[h]) - floor_;
+  if (headHeight < restHeight_[size_t(tracking::index(TrackerId::Hips))]) return false;
   SeedInputs in;
   in.up = up_;
   in.forward = forward_;
@@ -637,6 +643,7 @@ void AvatarBodySolver::seedStanding(const tracking::GuardedSample& targets) {
   const double yaw = seedYaw(in);
   (void)data_->setConfiguration(placeRoot(body_.model, body_.hips, restQ_, seedPelvis(in, yaw), yaw, up_));
   ik::kinematics(body_.model, *data_, false);
+  return true;
 }
 
 void AvatarBodySolver::setPoleTargets() {
@@ -725,12 +732,13 @@ void AvatarBodySolver::guardAgainstCollapse(const tracking::GuardedSample& targe
   const double time = targets.pose.time;
   if (guard_.update(bodySignals(time, result)) == CollapseReason::None) return;
   // Stand up under the head, plant the feet afresh, solve cold next frame; the shown pose fades
-  // from the heap to the new solution.
-  fade_.start(pose, time, options_.recoveryBlendSeconds);
-  seedStanding(targets);
+  // from the heap to the new solution. Under a head too low to stand under (seedStanding), only
+  // the cold solve.
+  reseeded_ = true;
+  if (!seedStanding(targets)) return;
+  fade_.start(pose, time, options_.recoveryBlendSeconds);  // `pose` is still the heap
   lastGoodQ_ = data_->q();
   planner_.restart();
-  reseeded_ = true;
 }
 
 }  // namespace embody::runtime

@@ -175,7 +175,8 @@ class AvatarBodySolver final : public BodySolver {
   void setTargets(const tracking::GuardedSample& targets);
   void setSeatedTargets(const tracking::GuardedSample& targets);
   // Standing start: the root under the head, facing the head's and hands' heading (body_seed.h).
-  void seedStanding(const tracking::GuardedSample& targets);
+  // False (nothing changed) without a live head or under a head lower than the standing pelvis.
+  bool seedStanding(const tracking::GuardedSample& targets);
   void setPoleTargets();
   // After a solve: asks the collapse guard; on a collapse re-seeds and starts the fade.
   void guardAgainstCollapse(const tracking::GuardedSample& targets, const SolveResult& result, avatar::SkeletonPose& pose);

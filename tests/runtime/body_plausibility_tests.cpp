@@ -31,6 +31,7 @@ struct Measures {
   double minPelvisHeight = 1e9;
   std::vector<double> headError, handError, pelvisHeight;
   int recoveries = 0;
+  CollapseReason lastReason = CollapseReason::None;
 };
 
 // The knee's offset from its hip-ankle line along the foot's forward (negative: behind the line,
@@ -78,6 +79,7 @@ Measures run(tracking::PoseSource& source, const AvatarBodyOptions& options, int
                                    st.residual[size_t(tracking::index(TrackerId::RightHand))]));
   }
   m.recoveries = s.collapseGuard().recoveries();
+  m.lastReason = s.collapseGuard().lastReason();
   return m;
 }
 
@@ -212,4 +214,57 @@ TEST_CASE("no knee or elbow bends backwards over the synthetic motions, three tr
       CHECK(m.recoveries == 0);
     }
   }
+}
+
+TEST_CASE("limb poles sit below the trackers; joint markers replace them", "[runtime][plausibility]") {
+  auto poles = [](bool markers) {
+    AvatarBodyOptions o = optionsFor(tracking::TrackerMask::threePoint());
+    o.jointMarkers = markers;
+    auto s = AvatarBodySolver::create(defaultAvatar(), o);
+    REQUIRE(s.ok());
+    const ik::Model& m = (*s)->body().model;
+    int count = 0, poleLevel = -1, markerLevel = -1, lowestTracker = -1;
+    for (const auto& t : m.tasks) {
+      if (t.desc.name.rfind("pole_", 0) == 0) ++count, poleLevel = t.desc.level;
+      else if (t.desc.name.rfind("marker_", 0) == 0) markerLevel = t.desc.level;
+      else lowestTracker = std::max(lowestTracker, t.desc.level);
+    }
+    return std::array<int, 4>{count, poleLevel, markerLevel, lowestTracker};
+  };
+  const auto without = poles(false);
+  CHECK(without[0] == 4);               // both knees, both elbows
+  CHECK(without[1] > without[3]);       // below every tracker task
+  const auto with = poles(true);
+  CHECK(with[0] == 0);                  // a marker says where the knee is: no pole pulls it off
+  CHECK(with[2] == with[3] + 1);        // the markers right below the trackers
+}
+
+TEST_CASE("a head lying on the floor is not stood up: no standing seed, a stall only restarts the solve cold", "[runtime][plausibility]") {
+  // A person on their back: the head 15 cm above the floor, the hands beside it, for 3 s.
+  tracking::PoseSample lying;
+  lying.time = 0.0;
+  auto set = [&](TrackerId id, glm::vec3 p, glm::quat q) {
+    lying[id].position = p;
+    lying[id].orientation = q;
+    lying[id].valid = true;
+  };
+  set(TrackerId::Head, {0.0f, 0.15f, 0.0f}, glm::quat(0.7071f, 0.7071f, 0.0f, 0.0f));
+  set(TrackerId::LeftHand, {-0.3f, 0.1f, 0.4f}, glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+  set(TrackerId::RightHand, {0.3f, 0.1f, 0.4f}, glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+  struct Still : tracking::PoseSource {
+    tracking::PoseSample pose;
+    tracking::PoseSample sample(double t) override {
+      tracking::PoseSample p = pose;
+      p.time = t;
+      return p;
+    }
+    double duration() const override { return 3.0; }
+    std::string name() const override { return "lying"; }
+    tracking::TrackerMask trackers() const override { return tracking::TrackerMask::threePoint(); }
+  } source;
+  source.pose = lying;
+  const Measures m = run(source, optionsFor(tracking::TrackerMask::threePoint()), 90, 30.0);
+  INFO("recoveries " << m.recoveries << ", last " << collapseReasonName(m.lastReason) << ", head error " << maxAfter(m.headError, 60));
+  CHECK(m.nonFinite == 0);
+  CHECK(maxAfter(m.pelvisHeight, 1) < 0.5);  // lying from the first solve on, never stood up (standing: ~0.95 m)
 }
