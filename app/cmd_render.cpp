@@ -42,7 +42,7 @@ void declareRenderOptions(app::Args& args) {
   app::JobOptionDefaults defaults;
   defaults.motion = "";  // without --motion: the rest pose
   defaults.size = "";    // motion 480x480, rest pose 1280x720
-  app::addJobOptions(args, app::kAllJobOptions | app::kIterationOptions, defaults);
+  app::addJobOptions(args, app::kAllJobOptions | app::kIterationOptions | app::kExportOptions, defaults);
   args.option("out", "DIR", "output folder (created if missing)");
   args.option("frames", "N", "frames to render (default: the motion's duration, at most 20 s)");
   args.option("width", "PIXELS", "frame width (or --size; motion default 480, rest pose 1280)");
@@ -50,9 +50,6 @@ void declareRenderOptions(app::Args& args) {
   args.option("view", "KIND", "third (orbit camera), first (at the eyes) or stereo (two eyes, side by side with "
               "--motion); third-person/first-person also accepted", "third");
   args.option("record", "FILE.jsonl", "also record the motion's samples as a JSON Lines trace");
-  args.option("export", "FILE.bvh|FILE.glb", "write the solved motion (the body shown, every frame): BVH on the "
-              "avatar's hierarchy (for a BVH avatar the clip's own hierarchy, channels and frame time), or the avatar "
-              "as glTF binary with the motion as an animation");
   args.flag("seated", "seated mode: the lower body sits on a seat placed under the first head sample, the spine and "
                       "arms follow (try --motion synthetic:seated)");
   args.option("yaw", "DEGREES", "orbit camera yaw around the avatar (0 = from the front)", "30");
@@ -91,14 +88,13 @@ RenderView readRenderView(const app::Args& args) {
 int renderMotion(const app::Args& args, const RenderView& v) {
   app::RenderJob job;
   try {
-    app::readJobOptions(args, app::kAllJobOptions | app::kIterationOptions, job);
+    app::readJobOptions(args, app::kAllJobOptions | app::kIterationOptions | app::kExportOptions, job);
     if (args.has("frames")) job.frames = args.integer("frames");
     if (args.has("frames") && job.frames < 1) throw std::invalid_argument("--frames must be at least 1");
   } catch (const std::invalid_argument& e) {
     return app::usageError(e.what());
   }
   job.record = args.get("record");
-  job.exportPath = args.get("export");
   job.seated = args.has("seated");
   job.width = v.width;
   job.height = v.height;
@@ -218,7 +214,7 @@ int runRender(app::Argv argv) {
     view = readRenderView(args);
     // The shared options are checked with or without --motion: a bad value is an error either way.
     app::JobOptions checked;
-    app::readJobOptions(args, app::kAllJobOptions | app::kIterationOptions, checked);
+    app::readJobOptions(args, app::kAllJobOptions | app::kIterationOptions | app::kExportOptions, checked);
   } catch (const std::invalid_argument& e) {
     return app::usageError(e.what());
   }

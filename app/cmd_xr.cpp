@@ -11,6 +11,7 @@
 #include "app/avatar_arg.h"
 #include "app/args.h"
 #include "app/job_options.h"
+#include "app/motion_export.h"
 #include "avatar/body/calibration.h"
 #include "runtime/frame_stats.h"
 #include "runtime/seated_stats.h"
@@ -49,7 +50,7 @@ struct XrCommand {
 };
 
 // The options shared with render/mirror/demo (app/job_options.h).
-constexpr unsigned kSharedOptions = app::kAvatarOptions | app::kBodyOptions | app::kBudgetOptions;
+constexpr unsigned kSharedOptions = app::kAvatarOptions | app::kBodyOptions | app::kBudgetOptions | app::kExportOptions;
 
 void declareOptions(app::Args& args) {
   app::addJobOptions(args, kSharedOptions);
@@ -308,6 +309,38 @@ bool writeStats(const XrCommand& c, const xr::XrLoopReport& r, const BodyHook& h
   return bool(out);
 }
 
+// --export: every frame's body as shown, recorded on the render thread; written when the session
+// ends, at the headset's mean display period (OpenXR frames are paced by the runtime).
+struct ShownMotion {
+  app::MotionExport file;
+  double firstSeconds = 0.0, lastSeconds = 0.0;
+
+  void attach(const std::string& path, const avatar::AvatarAsset& asset, uint64_t frames, xr::XrLoopOptions& lo) {
+    if (path.empty()) return;
+    file.open(path, asset, nullptr, 1.0 / 90.0, size_t(frames));
+    lo.onBodyShown = [this](const avatar::SkeletonPose& pose, double displaySeconds) {
+      if (file.frames() == 0) firstSeconds = displaySeconds;
+      lastSeconds = displaySeconds;
+      file.add(pose);
+    };
+  }
+  // Exit code contribution: 0 written (or nothing asked), 1 an error (printed).
+  int write(const avatar::AvatarAsset& asset) {
+    if (!file.active()) return 0;
+    if (file.frames() == 0) {
+      std::fprintf(stderr, "error: --export %s: no frame was shown, nothing to write\n", file.path().c_str());
+      return 1;
+    }
+    if (file.frames() > 1 && lastSeconds > firstSeconds) file.setFrameTime((lastSeconds - firstSeconds) / double(file.frames() - 1));
+    if (auto s = file.write(asset); !s) {
+      std::fprintf(stderr, "error: %s\n", s.error().c_str());
+      return 1;
+    }
+    std::printf("exported the body shown (%zu frames) to %s\n", file.frames(), file.path().c_str());
+    return 0;
+  }
+};
+
 int runXr(app::Argv argv) {
   XrCommand c;
   if (auto code = parseCommand(argv, c)) return *code;
@@ -323,6 +356,8 @@ int runXr(app::Argv argv) {
     std::fprintf(stderr, "error: %s\n", attached.error().c_str());
     return 1;
   }
+  ShownMotion shown;
+  shown.attach(c.shared.exportPath, asset, c.loop.frames, c.loop);
   installStopHandlers();
   c.loop.stopRequested = &gStopRequested;
   int attempts = 0;
@@ -330,6 +365,7 @@ int runXr(app::Argv argv) {
   printSession(r);
   printBody(c, r, hook);
   if (!c.statsPath.empty() && !writeStats(c, r, hook, attempts)) return 1;
+  if (shown.write(asset) != 0) return 1;
   if (!r.error.empty()) {
     std::fprintf(stderr, "error: %s\n", r.error.c_str());
     return 1;

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "app/motion_export.h"
 #include "avatar/body/calibration.h"
 
 namespace embody::app {
@@ -46,6 +47,10 @@ void addJobOptions(Args& args, unsigned groups, const JobOptionDefaults& default
   if (groups & kIterationOptions)
     args.option("ik-iterations", "N", "a fixed IK iteration count per frame (1 .. 1000) instead of the time budget: the "
                 "same command gives the same output bytes (offline, reproducible runs)");
+  if (groups & kExportOptions)
+    args.option("export", "FILE.bvh|FILE.glb", "write the solved motion (the body shown, every frame): BVH on the "
+                "avatar's hierarchy (for a BVH avatar the clip's own hierarchy, channels and frame time), or the avatar "
+                "as glTF binary with the motion as an animation");
 }
 
 void parseSize(const std::string& text, int& width, int& height) {
@@ -110,6 +115,10 @@ void readJobOptions(const Args& args, unsigned groups, JobOptions& out) {
     out.ikIterations = args.integer("ik-iterations");
     if (!(out.ikIterations >= 1 && out.ikIterations <= kMaxIkIterations))
       throw std::invalid_argument("--ik-iterations must be 1 .. 1000");
+  }
+  if (groups & kExportOptions) {
+    out.exportPath = args.get("export");
+    if (const std::string bad = checkExportPath(out.exportPath); !bad.empty()) throw std::invalid_argument(bad);
   }
 }
 

@@ -24,7 +24,8 @@ enum JobOptionGroup : unsigned {
   kFrameOptions = 1u << 3,   // --size
   kBudgetOptions = 1u << 4,  // --ik-budget-ms
   kAllJobOptions = 0x1Fu,
-  kIterationOptions = 1u << 5,  // --ik-iterations (offline, reproducible runs: render, demo)
+  kIterationOptions = 1u << 5,  // --ik-iterations (offline, reproducible runs: render, demo, mirror)
+  kExportOptions = 1u << 6,     // --export FILE.bvh|FILE.glb (render, xr: app/motion_export.h)
 };
 
 // The values of the shared options (the defaults are the CLI's).
@@ -43,6 +44,7 @@ struct JobOptions {
   int width = 480, height = 480;
   double budgetMs = 1.0;
   int ikIterations = 0;            // --ik-iterations: > 0 a fixed count per frame (deterministic), 0 the budget
+  std::string exportPath;          // --export FILE.bvh|.glb: the body shown, every frame ("" none)
 };
 
 // The limits every command applies.

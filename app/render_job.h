@@ -14,7 +14,6 @@ namespace embody::app {
 // The shared options (avatar, body, motion, size, budget: app/job_options.h) and the rest.
 struct RenderJob : JobOptions {
   std::string record;              // --record FILE.jsonl ("" none)
-  std::string exportPath;          // --export FILE.bvh|.glb: the solved motion, every frame ("" none)
   bool seated = false;             // seated mode (runtime::SeatOptions): the lower body sits on a seat
   int frames = 0;                  // 0: the motion's duration (at most 20 s)
   std::string view = "third";      // third | first | stereo

@@ -34,13 +34,21 @@ namespace {
 struct Figures {
   long problems = 0, nanSolutions = 0, converged = 0;
   double equalityResidualMax = 0.0, inequalityViolationMax = 0.0;
+  int worstInequality = -1;        // the row of inequalityViolationMax
+  bool worstReported = false;      // ... listed in SolveReport::unsatisfiable by the solver
+  std::vector<int> worstActive;    // ... and the rows pinned in that solve's last iteration
   std::vector<int> iterations;  // of converged problems
   void merge(const Figures& o) {
     problems += o.problems;
     nanSolutions += o.nanSolutions;
     converged += o.converged;
     equalityResidualMax = std::max(equalityResidualMax, o.equalityResidualMax);
-    inequalityViolationMax = std::max(inequalityViolationMax, o.inequalityViolationMax);
+    if (o.inequalityViolationMax > inequalityViolationMax) {
+      inequalityViolationMax = o.inequalityViolationMax;
+      worstInequality = o.worstInequality;
+      worstReported = o.worstReported;
+      worstActive = o.worstActive;
+    }
     iterations.insert(iterations.end(), o.iterations.begin(), o.iterations.end());
   }
 };
@@ -108,12 +116,13 @@ double equalityResidual(const ik::Model& m, const Eigen::VectorXd& q) {
   return worst;
 }
 
-double inequalityViolation(const ik::Model& m, const Eigen::VectorXd& q) {
-  double worst = 0.0;
-  for (const auto& row : m.inequalities) {
+// The largest max(Σ c q − rhs, 0) and its row (-1 when none is violated).
+std::pair<double, int> inequalityViolation(const ik::Model& m, const Eigen::VectorXd& q) {
+  std::pair<double, int> worst{0.0, -1};
+  for (size_t r = 0; r < m.inequalities.size(); ++r) {
     double lhs = 0.0;
-    for (const auto& t : row.terms) lhs += t.coefficient * q[m.dofIndex(t.dof)];
-    worst = std::max(worst, lhs - row.rhs);
+    for (const auto& t : m.inequalities[r].terms) lhs += t.coefficient * q[m.dofIndex(t.dof)];
+    if (lhs - m.inequalities[r].rhs > worst.first) worst = {lhs - m.inequalities[r].rhs, static_cast<int>(r)};
   }
   return worst;
 }
@@ -139,13 +148,24 @@ Figures solveRandom(const ik::Model& m, long problems, uint64_t seed, int maxIte
       continue;
     }
     f.equalityResidualMax = std::max(f.equalityResidualMax, equalityResidual(m, q));
-    f.inequalityViolationMax = std::max(f.inequalityViolationMax, inequalityViolation(m, q));
+    if (const auto [v, row] = inequalityViolation(m, q); v > f.inequalityViolationMax) {
+      f.inequalityViolationMax = v;
+      f.worstInequality = row;
+      f.worstReported = std::find(r.unsatisfiable.begin(), r.unsatisfiable.end(), row) != r.unsatisfiable.end();
+      f.worstActive = r.active_clamps;
+    }
     if (r.converged()) {
       ++f.converged;
       f.iterations.push_back(r.iterations);
     }
   }
   return f;
+}
+
+nlohmann::json activeRowNames(const ik::Model& m, const std::vector<int>& rows) {
+  nlohmann::json names = nlohmann::json::array();
+  for (int r : rows) names.push_back(m.inequalities[static_cast<size_t>(r)].name);
+  return names;
 }
 
 nlohmann::json run(const std::string& name, const ik::Model& m, long problems, int threads, uint64_t seed,
@@ -175,6 +195,9 @@ nlohmann::json run(const std::string& name, const ik::Model& m, long problems, i
           {"nan_solutions", all.nanSolutions},
           {"equality_residual_max", all.equalityResidualMax},
           {"inequality_violation_max", all.inequalityViolationMax},
+          {"inequality_violation_row", all.worstInequality < 0 ? "" : m.inequalities[all.worstInequality].name},
+          {"inequality_violation_reported_unsatisfiable", all.worstReported},
+          {"inequality_violation_active_rows", activeRowNames(m, all.worstActive)},
           {"converged_fraction", all.problems ? double(all.converged) / double(all.problems) : 0.0},
           {"iterations_p50", pct(0.5)},
           {"iterations_p99", pct(0.99)},

@@ -1089,25 +1089,73 @@ double rowValue(const Workspace& w, size_t i, const Eigen::VectorXd& x) {
   return v;
 }
 
+// Loads inequality row i into w.tmp_n and pins it at its bound (c^T (q + Δq) = rhs). Returns
+// false when it depends on the active set (nothing changes then).
+bool pinRow(const Model& model, Workspace& w, size_t i, Path path) {
+  const double current = rowValue(w, i, w.q);
+  w.tmp_n.setZero();
+  for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) w.tmp_n(w.ineq_dof[k]) += w.ineq_coef[k];
+  const int single = w.ineq_begin[i + 1] - w.ineq_begin[i] == 1 ? w.ineq_dof[w.ineq_begin[i]] : -1;
+  return addActiveRow(w, model.inequalities[i].rhs - current, single, path, 1e-9);
+}
+
+// The active set again from the equality rows: the pinned rows (report.active_clamps, in the
+// order they were added) except `skip`.
+void rebuildActiveSet(const Model& model, Workspace& w, Path path, int skip) {
+  resetActiveSet(w, path);
+  for (int r : w.report.active_clamps)
+    if (r != skip && pinRow(model, w, static_cast<size_t>(r), path)) w.ineq_active[r] = 1;
+}
+
+double nextRowValue(const Workspace& w, size_t i) {
+  double next = rowValue(w, i, w.q);
+  for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) next += w.ineq_coef[k] * w.dq(w.ineq_dof[k]);
+  return next;
+}
+
+// Row i is violated by q + Δq but depends on the pinned rows: held at their bounds, they fix its
+// value. A pinned row only has to hold as an inequality, so one of them may be the wrong one to
+// hold at its bound (two regions' opposite limits pinned in one sweep leave the band between
+// them no room; pinning the band instead leaves one of those limits inactive). Tries each pinned
+// row, latest first, replaced by row i, and keeps the first exchange whose step satisfies the
+// released row; otherwise restores the active set and step. Only rows that were dependent and
+// violated pay for this (a rebuild and a pass per try).
+bool exchangePinnedRow(const Model& model, Workspace& w, const SolveOptions& o, size_t i) {
+  std::vector<int>& pinned = w.report.active_clamps;
+  for (size_t k = pinned.size(); k-- > 0;) {
+    const int released = pinned[k];
+    rebuildActiveSet(model, w, o.path, released);
+    if (!pinRow(model, w, i, o.path)) continue;
+    computeDq0(w);
+    runPass(model, w, o);
+    if (nextRowValue(w, static_cast<size_t>(released)) > model.inequalities[released].rhs + o.inequality_tolerance)
+      continue;
+    pinned.erase(pinned.begin() + static_cast<std::ptrdiff_t>(k));  // capacity reserved: no allocation
+    pinned.push_back(static_cast<int>(i));
+    w.ineq_active[i] = 1;
+    return true;
+  }
+  rebuildActiveSet(model, w, o.path, -1);
+  computeDq0(w);
+  runPass(model, w, o);
+  return false;
+}
+
 // Pins every inequality violated by q + Δq (user couplings first: the model keeps that order).
 // Returns whether a row was added.
 bool pinViolations(const Model& model, Workspace& w, const SolveOptions& o) {
   bool added = false;
   for (size_t i = 0; i < model.inequalities.size(); ++i) {
     if (w.ineq_active[i]) continue;
-    const double rhs = model.inequalities[i].rhs;
-    const double current = rowValue(w, i, w.q);
-    double next = current;
-    for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) next += w.ineq_coef[k] * w.dq(w.ineq_dof[k]);
-    if (!(next > rhs + o.inequality_tolerance)) continue;
-    w.tmp_n.setZero();
-    for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) w.tmp_n(w.ineq_dof[k]) += w.ineq_coef[k];
-    const int single = w.ineq_begin[i + 1] - w.ineq_begin[i] == 1 ? w.ineq_dof[w.ineq_begin[i]] : -1;
-    // A row dependent on the active set is skipped (first added wins); it is reported only if it
-    // is still violated once the loop settles (pinning its partner often satisfies it).
-    if (addActiveRow(w, rhs - current, single, o.path, 1e-9)) {
+    if (!(nextRowValue(w, i) > model.inequalities[i].rhs + o.inequality_tolerance)) continue;
+    // A row dependent on the active set is first offered in exchange for a pinned row; if none
+    // can give way it is skipped (first added wins), and reported only if it is still violated
+    // once the loop settles (pinning its partner often satisfies it).
+    if (pinRow(model, w, i, o.path)) {
       w.ineq_active[i] = 1;
       w.report.active_clamps.push_back(static_cast<int>(i));
+      added = true;
+    } else if (exchangePinnedRow(model, w, o, i)) {
       added = true;
     }
   }
@@ -1117,9 +1165,7 @@ bool pinViolations(const Model& model, Workspace& w, const SolveOptions& o) {
 void reportRemainingViolations(const Model& model, Workspace& w, const SolveOptions& o) {
   for (size_t i = 0; i < model.inequalities.size(); ++i) {
     if (w.ineq_active[i] || w.ineq_reported[i]) continue;
-    double next = rowValue(w, i, w.q);
-    for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) next += w.ineq_coef[k] * w.dq(w.ineq_dof[k]);
-    if (next > model.inequalities[i].rhs + o.inequality_tolerance) {
+    if (nextRowValue(w, i) > model.inequalities[i].rhs + o.inequality_tolerance) {
       w.ineq_reported[i] = 1;
       w.report.unsatisfiable.push_back(static_cast<int>(i));
     }
@@ -1138,6 +1184,23 @@ void reparameterize(const Model& model, Workspace& w) {
     Eigen::Vector3d v = w.q.segment<3>(f);
     if (reparameterizeExpMap(v)) w.q.segment<3>(f) = v;
   }
+}
+
+// The oscillation guard's scaled step Δq0 + s (Δq - Δq0) moves each row's value linearly from
+// its value at q + Δq0 to the one at q + Δq. Δq0 alone (the pinned rows at their bounds) may
+// break a row the full step keeps (a limit pinned pushes a band past its slack), so the scale
+// may not go below what keeps every row the clamping loop left satisfied.
+double smallestScaleKeepingRows(const Model& model, const Workspace& w, const SolveOptions& o) {
+  double smallest = 0.0;
+  for (size_t i = 0; i < model.inequalities.size(); ++i) {
+    const double bound = model.inequalities[i].rhs + o.inequality_tolerance;
+    const double full = nextRowValue(w, i);
+    if (full > bound) continue;  // violated anyway (reported): the scale cannot help
+    double base = rowValue(w, i, w.q);
+    for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) base += w.ineq_coef[k] * w.dq0(w.ineq_dof[k]);
+    if (base > bound) smallest = std::max(smallest, (base - bound) / (base - full));
+  }
+  return std::min(smallest, 1.0);
 }
 
 // The iteration after kinematics(): active-set reset, clamping loop, q += Δq.
@@ -1174,7 +1237,8 @@ bool step(const Model& model, Workspace& w, const SolveOptions& o) {
       w.step_scale = std::min(1.0, w.step_scale * 1.25);
     w.previous_task_step = task;
     w.has_previous_step = true;
-    w.dq = w.dq0 + w.step_scale * task;
+    const double scale = w.step_scale < 1.0 ? std::max(w.step_scale, smallestScaleKeepingRows(model, w, o)) : 1.0;
+    w.dq = w.dq0 + scale * task;
   }
   w.q += w.dq;
   reparameterize(model, w);

@@ -17,7 +17,7 @@ if [[ ${#clips[@]} -eq 0 ]]; then
   shopt -s nullglob
   clips=(../shared/assets/cmu_12_01_walk.bvh ../shared/mocap/*.bvh)
 fi
-embody="$build/app/embody"
+embody=${EMBODY:-$build/app/embody}  # EMBODY=PATH: a copy, so rebuilding does not change a long run
 fps=${BVH_MATRIX_FPS:-60}
 iterations=${BVH_MATRIX_ITERATIONS:-10}
 mkdir -p "$out"
@@ -36,9 +36,10 @@ for clip in "${clips[@]}"; do
   for avatar in default "$mixamo" "$clip"; do
     case $avatar in default) label=default ;; "$mixamo") label=mixamo ;; *) label=own ;; esac
     dir="$out/$name/$label"
+    mkdir -p "$out/$name"
     if ! "$embody" render --avatar "$avatar" --motion "$clip" --fps "$fps" --ik-iterations "$iterations" \
         --size 160x160 --out "$dir" >"$dir.log" 2>&1; then
-      echo "| $name | $label | error: $(grep -m1 error: "$dir.log") | | | |"
+      echo "| $name | $label | $(grep -m1 error: "$dir.log" || tail -1 "$dir.log") | | | |"
       continue
     fi
     s="$dir/stats.json"

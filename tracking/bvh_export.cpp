@@ -57,7 +57,7 @@ void SolvedMotionBvh::add(const avatar::SkeletonPose& pose) {
   for (size_t j = 0; j < bvhOfJoint_.size(); ++j) {
     const int b = bvhOfJoint_[j];
     if (b < 0) continue;
-    const glm::dmat3 m(glm::mat3(globals_[j]));
+    const glm::dmat3 m = glm::dmat3(glm::mat3(globals_[j]));  // not m(glm::mat3(x[j])): clang reads a declaration
     // Columns may carry scale: normalise before taking the rotation.
     const glm::dmat3 r(glm::normalize(m[0]), glm::normalize(m[1]), glm::normalize(m[2]));
     const glm::dquat delta = glm::quat_cast(r) * glm::conjugate(restRotation_[j]);

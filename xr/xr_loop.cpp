@@ -487,6 +487,7 @@ Status HeadsetLoop::render(FrameWork& f) {
     placement_->place(o_.avatar->skeleton, f.head, pose_);
   }
   driveFingers(f);
+  if (o_.onBodyShown) o_.onBodyShown(pose_, double(f.timing.predictedDisplayTime) * 1e-9);
   if (auto s = renderer_->computePose(pose_); !s) return s;
   appendHandGizmos();
   engine::SceneFrame scene;

@@ -51,6 +51,10 @@ struct XrLoopOptions {
   // The join: the render thread takes the newest solved body at submit + this, never later.
   double ikBudgetSeconds = 0.001;
   bool lateLatch = true;  // move the solved hands onto the controllers located again before skinning
+  // Called on the render thread with each frame's body as it is shown (after the late latch and
+  // the fingers, just before skinning; world space) and the frame's predicted display time in
+  // seconds: `embody xr --export` records it.
+  std::function<void(const avatar::SkeletonPose& shown, double displaySeconds)> onBodyShown;
   // Called on the IK thread before the next solve after each recenter (the world moved under the
   // user): e.g. a seated body places its seat again (runtime::TrackedAvatarBody::reset).
   std::function<void()> onRecenter;

@@ -46,6 +46,15 @@ void writeJoint(const BvhClip& clip, size_t j, int depth, std::string& out) {
   out += indent + "}\n";
 }
 
+// The joints in the order the HIERARCHY lists them (depth first from each root), which is the
+// order a reader assigns the MOTION columns in. A clip built from a skeleton (an avatar's export)
+// may keep its joints in another order, with firstChannel counting in that order.
+void hierarchyOrder(const BvhClip& clip, size_t j, std::vector<size_t>& out) {
+  out.push_back(j);
+  for (size_t c = j + 1; c < clip.joints.size(); ++c)
+    if (clip.joints[c].parent == int(j)) hierarchyOrder(clip, c, out);
+}
+
 glm::dmat3 axisRotation(int axis, double radians) {
   const double c = std::cos(radians), s = std::sin(radians);
   glm::dmat3 m(1.0);  // column-major: m[col][row]
@@ -63,11 +72,20 @@ std::string formatBvh(const BvhClip& clip) {
   out += "MOTION\nFrames: " + std::to_string(clip.frameCount) + "\nFrame Time: ";
   appendNumber(out, clip.frameTime);
   out += "\n";
+  std::vector<size_t> order;
+  for (size_t j = 0; j < clip.joints.size(); ++j)
+    if (clip.joints[j].parent < 0) hierarchyOrder(clip, j, order);
   for (size_t f = 0; f < clip.frameCount; ++f) {
     const auto values = clip.frame(f);
-    for (size_t k = 0; k < values.size(); ++k) {
-      if (k) out += ' ';
-      appendNumber(out, values[k]);
+    bool first = true;
+    for (size_t j : order) {
+      const BvhJoint& joint = clip.joints[j];
+      if (joint.endSite) continue;
+      for (size_t k = 0; k < joint.channels.size(); ++k) {
+        if (!first) out += ' ';
+        first = false;
+        appendNumber(out, values[size_t(joint.firstChannel) + k]);
+      }
     }
     out += "\n";
   }

@@ -454,3 +454,39 @@ TEST_CASE("tasks switch on and off without rebuilding; a solved Data converges i
   CHECK(r.converged());
   CHECK((data.taskPosition(lh) - start - Eigen::Vector3d(-0.1, -0.05, 0.1)).norm() < 1e-4);
 }
+
+TEST_CASE("a dependent violated row takes the place of a pinned row that need not hold at its bound") {
+  // a <= 0.3 and b >= -0.3 (limits, first), then the band a - b <= 0.45. One full step from
+  // (0.25, -0.18) towards a target that wants a up and b down violates all three: both limits
+  // are pinned first, which fixes a - b = 0.6 and leaves the band dependent. Pinning the band in
+  // place of b's limit gives a = 0.3, b = -0.15: every row holds (b's limit is inactive there).
+  const Model model = twoJointModel({{"a <= 0.3", {{{0, 0}, 1.0}}, 0.3, InequalityKind::UserCoupling},
+                                     {"b >= -0.3", {{{1, 0}, -1.0}}, 0.3, InequalityKind::UserCoupling},
+                                     {"a - b <= 0.45", {{{0, 0}, 1.0}, {{1, 0}, -1.0}}, 0.45, InequalityKind::UserCoupling}});
+  for (Path path : {Path::Fast, Path::Reference}) {
+    INFO((path == Path::Fast ? "fast" : "reference"));
+    for (int iterations : {1, 50}) {
+      INFO(iterations << " iterations");
+      Data data(model);
+      REQUIRE(data.setConfiguration(Eigen::Vector2d(0.25, -0.18)));
+      const double a = 0.8, b = -1.6;  // tip of the target configuration
+      REQUIRE(data.setTarget(0, Eigen::Vector3d(0.5 * std::cos(a) + 0.5 * std::cos(a + b),
+                                                0.5 * std::sin(a) + 0.5 * std::sin(a + b), 0.0)));
+      SolveOptions o;
+      o.path = path;
+      o.max_iterations = iterations;
+      o.max_level_step = 0.0;  // the full step: all three rows violated in the first sweep
+      const SolveReport& r = solve(model, data, o);
+      const Eigen::VectorXd& q = data.q();
+      CHECK(q(0) <= 0.3 + 1e-9);
+      CHECK(-q(1) <= 0.3 + 1e-9);
+      CHECK(q(0) - q(1) <= 0.45 + 1e-9);
+      CHECK(r.unsatisfiable.empty());
+      if (iterations == 1) {
+        CHECK(q(0) == Approx(0.3).margin(1e-9));
+        CHECK(q(1) == Approx(-0.15).margin(1e-9));
+        CHECK(r.active_clamps == std::vector<int>{0, 2});
+      }
+    }
+  }
+}

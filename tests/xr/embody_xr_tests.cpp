@@ -15,7 +15,9 @@
 #include <numbers>
 #include <string>
 
+#include "avatar/bvh/bvh.h"
 #include "engine/image_io.h"
+#include "tests/support/gltf_validator.h"
 #include "xr_test_support.h"
 
 namespace fs = std::filesystem;
@@ -502,4 +504,45 @@ TEST_CASE("embody xr --mirror without a display fails with a clear message", "[x
   INFO(p.output);
   CHECK(p.exitCode == 1);
   CHECK(p.output.find("needs a display") != std::string::npos);
+}
+
+TEST_CASE("embody xr --export writes the body shown, every frame, as BVH and as glTF", "[xr]") {
+  // BVH: the avatar's hierarchy, one frame per submitted frame at the runtime's display period,
+  // the wrists where the (late-latched) hands were shown: at the controllers' wrists.
+  const std::string bvhPath = freshTestDir("xr_export_files") + "/shown.bvh";
+  // A budget that brings the hands from the rest pose within the first frames (see the first test).
+  const XrRun r = runEmbodyXr("xr_export_bvh", {"--frames", "30", "--ik-budget-ms", ikBudgetMs(), "--export", bvhPath}, {});
+  requireCleanRun(r);
+  CHECK(r.process.output.find("exported the body shown (30 frames) to " + bvhPath) != std::string::npos);
+  auto clip = embody::avatar::loadBvh(bvhPath);
+  REQUIRE(clip.ok());
+  CHECK(clip->frameCount == 30);
+  CHECK(clip->frameTime > 1.0 / 1000.0);
+  CHECK(clip->frameTime < 0.2);
+  const int leftWrist = clip->find("l_wrist"), rightWrist = clip->find("r_wrist");
+  REQUIRE(leftWrist >= 0);
+  REQUIRE(rightWrist >= 0);
+  std::vector<embody::avatar::BvhGlobal> globals;
+  embody::avatar::bvhGlobals(*clip, clip->frame(29), globals);
+  const double metresPerUnit = 0.01;  // an avatar's export is in centimetres (tracking/bvh_export.h)
+  const glm::dvec3 left = globals[size_t(leftWrist)].position * metresPerUnit;
+  const glm::dvec3 right = globals[size_t(rightWrist)].position * metresPerUnit;
+  INFO("left wrist " << left.x << " " << left.y << " " << left.z << ", right " << right.x << " " << right.y << " " << right.z);
+  // The wrist sits a few centimetres behind the grip pose the trace gives for each controller.
+  CHECK(glm::distance(left, glm::dvec3(kLeftHand)) < 0.08);
+  CHECK(glm::distance(right, glm::dvec3(kRightHand)) < 0.08);
+  CHECK(left.x < right.x);
+
+  // glTF: the avatar with the shown motion as an animation, valid for the Khronos validator.
+  const std::string glbPath = freshTestDir("xr_export_files_glb") + "/shown.glb";
+  const XrRun g = runEmbodyXr("xr_export_glb", {"--frames", "12", "--export", glbPath}, {});
+  requireCleanRun(g);
+  CHECK(g.process.output.find("exported the body shown (12 frames)") != std::string::npos);
+  const auto v = validateGltfFile(glbPath);
+  if (!v.skipReason.empty()) {
+    WARN("glTF validator: " << v.skipReason);
+  } else {
+    INFO(v.report);
+    CHECK(v.exitCode == 0);
+  }
 }

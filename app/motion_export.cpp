@@ -1,0 +1,48 @@
+#include "app/motion_export.h"
+
+#include "app/avatar_arg.h"
+
+namespace embody::app {
+
+bool isGlbPath(const std::string& path) { return path.size() > 4 && path.substr(path.size() - 4) == ".glb"; }
+
+std::string checkExportPath(const std::string& path) {
+  if (path.empty() || isBvhPath(path) || isGlbPath(path)) return "";
+  return "--export writes FILE.bvh or FILE.glb: " + path;
+}
+
+void MotionExport::open(const std::string& path, const avatar::AvatarAsset& asset, const tracking::BvhAvatar* clip,
+                        double frameTime, size_t frames) {
+  path_ = path;
+  if (isGlbPath(path)) {
+    glb_.emplace();
+    glb_->frameTime = frameTime;
+    glb_->frames.reserve(frames);
+  } else if (isBvhPath(path)) {
+    bvh_ = clip ? tracking::SolvedMotionBvh::forBvhAvatar(*clip) : tracking::SolvedMotionBvh::forAvatar(asset, frameTime);
+    clipFrameTime_ = clip ? bvh_->clip().frameTime : 0.0;
+    bvh_->setFrameTime(frameTime);
+    bvh_->reserve(frames);
+  }
+}
+
+void MotionExport::add(const avatar::SkeletonPose& pose) {
+  if (bvh_) bvh_->add(pose);
+  if (glb_) glb_->frames.push_back(pose);
+  frames_ += active() ? 1 : 0;
+}
+
+void MotionExport::setFrameTime(double seconds) {
+  if (bvh_) bvh_->setFrameTime(seconds);
+  if (glb_) glb_->frameTime = seconds;
+}
+
+Status MotionExport::write(const avatar::AvatarAsset& asset) const {
+  if (bvh_)
+    if (auto s = bvh_->write(path_); !s) return s;
+  if (glb_)
+    if (auto s = avatar::writeGlbFile(asset, path_, &*glb_); !s) return Error{"--export " + path_ + ": " + s.error()};
+  return {};
+}
+
+}  // namespace embody::app
