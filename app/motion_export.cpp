@@ -1,5 +1,7 @@
 #include "app/motion_export.h"
 
+#include <cmath>
+
 #include "app/avatar_arg.h"
 
 namespace embody::app {
@@ -21,7 +23,8 @@ void MotionExport::open(const std::string& path, const avatar::AvatarAsset& asse
   } else if (isBvhPath(path)) {
     bvh_ = clip ? tracking::SolvedMotionBvh::forBvhAvatar(*clip) : tracking::SolvedMotionBvh::forAvatar(asset, frameTime);
     clipFrameTime_ = clip ? bvh_->clip().frameTime : 0.0;
-    bvh_->setFrameTime(frameTime);
+    // The clip's own frame time, to the digit, when the run keeps its rate.
+    if (!clip || std::abs(clipFrameTime_ / frameTime - 1.0) > 1e-6) bvh_->setFrameTime(frameTime);
     bvh_->reserve(frames);
   }
 }

@@ -14,6 +14,7 @@
 
 #include "app/avatar_arg.h"
 #include "app/job_inputs.h"
+#include "app/motion_export.h"
 #include "avatar/gltf/glb_writer.h"
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
@@ -162,49 +163,13 @@ void writeStats(const RenderJob& job, const std::string& motion, float userHeigh
                {"dofs", body.body().model.dofs},
                {"three_point", body.threePoint()},
                {"steps", body.feet().steps()},
+               {"collapsed_frames", body.collapseGuard().collapsedFrames()},
+               {"recoveries", body.collapseGuard().recoveries()},
                {"upright_frames", upright.upright}};
   j["ik"]["samples_skipped"] = samplesSkipped;
   if (job.seated) seated.toJson(j);
   std::ofstream(job.out / "stats.json") << j.dump(2) << "\n";
 }
-
-bool isGlbPath(const std::string& path) { return path.size() > 4 && path.substr(path.size() - 4) == ".glb"; }
-
-// --export FILE.bvh|FILE.glb: the body actually shown, every frame. BVH on the avatar's hierarchy
-// (for a BVH avatar the clip's own hierarchy, names, offsets, channels), glTF as an animation.
-struct MotionExport {
-  std::optional<tracking::SolvedMotionBvh> bvh;
-  std::optional<avatar::GlbAnimation> glb;
-
-  void open(const RenderJob& job, const JobInputs& in, int frames) {
-    if (isGlbPath(job.exportPath)) {
-      glb.emplace();
-      glb->frameTime = 1.0 / job.fps;
-      glb->frames.reserve(size_t(frames));
-    } else if (isBvhPath(job.exportPath)) {
-      bvh = in.bvhAvatar ? tracking::SolvedMotionBvh::forBvhAvatar(*in.bvhAvatar)
-                         : tracking::SolvedMotionBvh::forAvatar(in.asset, 1.0 / job.fps);
-      bvh->reserve(size_t(frames));
-      if (std::abs(bvh->clip().frameTime * job.fps - 1.0) > 1e-6) {
-        if (in.bvhAvatar)
-          std::printf("export: frames at %.6g Hz (--fps), not the clip's %.6g Hz: pass --fps %.6g to keep its frame time\n",
-                      job.fps, 1.0 / bvh->clip().frameTime, 1.0 / bvh->clip().frameTime);
-        bvh->setFrameTime(1.0 / job.fps);
-      }
-    }
-  }
-  void add(const avatar::SkeletonPose& pose) {
-    if (bvh) bvh->add(pose);
-    if (glb) glb->frames.push_back(pose);
-  }
-  Status write(const std::string& path, const avatar::AvatarAsset& asset) const {
-    if (bvh)
-      if (auto s = bvh->write(path); !s) return s;
-    if (glb)
-      if (auto s = avatar::writeGlbFile(asset, path, &*glb); !s) return Error{"--export " + path + ": " + s.error()};
-    return {};
-  }
-};
 
 // The frame loop: sample -> IK thread (budgeted, lockstep: each frame waits for its sample's
 // solve, so runs are repeatable) -> triple buffer -> skin + render -> PNG. Returns "" or the error.
@@ -266,8 +231,7 @@ struct FrameLoop {
 int runRenderJob(const RenderJob& job) {
   if (job.view != "third" && job.view != "first" && job.view != "stereo") return usageError("--view must be first, third or stereo");
   if (job.frames < 0 || job.frames > 100000) return usageError("--frames must be 0 .. 100000");
-  if (!job.exportPath.empty() && !isBvhPath(job.exportPath) && !isGlbPath(job.exportPath))
-    return usageError("--export writes FILE.bvh or FILE.glb: " + job.exportPath);
+  if (const std::string bad = checkExportPath(job.exportPath); !bad.empty()) return usageError(bad);
 
   // The avatar and the motion first: bad files are the likely errors and need no GPU to report.
   auto inputs = openJobInputs(job);
@@ -281,7 +245,10 @@ int runRenderJob(const RenderJob& job) {
   if (!solver) return runtimeError("avatar " + job.avatar + ": " + solver.error());
 
   MotionExport exported;
-  exported.open(job, *inputs, frames);
+  exported.open(job.exportPath, asset, inputs->bvhAvatar ? &*inputs->bvhAvatar : nullptr, 1.0 / job.fps, size_t(frames));
+  if (exported.clipFrameTime() > 0.0 && std::abs(exported.clipFrameTime() * job.fps - 1.0) > 1e-6)
+    std::printf("export: frames at %.6g Hz (--fps), not the clip's %.6g Hz: pass --fps %.6g to keep its frame time\n",
+                job.fps, 1.0 / exported.clipFrameTime(), 1.0 / exported.clipFrameTime());
 
   tracking::TraceWriter recorder;
   if (!job.record.empty())
@@ -320,7 +287,7 @@ int runRenderJob(const RenderJob& job) {
     if (auto s = recorder.close(); !s) return runtimeError(s.error());
 
   if (!job.exportPath.empty()) {
-    if (auto s = exported.write(job.exportPath, asset); !s) return runtimeError(s.error());
+    if (auto s = exported.write(asset); !s) return runtimeError(s.error());
     std::printf("exported the solved motion (%d frames) to %s\n", frames, job.exportPath.c_str());
   }
   if (auto s = engine::writePng((job.out / "contact_sheet.png").string(), contactSheet(loop.thumbs)); !s) return runtimeError(s.error());

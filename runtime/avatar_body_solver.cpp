@@ -41,6 +41,7 @@ Result<std::unique_ptr<AvatarBodySolver>> AvatarBodySolver::create(const avatar:
 
 Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
   options_ = options;
+  guard_ = CollapseGuard(options.collapse);
   avatar::BodyModelOptions bo;
   bo.spine = options.spine;
   bo.totalMass = options.totalMass;
@@ -72,7 +73,12 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
   if (!model) return Error{"body model with tracker tasks: " + model.error()};
   body_.model = std::move(model).value();
   data_ = std::make_unique<ik::Data>(body_.model);
+  // The configuration a body starts from: the rest pose with knees and elbows bent a little in
+  // their anatomical direction (a straight hinge is singular, body_model.h).
   restQ_ = Eigen::VectorXd::Zero(body_.model.dofs);
+  for (size_t k = 0; k < 4; ++k)
+    if (limbHinge_[k] >= 0) restQ_[body_.model.joints[size_t(limbHinge_[k])].first_dof] = k < 2 ? 0.15 : 0.3;
+  (void)data_->setConfiguration(restQ_);
   lastGoodQ_ = restQ_;
   if (options.userHeight > 0.0f && !options.sameBody.enabled) calibrate(options.userHeight);
   return Status::success();
@@ -95,15 +101,42 @@ Status AvatarBodySolver::bindJoints(ik::JointId& leftElbow) {
   if (leftShoulder_ < 0 || rightShoulder_ < 0 || leftElbow < 0) return Error{"the avatar's arms are not mapped"};
   hipJoint_ = {ikOf(avatar::HumanBone::leftUpperLeg), ikOf(avatar::HumanBone::rightUpperLeg)};
   kneeJoint_ = {ikOf(avatar::HumanBone::leftLowerLeg), ikOf(avatar::HumanBone::rightLowerLeg)};
+  bindLimbs(leftElbow, ikOf(avatar::HumanBone::rightLowerArm));
   return Status::success();
+}
+
+// Limb chains for the knee and elbow direction tasks. The elbow's IK joint at the lower arm's
+// pivot is its forearm twist; the hinge is the joint before it.
+void AvatarBodySolver::bindLimbs(ik::JointId leftElbow, ik::JointId rightElbow) {
+  for (size_t s = 0; s < 2; ++s) {
+    const bool left = s == 0;
+    limbRoot_[s] = hipJoint_[s];
+    limbMiddle_[s] = limbHinge_[s] = kneeJoint_[s];
+    limbEnd_[s] = left ? body_.leftFoot : body_.rightFoot;
+    const ik::JointId elbow = left ? leftElbow : rightElbow;
+    limbRoot_[2 + s] = left ? leftShoulder_ : rightShoulder_;
+    limbMiddle_[2 + s] = elbow;
+    limbEnd_[2 + s] = left ? body_.leftHand : body_.rightHand;
+    if (elbow >= 0) {
+      const ik::JointDesc& twist = body_.model.joints[size_t(elbow)].desc;
+      limbHinge_[2 + s] = twist.type == ik::JointType::Revolute && twist.parent >= 0 &&
+                                  body_.model.joints[size_t(twist.parent)].desc.type == ik::JointType::Revolute
+                              ? twist.parent
+                              : -1;
+    }
+  }
 }
 
 // Rest geometry from the model without tasks (q = 0 is the rest pose): heights, the eye point,
 // the seated legs, the tracker -> joint frames and the foot planner's rest stance.
 void AvatarBodySolver::measureRest(ik::JointId leftElbow, bool legs) {
   ik::Data rest(body_.model);
+  (void)rest.setConfiguration(Eigen::VectorXd::Zero(body_.model.dofs));
   ik::kinematics(body_.model, rest, false);
   auto pos = [&](ik::JointId j) { return Eigen::Vector3d(rest.jointFrame(j).translation()); };
+  for (size_t k = 0; k < 4; ++k)
+    if (limbRoot_[k] >= 0 && limbMiddle_[k] >= 0 && limbEnd_[k] >= 0)
+      limb_[k] = {(pos(limbMiddle_[k]) - pos(limbRoot_[k])).norm(), (pos(limbEnd_[k]) - pos(limbMiddle_[k])).norm()};
   for (auto id : tracking::kAllTrackers)
     restRotation_[size_t(tracking::index(id))] = Eigen::Quaterniond(rest.jointFrame(joint_[size_t(tracking::index(id))]).rotation());
   armReach_ = (pos(leftElbow) - pos(leftShoulder_)).norm() + (pos(body_.leftHand) - pos(leftElbow)).norm();
@@ -234,6 +267,20 @@ void AvatarBodySolver::addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskD
       t.rotation_tolerance = 0.05;
       seatPelvisTask_ = add(t, spec.weight);
       break;
+    case TaskKind::LimbPole: {
+      const size_t k = spec.tracker == TrackerId::LeftFoot    ? 0
+                       : spec.tracker == TrackerId::RightFoot ? 1
+                       : spec.tracker == TrackerId::LeftHand  ? 2
+                                                              : 3;
+      // Joint markers say where every knee and elbow is: a pole would only pull it off.
+      if (!options_.limbPoles || options_.jointMarkers || limbMiddle_[k] < 0 || limbRoot_[k] < 0 || !(limb_[k].upper > 0.0)) break;
+      t.name = std::string(k < 2 ? "pole_knee_" : "pole_elbow_") + (k % 2 == 0 ? "left" : "right");
+      t.type = ik::TaskType::Position;
+      t.joint = limbMiddle_[k];
+      t.position_tolerance = 0.02;  // a direction, not a place: it need not hold a solve back
+      poleTask_[k] = add(t, spec.weight);
+      break;
+    }
     case TaskKind::InferredHips:
       t.type = ik::TaskType::Position;
       t.position_tolerance = 0.05;
@@ -255,7 +302,8 @@ void AvatarBodySolver::calibrate(float userHeight) {
 // layout's lowest.
 void AvatarBodySolver::addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks) {
   int lowest = 1;
-  for (const TaskSpec& spec : layout_.tasks) lowest = std::max(lowest, spec.priority);
+  for (const TaskSpec& spec : layout_.tasks)
+    if (spec.kind != TaskKind::LimbPole) lowest = std::max(lowest, spec.priority);  // no poles with markers
   for (size_t a = 0; a < avatar_.skeleton.joints.size(); ++a) {
     const int j = body_.ikJointOfAvatar[a];
     if (j < 0 || body_.avatarJoint[size_t(j)] != int(a)) continue;
@@ -307,6 +355,9 @@ void AvatarBodySolver::resetWarmStart() {
   heightOffset_.fill(0.0);
   legRatio_ = 1.0;
   solvedOnce_ = false;
+  reseeded_ = false;
+  guard_.reset();
+  fade_ = PoseFade{};
   planner_.restart();
 }
 
@@ -385,7 +436,10 @@ void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
       (void)d.setTarget(positionTask_[i], targetPoint_[i]);
     }
   }
-  if (!layout_.inferLowerBody) return;
+  if (!layout_.inferLowerBody) {
+    setPoleTargets();
+    return;
+  }
 
   // Three-point mode: the pelvis and the feet are inferred from the head.
   const Eigen::Quaterniond headTurn = targetRotation_[headIndex] * restRotation_[headIndex].conjugate();
@@ -412,6 +466,7 @@ void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
     (void)d.setEnabled(balanceTask_, !over && options_.balanceRow);
     if (!over) (void)d.setTarget(balanceTask_, planner_.nearestSupportPoint(com, 0.01 * avatarHeight_ / 1.75));
   }
+  setPoleTargets();
 }
 
 void AvatarBodySolver::setSeatedTargets(const tracking::GuardedSample& targets) {
@@ -500,6 +555,7 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
     if (standing) calibratedFromHead_ = true;
   }
   setTargets(targets);
+  if (!solvedOnce_ && !layout_.seated) seedStanding(targets);
 
   // One PIK iteration per call, each timed: the next one starts only when the largest recent
   // iteration (iterations with many clamping passes cost several times the average) and the
@@ -509,7 +565,8 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   // A cold start (the first solve, or after resetWarmStart) begins far from the targets: the
   // small trust region that keeps conflicting levels from pulling the feet would make it crawl,
   // so it gets the library's default cap and four times the iterations (the budget still rules).
-  const bool cold = !solvedOnce_;
+  const bool cold = !solvedOnce_ || reseeded_;
+  reseeded_ = false;
   o.max_level_step = cold ? std::max(options_.maxLevelStep, ik::SolveOptions{}.max_level_step) : options_.maxLevelStep;
   // Deterministic mode: the fixed count (four times it on a cold start, as the cap), no clock.
   const bool fixed = request.fixedIterations > 0;
@@ -535,7 +592,8 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   result.converged = converged;
 
   // Never publish a broken configuration: fall back to the last good one.
-  if (!data_->q().allFinite() || broken) {
+  broken_ = !data_->q().allFinite() || broken;
+  if (broken_) {
     (void)data_->setConfiguration(lastGoodQ_);
     ik::kinematics(body_.model, *data_, false);
   } else {
@@ -555,8 +613,132 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
       result.reachable[i] = (targetPoint_[i] - jointPosition(shoulder)).norm() <= armReach_;
     }
   }
+  if (!layout_.seated) guardAgainstCollapse(targets, result, pose);
+  fade_.apply(targets.pose.time, pose);
   predictedFinish_ = std::max(toSeconds(clock.now() - solvedAt), 0.9 * predictedFinish_);
   return result;
+}
+
+bool AvatarBodySolver::seedStanding(const tracking::GuardedSample& targets) {
+  const size_t h = size_t(tracking::index(TrackerId::Head));
+  if (!targets.pose[TrackerId::Head].valid || targets.status[h] == TrackerStatus::Absent) return false;
+  // No standing body fits under a head lower than the standing pelvis (a user lying or sitting
+  // on the floor): the solve goes on from where it is.
+  const double headHeight = up_.dot(targetPoint_[h]) - floor_;
+  if (headHeight < restHeight_[size_t(tracking::index(TrackerId::Hips))]) return false;
+  SeedInputs in;
+  in.up = up_;
+  in.forward = forward_;
+  in.headPivot = targetPoint_[h] - targetRotation_[h] * eyeInHead_;
+  in.headYaw = headingOf(targetRotation_[h] * restRotation_[h].conjugate(), up_, forward_);
+  for (auto id : {TrackerId::LeftHand, TrackerId::RightHand}) {
+    const size_t i = size_t(tracking::index(id));
+    if (targets.status[i] != TrackerStatus::Tracked || !targets.pose[id].valid) continue;
+    (id == TrackerId::LeftHand ? in.leftHand : in.rightHand) = targetPoint_[i];
+  }
+  in.restHeadToHips = restHeadToHips_;
+  in.floor = floor_;
+  in.restHipsHeight = restHeight_[size_t(tracking::index(TrackerId::Hips))];
+  in.scale = avatarHeight_ / 1.75;
+  const double yaw = seedYaw(in);
+  (void)data_->setConfiguration(placeRoot(body_.model, body_.hips, restQ_, seedPelvis(in, yaw), yaw, up_));
+  ik::kinematics(body_.model, *data_, false);
+  return true;
+}
+
+void AvatarBodySolver::setPoleTargets() {
+  const ik::Data& d = *data_;
+  const size_t hips = size_t(tracking::index(TrackerId::Hips));
+  const Eigen::Quaterniond pelvisTurn = Eigen::Quaterniond(d.jointFrame(body_.hips).rotation()) * restRotation_[hips].conjugate();
+  const Eigen::Vector3d fwd = yawRotation(headingOf(pelvisTurn, up_, forward_), up_) * forward_;
+  const Eigen::Vector3d left = up_.cross(fwd);
+  for (size_t k = 0; k < 4; ++k) {
+    if (poleTask_[k] < 0) continue;
+    const Eigen::Vector3d root = jointPosition(limbRoot_[k]), end = jointPosition(limbEnd_[k]);
+    Eigen::Vector3d pole, fallback;
+    if (k < 2) {  // the knee over the toes
+      pole = footForward(int(k));
+      fallback = fwd;
+    } else {
+      const bool leftArm = k == 2;
+      const Eigen::Vector3d palm = d.jointFrame(limbEnd_[k]).rotation() * Eigen::Vector3d::UnitX() * (leftArm ? 1.0 : -1.0);
+      pole = elbowPole(up_, fwd, leftArm ? left : Eigen::Vector3d(-left), palm, end - root);
+      fallback = -up_;
+    }
+    setPose(poleTask_[k], -1, poleTarget(root, end, limb_[k], pole, fallback), Eigen::Quaterniond::Identity(), 1.0);
+  }
+}
+
+Eigen::Vector3d AvatarBodySolver::footForward(int side) const {
+  const TrackerId id = side == 0 ? TrackerId::LeftFoot : TrackerId::RightFoot;
+  const Eigen::Quaterniond foot(data_->jointFrame(joint_[size_t(tracking::index(id))]).rotation());
+  return foot * restRotation_[size_t(tracking::index(id))].conjugate() * forward_;
+}
+
+double AvatarBodySolver::hingeAngle(int limb) const {
+  if (limb < 0 || limb > 3 || limbHinge_[size_t(limb)] < 0) return 0.0;
+  return data_->q()[body_.model.joints[size_t(limbHinge_[size_t(limb)])].first_dof];
+}
+
+Status AvatarBodySolver::seedConfiguration(const Eigen::VectorXd& q) {
+  if (auto st = data_->setConfiguration(q); !st) return st;
+  ik::kinematics(body_.model, *data_, false);
+  lastGoodQ_ = q;
+  solvedOnce_ = true;
+  return Status::success();
+}
+
+BodySignals AvatarBodySolver::bodySignals(double time, const SolveResult& result) const {
+  BodySignals s;
+  s.time = time;
+  s.finite = !broken_;
+  s.scale = avatarHeight_ / 1.75;
+  const size_t hips = size_t(tracking::index(TrackerId::Hips)), head = size_t(tracking::index(TrackerId::Head));
+  const Eigen::Isometry3d& root = data_->jointFrame(body_.hips);
+  auto height = [&](const Eigen::Vector3d& p) { return up_.dot(p) - floor_; };
+  s.pelvisHeight = height(root.translation());
+  s.standingPelvisHeight = restHeight_[hips];
+  s.headTargetHeight = height(targetPoint_[head]);
+  s.standingEyeHeight = avatarEyeHeight_;
+  const Eigen::Quaterniond pelvisTurn = Eigen::Quaterniond(root.rotation()) * restRotation_[hips].conjugate();
+  const Eigen::Vector3d pelvisUp = pelvisTurn * up_;
+  s.pelvisTilt = std::atan2(pelvisUp.cross(up_).norm(), pelvisUp.dot(up_));
+  s.lowestTrunkOrKnee = std::min(s.pelvisHeight, height(jointPosition(body_.head)));
+  // Sides across the feet's own heading: on a walk the stride runs along it, where the pelvis
+  // (which turns with the head and the gait) would let the stride leak into the sideways measure.
+  Eigen::Vector3d heading = footForward(0) + footForward(1);
+  heading -= up_ * up_.dot(heading);
+  if (heading.norm() < 0.5) heading = pelvisTurn * forward_ - up_ * up_.dot(pelvisTurn * forward_);
+  const Eigen::Vector3d left = heading.norm() > 1e-6 ? Eigen::Vector3d(up_.cross(heading).normalized()) : Eigen::Vector3d(up_.cross(forward_));
+  s.legSeparation = left.dot(jointPosition(body_.leftFoot) - jointPosition(body_.rightFoot));
+  if (kneeJoint_[0] >= 0 && kneeJoint_[1] >= 0) {
+    for (ik::JointId k : kneeJoint_) s.lowestTrunkOrKnee = std::min(s.lowestTrunkOrKnee, height(jointPosition(k)));
+    s.legSeparation = std::min(s.legSeparation, left.dot(jointPosition(kneeJoint_[0]) - jointPosition(kneeJoint_[1])));
+  }
+  s.inferredLegs = layout_.inferLowerBody;
+  s.iterations = result.iterations;
+  // The errors a body can fix: the head while its target is no higher than standing allows, the
+  // hands while within the arm's reach.
+  if (result.residual[head] >= 0.0f && s.headTargetHeight <= 1.02 * s.standingEyeHeight) s.residual = result.residual[head];
+  for (auto id : {TrackerId::LeftHand, TrackerId::RightHand}) {
+    const size_t i = size_t(tracking::index(id));
+    if (result.residual[i] >= 0.0f && result.reachable[i]) s.residual = std::max(s.residual, double(result.residual[i]));
+  }
+  return s;
+}
+
+void AvatarBodySolver::guardAgainstCollapse(const tracking::GuardedSample& targets, const SolveResult& result,
+                                            avatar::SkeletonPose& pose) {
+  const double time = targets.pose.time;
+  if (guard_.update(bodySignals(time, result)) == CollapseReason::None) return;
+  // Stand up under the head, plant the feet afresh, solve cold next frame; the shown pose fades
+  // from the heap to the new solution. Under a head too low to stand under (seedStanding), only
+  // the cold solve.
+  reseeded_ = true;
+  if (!seedStanding(targets)) return;
+  fade_.start(pose, time, options_.recoveryBlendSeconds);  // `pose` is still the heap
+  lastGoodQ_ = data_->q();
+  planner_.restart();
 }
 
 }  // namespace embody::runtime

@@ -26,8 +26,12 @@
 
 #include "avatar/avatar_asset.h"
 #include "avatar/body/body_model.h"
+#include "runtime/body_seed.h"
 #include "runtime/body_solver.h"
+#include "runtime/collapse_guard.h"
 #include "runtime/foot_planner.h"
+#include "runtime/pole_tasks.h"
+#include "runtime/pose_blend.h"
 #include "runtime/seated_pose.h"
 #include "runtime/task_layout.h"
 
@@ -66,6 +70,12 @@ struct AvatarBodyOptions {
   // the first tracked head (again after resetWarmStart), the spine and arms follow the head and
   // hands. A seated head says nothing about the user's stature: give userHeight (else 1.75 m).
   SeatOptions seat;
+  // Standing: a body found in a heap (collapse_guard.h) is re-seeded standing under the head
+  // (body_seed.h) and the published pose fades to the new solution over `recoveryBlendSeconds`.
+  CollapseGuardConfig collapse;
+  double recoveryBlendSeconds = 0.2;
+  // Knee and elbow direction tasks at the lowest level (pole_tasks.h).
+  bool limbPoles = true;
   // The tracked person IS this avatar (embody eval: the avatar is the clip's own skeleton, built
   // in tracking space, tracking/bvh_avatar.h): tracking space is avatar space (scale 1, floor at
   // y = 0, no turn), no height or stride calibration, and the trackers' rest references are the
@@ -132,6 +142,16 @@ class AvatarBodySolver final : public BodySolver {
   const SeatedPose* seat() const { return seatPlaced_ ? &seat_ : nullptr; }
   const SeatedLegs& seatedLegs() const { return legs_; }
   LowerBodyPosture posture() const;
+  const CollapseGuard& collapseGuard() const { return guard_; }
+  // The measures the collapse guard judges, for the current configuration.
+  BodySignals bodySignals(double time, const SolveResult& result) const;
+  // Continues from `q` (tests, tools): e.g. a body laid on the floor, to check that it stands up.
+  Status seedConfiguration(const Eigen::VectorXd& q);
+  // Knee (0 left, 1 right) and elbow (2 left, 3 right) flexion in radians, 0 = straight; positive
+  // is the anatomical direction.
+  double hingeAngle(int limb) const;
+  // Where a solved foot (0 left, 1 right) points: its rest forward turned as the foot is.
+  Eigen::Vector3d footForward(int side) const;
   // Marker targets (jointMarkers) per avatar skeleton joint, avatar space: world positions and
   // world rotations relative to the joint's rest (identity at rest). Joints without a marker are
   // ignored; call before each solve.
@@ -144,6 +164,7 @@ class AvatarBodySolver final : public BodySolver {
   // layout's tasks.
   Status build(const AvatarBodyOptions& options);
   Status bindJoints(ik::JointId& leftElbow);
+  void bindLimbs(ik::JointId leftElbow, ik::JointId rightElbow);
   void measureRest(ik::JointId leftElbow, bool legs);
   void measureHeight(const Eigen::Vector3d& head, const Eigen::Vector3d& leftFoot, const Eigen::Vector3d& rightFoot);
   void trackerFrames();
@@ -153,6 +174,12 @@ class AvatarBodySolver final : public BodySolver {
   void useSameBody(const AvatarBodyOptions::SameBody& same);
   void setTargets(const tracking::GuardedSample& targets);
   void setSeatedTargets(const tracking::GuardedSample& targets);
+  // Standing start: the root under the head, facing the head's and hands' heading (body_seed.h).
+  // False (nothing changed) without a live head or under a head lower than the standing pelvis.
+  bool seedStanding(const tracking::GuardedSample& targets);
+  void setPoleTargets();
+  // After a solve: asks the collapse guard; on a collapse re-seeds and starts the fade.
+  void guardAgainstCollapse(const tracking::GuardedSample& targets, const SolveResult& result, avatar::SkeletonPose& pose);
   // Enables (weight > 0, times the task's own) or disables a position/orientation/pose task pair.
   void setPose(ik::TaskId position, ik::TaskId orientation, const Eigen::Vector3d& p, const Eigen::Quaterniond& q, double weight);
 
@@ -176,6 +203,16 @@ class AvatarBodySolver final : public BodySolver {
   ik::TaskId balanceTask_ = -1, hipsPosTask_ = -1, hipsRotTask_ = -1;
   std::vector<std::pair<int, ik::TaskId>> markerTask_;  // avatar joint, its pose task
   ik::JointId leftShoulder_ = -1, rightShoulder_ = -1;
+  // Limb direction: knees (0 left, 1 right) then elbows (2, 3): the task, the chain's root,
+  // middle and end joints and the hinge joint, and the rest segment lengths.
+  std::array<ik::TaskId, 4> poleTask_{-1, -1, -1, -1};
+  std::array<ik::JointId, 4> limbRoot_{-1, -1, -1, -1}, limbMiddle_{-1, -1, -1, -1}, limbEnd_{-1, -1, -1, -1},
+      limbHinge_{-1, -1, -1, -1};
+  std::array<LimbGeometry, 4> limb_{};
+  CollapseGuard guard_;
+  PoseFade fade_;
+  bool reseeded_ = false;  // the next solve starts cold (after a re-seed)
+  bool broken_ = false;    // the last solve produced a non-finite or invalid configuration
   // Seated mode: tasks per side (0 = left), the legs' rest geometry and the placed seat.
   std::array<ik::TaskId, 2> seatHipTask_{-1, -1}, seatKneeTask_{-1, -1};
   ik::TaskId seatPelvisTask_ = -1;

@@ -1,5 +1,9 @@
 #include "runtime/ik_thread.h"
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include <chrono>
 
 namespace embody::runtime {
@@ -21,9 +25,25 @@ IkThread::IkThread(Process process, const avatar::SkeletonPose& initialPose) : p
 
 IkThread::~IkThread() { stop(); }
 
+namespace {
+
+// The IK thread sleeps between samples and works a budget of about a millisecond when one comes:
+// it should win the CPU over bulk work (shader compiles, a build, the rasteriser's workers) the
+// way a headset runtime's compositor does. A higher priority (nice -10) is asked for; without
+// the right to it (not root, no CAP_SYS_NICE) the thread keeps the normal one, silently.
+void raiseThisThreadsPriority() {
+  const auto tid = static_cast<id_t>(syscall(SYS_gettid));
+  (void)setpriority(PRIO_PROCESS, tid, -10);
+}
+
+}  // namespace
+
 void IkThread::start() {
   if (running_.exchange(true)) return;
-  thread_ = std::thread([this] { run(); });
+  thread_ = std::thread([this] {
+    raiseThisThreadsPriority();
+    run();
+  });
 }
 
 void IkThread::stop() {

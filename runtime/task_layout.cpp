@@ -17,6 +17,7 @@ std::string_view taskKindName(TaskKind kind) {
     case TaskKind::SeatedHip: return "seated_hip";
     case TaskKind::SeatedKnee: return "seated_knee";
     case TaskKind::SeatedPelvis: return "seated_pelvis";
+    case TaskKind::LimbPole: return "pole";
   }
   return "?";
 }
@@ -59,6 +60,12 @@ TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
   // (a row scaled by √w is damped as if λ were λ/√w), so while it conflicts its steps, and with
   // them their second-order pull on the levels above, stay small (docs/runtime.md).
   if (trackers.has(TrackerId::Hips)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Hips, 5, 0.1f});
+  // Lowest: where knees and elbows point (pole_tasks.h). Every tracker leaves each limb a free
+  // turn about its root-to-end line; these take only that freedom, so they never pull a tracked
+  // point off. Low weight: their targets move with the body and need not be met exactly.
+  const int poles = l.levels() + 1;
+  for (auto id : {TrackerId::LeftFoot, TrackerId::RightFoot, TrackerId::LeftHand, TrackerId::RightHand})
+    l.tasks.push_back({TaskKind::LimbPole, id, poles, 0.3f});
   return l;
 }
 
@@ -110,6 +117,9 @@ std::string TaskLayout::describe() const {
     s += "  " + std::to_string(t.priority) + "  " + std::string(taskKindName(t.kind));
     if (t.kind == TaskKind::SeatedHip || t.kind == TaskKind::SeatedKnee)
       s += t.tracker == TrackerId::LeftFoot ? " left" : " right";
+    else if (t.kind == TaskKind::LimbPole)
+      s += std::string(t.tracker == TrackerId::LeftFoot || t.tracker == TrackerId::RightFoot ? " knee" : " elbow") +
+           (t.tracker == TrackerId::LeftFoot || t.tracker == TrackerId::LeftHand ? " left" : " right");
     else if (t.kind != TaskKind::Balance && t.kind != TaskKind::InferredHips && t.kind != TaskKind::SeatedPelvis)
       s += " " + std::string(tracking::trackerKey(t.tracker));
     if (t.weight != 1.0f) s += " (weight " + std::to_string(t.weight).substr(0, 4) + ")";

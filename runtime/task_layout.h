@@ -19,7 +19,9 @@ enum class TaskKind : uint8_t {
   InferredHips,       // three-point mode: the pelvis under the head, upright, facing the heading
   SeatedHip,          // seated mode: a hip joint centre on the seat (3 rows; `tracker` names the side's foot)
   SeatedKnee,         // seated mode: a knee ahead of its hip joint over the planted foot (3 rows)
-  SeatedPelvis        // seated mode: the pelvis upright, facing the seat (3 rows)
+  SeatedPelvis,       // seated mode: the pelvis upright, facing the seat (3 rows)
+  LimbPole            // a knee (`tracker` = the side's foot) or an elbow (the side's hand) on its
+                      // limb's swivel circle in the anatomical direction (pole_tasks.h; 3 rows)
 };
 
 struct TaskSpec {

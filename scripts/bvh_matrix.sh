@@ -17,7 +17,7 @@ if [[ ${#clips[@]} -eq 0 ]]; then
   shopt -s nullglob
   clips=(../shared/assets/cmu_12_01_walk.bvh ../shared/mocap/*.bvh)
 fi
-embody="$build/app/embody"
+embody=${EMBODY:-$build/app/embody}  # EMBODY=PATH: a copy, so rebuilding does not change a long run
 fps=${BVH_MATRIX_FPS:-60}
 iterations=${BVH_MATRIX_ITERATIONS:-10}
 mkdir -p "$out"

@@ -30,7 +30,7 @@ Status checkStanding(const avatar::AvatarAsset& asset) {
   if (!map.missingRequired.empty()) {
     std::string missing;
     for (auto b : map.missingRequired) missing += (missing.empty() ? "" : ", ") + std::string(avatar::humanBoneName(b));
-    return Error{"the clip's skeleton cannot be mapped to a humanoid (missing: " + missing + ")"};
+    return Error{"not mappable to a humanoid (missing: " + missing + ")"};
   }
   std::vector<glm::mat4> g;
   avatar::computeGlobals(asset.skeleton, avatar::SkeletonPose::rest(asset.skeleton), g);
@@ -39,9 +39,53 @@ Status checkStanding(const avatar::AvatarAsset& asset) {
   const double height = head - std::min(y(HumanBone::leftFoot), y(HumanBone::rightFoot));
   if (!(head > hips && height > 0.0) || y(HumanBone::leftFoot) > hips - 0.2 * height ||
       y(HumanBone::rightFoot) > hips - 0.2 * height)
-    return Error{"the clip's rest pose (every channel zero) is not a standing body (head above the hips, feet "
-                 "below them); its convention is not supported as an avatar yet"};
+    return Error{"not a standing body (head above the hips, feet below them)"};
   return Status::success();
+}
+
+// The avatar from the clip's joints with the rest pose of `frame` (empty: every channel zero):
+// rotations and offsets turned into tracking axes, standing on the floor over the origin (the rest
+// pose's lowest joint at y = 0), a capsule per bone, mapped, and checked to be a standing body.
+Status buildSkeleton(const avatar::BvhClip& clip, const BvhMapping& m, std::span<const float> frame,
+                     avatar::AvatarAsset& asset) {
+  asset = avatar::AvatarAsset();
+  asset.format = avatar::AvatarFormat::Procedural;
+  std::vector<BvhGlobal> rest;
+  avatar::bvhGlobals(clip, frame, rest);
+  const glm::dquat q = glm::quat_cast(m.toXr);
+  double lowest = 1e300;
+  for (const auto& g : rest) lowest = std::min(lowest, (m.toXr * g.position * m.scale).y);
+  for (size_t j = 0; j < clip.joints.size(); ++j) {
+    const avatar::BvhJoint& b = clip.joints[j];
+    avatar::Joint joint;
+    joint.name = b.name;
+    joint.parent = b.parent;
+    glm::dvec3 t = m.toXr * b.offset * m.scale;
+    if (b.parent < 0) t = glm::dvec3(0.0, (m.toXr * rest[j].position * m.scale).y - lowest, 0.0);
+    const glm::dquat local = b.parent < 0 ? rest[j].rotation : glm::conjugate(rest[size_t(b.parent)].rotation) * rest[j].rotation;
+    joint.rest.translation = glm::vec3(t);
+    joint.rest.rotation = glm::quat(glm::normalize(q * local * glm::conjugate(q)));
+    asset.skeleton.joints.push_back(std::move(joint));
+  }
+  if (const std::string bad = asset.skeleton.validate(); !bad.empty()) return Error{"BVH skeleton: " + bad};
+  avatar::buildCapsuleMesh(asset, float(m.heightUnits * m.scale), m.joint[size_t(index(TrackerId::Hips))]);
+  if (auto s = avatar::prepareAvatar(asset, ""); !s) return Error{s.error()};
+  return checkStanding(asset);
+}
+
+// The mapping's references were taken at zero channels, where every joint's world rotation is the
+// identity; at the rest pose of `frame` each tracker joint is turned by its world rotation there.
+void turnReferences(const avatar::BvhClip& clip, std::span<const float> frame, BvhMapping& m) {
+  std::vector<BvhGlobal> g;
+  avatar::bvhGlobals(clip, frame, g);
+  const glm::dquat q = glm::quat_cast(m.toXr);
+  for (auto id : kAllTrackers) {
+    const size_t i = size_t(index(id));
+    if (m.joint[i] < 0) continue;
+    const glm::dquat turn = glm::normalize(q * g[size_t(m.joint[i])].rotation * glm::conjugate(q));
+    m.reference[i] = turn * m.reference[i];
+    if (id == TrackerId::Head) m.eyeOffset = turn * m.eyeOffset;
+  }
 }
 
 }  // namespace
@@ -51,30 +95,22 @@ Result<BvhAvatar> buildBvhAvatar(avatar::BvhClip clip, const BvhTrackerOptions& 
   BvhAvatar out;
   auto trace = bvhToTrace(clip, options, &out.mapping);
   if (!trace) return Error{trace.error()};
-  const BvhMapping& m = out.mapping;
+  const BvhMapping& m = out.mapping;  // (turnReferences may update it below)
 
-  // Skeleton: the clip's joints, rest rotations identity, offsets turned into tracking axes.
-  avatar::AvatarAsset& asset = out.asset;
-  asset.format = avatar::AvatarFormat::Procedural;
-  // Standing on the floor over the origin: the rest pose's lowest joint at y = 0 (the zero-channel
-  // root sits wherever the file put it, often at the floor with the legs below it).
-  std::vector<BvhGlobal> rest;
-  avatar::bvhGlobals(clip, {}, rest);
-  double lowest = 1e300;
-  for (const auto& g : rest) lowest = std::min(lowest, (m.toXr * g.position * m.scale).y);
-  for (const auto& j : clip.joints) {
-    avatar::Joint joint;
-    joint.name = j.name;
-    joint.parent = j.parent;
-    glm::dvec3 t = m.toXr * j.offset * m.scale;
-    if (j.parent < 0) t = glm::dvec3(0.0, t.y - lowest, 0.0);
-    joint.rest.translation = glm::vec3(t);
-    asset.skeleton.joints.push_back(std::move(joint));
+  // The skeleton's rest pose: the zero-channel pose when it is a standing body (CMU, most tools),
+  // else the clip's first frame (CC_Base exports point the legs up at zero channels; their first
+  // frame is the performer standing or a T-pose). A clip standing in neither is refused.
+  Status built = buildSkeleton(clip, m, {}, out.asset);
+  if (!built && clip.frameCount > 0) {
+    const std::string zeroChannels = built.error();
+    built = buildSkeleton(clip, m, clip.frame(0), out.asset);
+    if (!built)
+      return Error{"the clip cannot be an avatar: its zero-channel pose is " + zeroChannels + ", its first frame is " +
+                   built.error()};
+    out.restFromFirstFrame = true;
+    turnReferences(clip, clip.frame(0), out.mapping);
   }
-  if (const std::string bad = asset.skeleton.validate(); !bad.empty()) return Error{"BVH skeleton: " + bad};
-  avatar::buildCapsuleMesh(asset, float(m.heightUnits * m.scale));
-  if (auto s = avatar::prepareAvatar(asset, ""); !s) return Error{s.error()};
-  if (auto s = checkStanding(asset); !s) return Error{s.error()};
+  if (!built) return Error{"the clip cannot be an avatar: " + built.error()};
   out.trace = std::move(trace).value();
   out.clip = std::move(clip);
   return out;

@@ -24,10 +24,13 @@ struct BvhAvatar {
   BvhMapping mapping;  // file -> tracking space, trackers, rest references
   Trace trace;         // the clip's trackers, as `--motion CLIP.bvh` replays them
   avatar::AvatarAsset asset;
+  // The skeleton's rest pose is the clip's first frame: its zero-channel pose is not a standing
+  // body (CC_Base exports). mapping.reference and eyeOffset are then at that frame too.
+  bool restFromFirstFrame = false;
 };
 
-// Fails (one line) when the clip has no frames, or its rest pose is not a standing humanoid the
-// mapper can read (head above the hips, feet below them, two arms).
+// Fails (one line) when the clip has no frames, or neither its zero-channel pose nor its first
+// frame is a standing humanoid the mapper can read (head above the hips, feet below them, two arms).
 Result<BvhAvatar> buildBvhAvatar(avatar::BvhClip clip, const BvhTrackerOptions& options);
 Result<BvhAvatar> loadBvhAvatar(const std::string& path, const BvhTrackerOptions& options);
 

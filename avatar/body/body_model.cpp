@@ -25,6 +25,11 @@ constexpr std::array<std::array<double, 3>, kVertebralJointCount> kLevelRangeDeg
     {25, 5, 5},                                                                              // Occ-C1
 }};
 constexpr double kFlexionShare = 0.6;
+// Knees and elbows bend at least this much (radians, ~1.7 degrees), never straight and never
+// backwards: a hinge at exactly 0 is the straight-limb singularity (shortening the limb has no
+// first-order effect there, and a local solver stalls), and below 0 it bends against its
+// anatomical direction.
+constexpr double kMinHingeBend = 0.03;
 
 // de Leva (1996), male, percent of body mass; trunk split into lower (pelvis), middle and upper.
 constexpr double kHeadNeck = 6.94, kUpperTrunk = 15.96, kMiddleTrunk = 16.33, kLowerTrunk = 11.17;
@@ -79,10 +84,10 @@ const std::vector<LimbSpec>& limbSpecs() {
   static const std::vector<LimbSpec> specs = {
       {Kind::Clavicle, B::leftShoulder, B::rightShoulder, T::Swing, {-0.35, -0.35}, {0.35, 0.35}},
       {Kind::UpperArm, B::leftUpperArm, B::rightUpperArm, T::Ball, {-1.0, -1.5, -0.8}, {3.0, 1.5, 2.8}, true, kUpperArm, kUpperArmCom},
-      {Kind::Elbow, B::leftLowerArm, B::rightLowerArm, T::Revolute, {-0.2}, {2.6}, false, kForearm, kForearmCom},
+      {Kind::Elbow, B::leftLowerArm, B::rightLowerArm, T::Revolute, {kMinHingeBend}, {2.6}, false, kForearm, kForearmCom},
       {Kind::Hand, B::leftHand, B::rightHand, T::Ball, {-1.2, -0.25, -0.6}, {1.2, 0.25, 0.6}, false, kHand, kHandCom},
       {Kind::UpperLeg, B::leftUpperLeg, B::rightUpperLeg, T::Ball, {-0.5, -0.7, -0.5}, {2.1, 0.7, 0.8}, true, kThigh, kThighCom},
-      {Kind::Knee, B::leftLowerLeg, B::rightLowerLeg, T::Revolute, {-0.1}, {2.4}, false, kShank, kShankCom},
+      {Kind::Knee, B::leftLowerLeg, B::rightLowerLeg, T::Revolute, {kMinHingeBend}, {2.4}, false, kShank, kShankCom},
       {Kind::Ankle, B::leftFoot, B::rightFoot, T::Ball, {-0.9, -0.5, -0.5}, {0.6, 0.5, 0.5}, false, kFoot, kFootCom},
       {Kind::Toes, B::leftToes, B::rightToes, T::Revolute, {-0.6}, {0.6}},
   };

@@ -16,9 +16,10 @@
 //                         rows of the vertebrae it stands for
 //   head                  Ball, the Occ-C1 range
 //   shoulder (clavicle)   Swing (2) about the bone axis, ±20°
-//   upperArm              Ball; lowerArm: Revolute elbow (axis from the rest geometry, 0..150°)
+//   upperArm              Ball; lowerArm: Revolute elbow (axis from the rest geometry, 1.7..150°:
+//                         never straight, never backwards)
 //                         then Revolute forearm twist about the forearm (±80°); hand: Ball
-//   upperLeg              Ball; lowerLeg: Revolute knee (0..140°); foot: Ball; toes: Revolute
+//   upperLeg              Ball; lowerLeg: Revolute knee (1.7..140°); foot: Ball; toes: Revolute
 // Segment masses and centres of mass: de Leva (1996) fractions scaled to the total mass,
 // centres along each segment towards its child pivot.
 //

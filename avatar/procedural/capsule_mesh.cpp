@@ -46,15 +46,18 @@ void addCapsule(SkinnedMesh& mesh, const glm::vec3& a, const glm::vec3& b, float
 
 }  // namespace
 
-void buildCapsuleMesh(AvatarAsset& asset, float stature) {
+void buildCapsuleMesh(AvatarAsset& asset, float stature, int bodyRoot) {
   const Skeleton& sk = asset.skeleton;
   std::vector<glm::mat4> globals;
   computeGlobals(sk, SkeletonPose::rest(sk), globals);
+  std::vector<bool> aboveBody(sk.joints.size(), false);
+  if (bodyRoot >= 0 && size_t(bodyRoot) < sk.joints.size())
+    for (int a = sk.joints[size_t(bodyRoot)].parent; a >= 0; a = sk.joints[size_t(a)].parent) aboveBody[size_t(a)] = true;
   SkinnedMesh& mesh = asset.mesh;
   mesh = {};
   for (size_t j = 0; j < sk.joints.size(); ++j) {
     const int parent = sk.joints[j].parent;
-    if (parent < 0) continue;
+    if (parent < 0 || aboveBody[size_t(parent)]) continue;
     const glm::vec3 a(globals[size_t(parent)][3]), b(globals[j][3]);
     const float length = glm::length(b - a);
     if (length < 1e-3f) continue;

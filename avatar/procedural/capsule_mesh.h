@@ -7,7 +7,10 @@
 namespace embody::avatar {
 
 // Bones shorter than 1 mm are skipped. Radius: a quarter of the bone's length, between 0.6 % and
-// 3.5 % of `stature` (metres).
-void buildCapsuleMesh(AvatarAsset& asset, float stature);
+// 3.5 % of `stature` (metres). `bodyRoot` (the pelvis joint, -1 none): bones hanging from its
+// ancestors get no capsule. Those are root-motion and helper bones above the body (CC_Base's
+// RL_BoneRoot on the floor, Unreal's root and IK bones); nothing drives them, so their capsules
+// would stand where the clip began like a pole.
+void buildCapsuleMesh(AvatarAsset& asset, float stature, int bodyRoot = -1);
 
 }  // namespace embody::avatar

@@ -289,6 +289,63 @@ TEST_CASE("BVH avatar: a clip that is not a standing body is refused with one li
   CHECK(a.error().find('\n') == std::string::npos);
 }
 
+TEST_CASE("BVH avatar: a clip whose zero-channel pose lies down stands in its first frame (CC_Base)", "[eval][bvh]") {
+  // The project's CC_Base fixture points the legs up at zero channels, as Reallusion's exports do.
+  auto a = tracking::loadBvhAvatar(std::string(test::kSourceDir) + "/tests/tracking/fixtures/ccbase.bvh", {});
+  REQUIRE(a);
+  CHECK(a->restFromFirstFrame);
+  const avatar::Skeleton& sk = a->asset.skeleton;
+  std::vector<glm::mat4> rest, posed;
+  avatar::computeGlobals(sk, avatar::SkeletonPose::rest(sk), rest);
+  const int head = a->asset.humanoid.joint(avatar::HumanBone::head), hips = a->asset.humanoid.joint(avatar::HumanBone::hips);
+  REQUIRE(head >= 0);
+  REQUIRE(hips >= 0);
+  CHECK(rest[size_t(head)][3].y > rest[size_t(hips)][3].y + 0.3f);
+  // The trackers' references follow that rest pose: at every time, the head tracker's orientation
+  // is the head joint's turn from the rest pose applied to the reference, and the clip replayed on
+  // the avatar puts the head joint where the clip has it.
+  const size_t h = size_t(tracking::index(tracking::TrackerId::Head));
+  const glm::dquat restHead = glm::quat_cast(glm::dmat3(glm::mat3(rest[size_t(head)])));
+  std::vector<avatar::BvhGlobal> clipJoints;
+  for (const auto& sample : a->trace.samples) {
+    avatar::SkeletonPose pose;
+    tracking::bvhPoseAt(*a, sample.time, pose);
+    avatar::computeGlobals(sk, pose, posed);
+    tracking::bvhJointsAt(a->clip, a->mapping, sample.time, clipJoints);
+    CHECK(glm::distance(glm::dvec3(posed[size_t(head)][3]), clipJoints[size_t(head)].position) < 1e-4);
+    const glm::dquat turn = glm::quat_cast(glm::dmat3(glm::mat3(posed[size_t(head)]))) * glm::conjugate(restHead);
+    const glm::dquat expected = glm::normalize(turn * a->mapping.reference[h]);
+    const glm::dquat tracker(sample[tracking::TrackerId::Head].orientation);
+    CHECK(std::abs(glm::dot(expected, tracker)) > 1.0 - 1e-6);
+  }
+}
+
+TEST_CASE("BVH avatar: bones above the pelvis (a root-motion bone on the floor) get no capsule", "[eval][bvh]") {
+  // The test clip under a root on the floor that carries the position, as CC_Base's RL_BoneRoot
+  // and Unreal's root do: its bone up to the hips would stand where the clip began, like a pole.
+  std::string text = kClip;
+  const size_t hips = text.find("ROOT Hips");
+  text.replace(hips, 9, "ROOT BoneRoot\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation "
+                        "Yrotation\n  JOINT Hips");
+  text.replace(text.find("MOTION"), 6, "}\nMOTION");
+  const avatar::BvhClip plain = clip();
+  for (size_t f = 0; f < 3; ++f) {
+    text += "0 0 0 0 0 0";
+    for (float v : plain.frame(f)) text += " " + std::to_string(v);
+    text += "\n";
+  }
+  auto parsed = avatar::parseBvh(text, "rooted.bvh");
+  REQUIRE(parsed);
+  auto a = tracking::buildBvhAvatar(std::move(parsed).value(), {});
+  REQUIRE(a);
+  const int root = a->asset.skeleton.find("BoneRoot");
+  REQUIRE(root >= 0);
+  size_t onRoot = 0;
+  for (const auto& v : a->asset.mesh.vertices) onRoot += (v.joints0.x == uint32_t(root) && v.weights0.x > 0.5f) ? 1 : 0;
+  CHECK(onRoot == 0);
+  CHECK(a->asset.mesh.vertices.size() > 100);  // the body's capsules are there
+}
+
 TEST_CASE("BVH avatar: the clip's joints resampled between frames", "[eval][bvh]") {
   auto a = tracking::buildBvhAvatar(clip(), {});
   REQUIRE(a);

@@ -89,7 +89,7 @@ std::unique_ptr<tracking::PoseSource> open(const std::string& spec, tracking::Tr
   return std::move(src).value();
 }
 
-void checkFullBodyWalk(const avatar::AvatarAsset& avatar) {
+void checkFullBodyWalk(const avatar::AvatarAsset& avatar, double headLimit = 0.01) {
   EMBODY_REQUIRE_SHARED_ASSET(bvh, "cmu_12_01_walk.bvh");
   auto src = open(bvh);
   AvatarBodyOptions o;
@@ -103,7 +103,7 @@ void checkFullBodyWalk(const avatar::AvatarAsset& avatar) {
   CHECK(r.nonFinitePoses == 0);
   CHECK(r.summary.nonFiniteFrames == 0);
   CHECK(r.summary.headErrorP95 >= 0.0);
-  CHECK(r.summary.headErrorP95 <= 0.01);
+  CHECK(r.summary.headErrorP95 <= headLimit);
   CHECK(r.summary.handErrorP95 >= 0.0);
   CHECK(r.summary.handErrorP95 <= 0.02);
   CHECK(r.summary.deadlineMisses == 0);
@@ -117,11 +117,13 @@ TEST_CASE("BVH walk, every tracker, default avatar: head within 1 cm, hands with
 
 // Was [!mayfail] (head p95 ~4.4 cm: the head could not be reached with the feet first); passes
 // since the per-level trust region and the head orientation one level below the eye position.
-TEST_CASE("BVH walk, every tracker, CesiumMan: head within 1 cm, hands within 2 cm (p95), no NaN, no misses") {
+TEST_CASE("BVH walk, every tracker, CesiumMan: head within 1.2 cm, hands within 2 cm (p95), no NaN, no misses") {
   EMBODY_REQUIRE_SHARED_ASSET(path, "CesiumMan.glb");
   auto a = avatar::loadAvatarFile(path);
   REQUIRE(a.ok());
-  checkFullBodyWalk(a.value());
+  // 1.2 cm: since knees may no longer bend backwards (body_model.h), the walk's longest strides
+  // leave CesiumMan's head up to ~1 cm short (10.2-10.4 mm p95; it was just under 10 mm).
+  checkFullBodyWalk(a.value(), 0.012);
 }
 
 TEST_CASE("three-point walk: the avatar steps foot by foot, planted feet do not slide, head within 1 cm") {
@@ -131,10 +133,14 @@ TEST_CASE("three-point walk: the avatar steps foot by foot, planted feet do not 
   o.userHeight = 1.75f;
   o.trackers = tracking::TrackerMask::threePoint();
   const int frames = int(src->duration() * 60.0);
-  const Run r = drive(defaultAvatar(), *src, o, frames, 60.0, kGenerousBudget);
+  int recoveries = 0;
+  const Run r = drive(defaultAvatar(), *src, o, frames, 60.0, kGenerousBudget, {},
+                      [&](const AvatarBodySolver& s, const SolvedFrame&) { recoveries = s.collapseGuard().recoveries(); });
   INFO("head p95 " << r.summary.headErrorP95 << " hand p95 " << r.summary.handErrorP95 << " steps " << r.steps);
   CHECK(r.nonFinitePoses == 0);
   CHECK(r.summary.headErrorP95 <= 0.01);
+  // A walk is no collapse: stepping feet pass each other along the stride, never across it.
+  CHECK(recoveries == 0);
   // Lift-offs (planted -> swinging), in order, and the ankle's rise above its planted height.
   std::vector<int> liftOffs;
   double worstSlide = 0.0, maxRise[2] = {0.0, 0.0};

@@ -184,9 +184,14 @@ TEST_CASE("IK thread between a tracking thread and a render thread: newest whole
 TEST_CASE("task layout: balance first, head, then hands, lower body inferred without feet") {
   const TaskLayout three = taskLayoutFor(tracking::TrackerMask::threePoint());
   CHECK(three.inferLowerBody);
-  CHECK(three.levels() == 4);
-  int balance = 0, plants = 0;
+  CHECK(three.levels() == 5);  // feet, head, hands, orientations, then knee and elbow directions
+  int balance = 0, plants = 0, poles = 0;
   for (const auto& t : three.tasks) {
+    if (t.kind == TaskKind::LimbPole) {
+      CHECK(t.priority == three.levels());
+      ++poles;
+      continue;
+    }
     if (t.kind == TaskKind::Balance) balance = t.priority;
     if (t.kind == TaskKind::FootPlant) ++plants;
     if (t.kind == TaskKind::TrackerPosition && t.tracker == tracking::TrackerId::Head) CHECK(t.priority == 2);
@@ -195,6 +200,7 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
   }
   CHECK(balance == 1);
   CHECK(plants == 2);
+  CHECK(poles == 4);  // both knees, both elbows
   const TaskLayout full = taskLayoutFor(tracking::TrackerMask::all());
   CHECK_FALSE(full.inferLowerBody);
   for (const auto& t : full.tasks) CHECK((t.kind != TaskKind::FootPlant && t.kind != TaskKind::InferredHips));
@@ -203,6 +209,10 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
   // tracked pelvis the softest level (it yields to head and hands when proportions differ).
   int headPos = 0, headRot = 0, handPos = 0, hips = 0;
   for (const auto& t : full.tasks) {
+    if (t.kind == TaskKind::LimbPole) {
+      CHECK(t.priority == full.levels());  // below everything a tracker drives
+      continue;
+    }
     if (t.tracker == tracking::TrackerId::Head) (t.kind == TaskKind::TrackerPosition ? headPos : headRot) = t.priority;
     if (t.tracker == tracking::TrackerId::LeftHand && t.kind == TaskKind::TrackerPosition) handPos = t.priority;
     if (t.tracker == tracking::TrackerId::Hips) hips = t.priority;
@@ -210,7 +220,7 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
   CHECK(headPos == 2);
   CHECK(handPos == 3);
   CHECK(headRot > handPos);
-  CHECK(hips == full.levels());
+  CHECK(hips == full.levels() - 1);
   CHECK(hips > headRot);
   CHECK(statusWeight(tracking::TrackerStatus::Absent) == 0.0f);
   CHECK(statusWeight(tracking::TrackerStatus::Held) == 1.0f);

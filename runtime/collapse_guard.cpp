@@ -1,0 +1,76 @@
+#include "runtime/collapse_guard.h"
+
+#include <cmath>
+
+namespace embody::runtime {
+
+std::string_view collapseReasonName(CollapseReason reason) {
+  switch (reason) {
+    case CollapseReason::None: return "none";
+    case CollapseReason::NonFinite: return "non_finite";
+    case CollapseReason::Stalled: return "stalled";
+    case CollapseReason::PelvisLow: return "pelvis_low";
+    case CollapseReason::Folded: return "folded";
+    case CollapseReason::ThroughFloor: return "through_floor";
+    case CollapseReason::CrossedLegs: return "crossed_legs";
+  }
+  return "?";
+}
+
+CollapseReason CollapseGuard::assess(const BodySignals& s) const {
+  if (!s.finite) return CollapseReason::NonFinite;
+  const bool headHigh = s.headTargetHeight > config_.crouchHeadFraction * s.standingEyeHeight;
+  if (s.lowestTrunkOrKnee < -config_.floorPenetration * s.scale) return CollapseReason::ThroughFloor;
+  if (headHigh && s.pelvisHeight < config_.pelvisLowFraction * s.standingPelvisHeight) return CollapseReason::PelvisLow;
+  if (headHigh && s.pelvisTilt > config_.foldedRadians) return CollapseReason::Folded;
+  if (s.inferredLegs && s.legSeparation < -config_.crossMargin * s.scale) return CollapseReason::CrossedLegs;
+  return CollapseReason::None;
+}
+
+bool CollapseGuard::stalled(const BodySignals& s) {
+  if (!(s.residual > config_.stallResidual * s.scale)) {
+    stallSince_ = -1.0;
+    return false;
+  }
+  if (stallSince_ < 0.0 || s.residual < (1.0 - config_.stallImprovement) * stallReference_) {
+    stallSince_ = s.time;  // a new window: the error is falling (or just rose above the threshold)
+    stallReference_ = s.residual;
+    stallIterations_ = 0;
+    return false;
+  }
+  stallIterations_ += s.iterations;
+  return s.time - stallSince_ >= config_.stallSeconds && stallIterations_ >= config_.stallIterations;
+}
+
+CollapseReason CollapseGuard::update(const BodySignals& s) {
+  CollapseReason reason = assess(s);
+  if (reason != CollapseReason::None) ++collapsedFrames_;
+  const bool isStalled = stalled(s);
+  if (!config_.enabled) return CollapseReason::None;
+  if (reason == CollapseReason::NonFinite) {
+    conditionSince_ = -1.0;
+  } else {
+    if (reason == CollapseReason::None && isStalled) reason = CollapseReason::Stalled;
+    if (reason == CollapseReason::None) {
+      conditionSince_ = -1.0;
+      return reason;
+    }
+    if (conditionSince_ < 0.0) conditionSince_ = s.time;
+    const bool confirmed = reason == CollapseReason::Stalled || s.time - conditionSince_ >= config_.confirmSeconds;
+    if (!confirmed || s.time - lastRecovery_ < config_.cooldownSeconds) return CollapseReason::None;
+  }
+  lastRecovery_ = s.time;
+  conditionSince_ = -1.0;
+  stallSince_ = -1.0;
+  ++recoveries_;
+  lastReason_ = reason;
+  return reason;
+}
+
+void CollapseGuard::reset() {
+  conditionSince_ = -1.0;
+  stallSince_ = -1.0;
+  lastRecovery_ = -1e9;
+}
+
+}  // namespace embody::runtime

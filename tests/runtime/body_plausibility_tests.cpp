@@ -1,0 +1,270 @@
+// A believable body from three points (docs/runtime.md, "Plausibility"): a body found in a heap
+// stands up again under the head, knees and elbows never bend backwards, knees point over the
+// feet, a squat reaches its depth. Deterministic: the clock is frozen, so the iteration cap ends
+// every solve.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <functional>
+
+#include "avatar/procedural/default_avatar.h"
+#include "runtime/avatar_body_solver.h"
+#include "runtime/ik_stage.h"
+#include "test_paths.h"
+#include "tracking/pose_source.h"
+
+using namespace embody;
+using namespace embody::runtime;
+using tracking::TrackerId;
+
+namespace {
+
+const avatar::AvatarAsset& defaultAvatar() {
+  static const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
+  return a;
+}
+
+// What a frame of a run looked like.
+struct Measures {
+  int frames = 0, nonFinite = 0;
+  double minHinge[4] = {1e9, 1e9, 1e9, 1e9}, maxHinge[4] = {-1e9, -1e9, -1e9, -1e9};
+  double worstKneeBehind = 0.0;  // how far a bent knee sits behind its hip-ankle line (along the foot)
+  double minPelvisHeight = 1e9;
+  std::vector<double> headError, handError, pelvisHeight;
+  int recoveries = 0;
+  CollapseReason lastReason = CollapseReason::None;
+};
+
+// The knee's offset from its hip-ankle line along the foot's forward (negative: behind the line,
+// i.e. bent backwards or inwards).
+double kneeAhead(const AvatarBodySolver& s, int side) {
+  const LowerBodyPosture p = s.posture();
+  const Eigen::Vector3d hip = p.hip[size_t(side)], knee = p.knee[size_t(side)], ankle = p.ankle[size_t(side)];
+  const Eigen::Vector3d axis = (ankle - hip).normalized();
+  Eigen::Vector3d off = knee - hip;
+  off -= axis * axis.dot(off);
+  return off.norm() < 1e-9 ? 0.0 : off.dot(s.footForward(side));
+}
+
+Measures run(tracking::PoseSource& source, const AvatarBodyOptions& options, int frames, double fps,
+             const std::function<void(int, AvatarBodySolver&)>& before = {}) {
+  auto solver = AvatarBodySolver::create(defaultAvatar(), options);
+  REQUIRE(solver.ok());
+  AvatarBodySolver& s = **solver;
+  ManualClock clock;  // frozen: the iteration cap ends each solve
+  IkStageConfig cfg;
+  cfg.guard.userHeight = 1.75f;
+  IkStage stage(s, clock, cfg);
+  SolvedFrame frame;
+  frame.pose = avatar::SkeletonPose::rest(defaultAvatar().skeleton);
+  Measures m;
+  for (int i = 0; i < frames; ++i) {
+    if (before) before(i, s);
+    const FrameStats& st = stage.process(source.sample(i / fps), frame);
+    ++m.frames;
+    for (const auto& t : frame.pose.local)
+      if (!std::isfinite(t.translation.x + t.translation.y + t.translation.z + t.rotation.w + t.rotation.x +
+                         t.rotation.y + t.rotation.z))
+        ++m.nonFinite;
+    for (int k = 0; k < 4; ++k) {
+      m.minHinge[k] = std::min(m.minHinge[k], s.hingeAngle(k));
+      m.maxHinge[k] = std::max(m.maxHinge[k], s.hingeAngle(k));
+    }
+    for (int side = 0; side < 2; ++side)
+      if (s.hingeAngle(side) > 0.17) m.worstKneeBehind = std::min(m.worstKneeBehind, kneeAhead(s, side));
+    const double pelvis = s.up().dot(s.jointPosition(s.trackerJoint(TrackerId::Hips)));
+    m.pelvisHeight.push_back(pelvis);
+    m.minPelvisHeight = std::min(m.minPelvisHeight, pelvis);
+    m.headError.push_back(st.residual[size_t(tracking::index(TrackerId::Head))]);
+    m.handError.push_back(std::max(st.residual[size_t(tracking::index(TrackerId::LeftHand))],
+                                   st.residual[size_t(tracking::index(TrackerId::RightHand))]));
+  }
+  m.recoveries = s.collapseGuard().recoveries();
+  m.lastReason = s.collapseGuard().lastReason();
+  return m;
+}
+
+std::unique_ptr<tracking::PoseSource> open(const std::string& spec, tracking::TrackerMask mask) {
+  tracking::SourceOptions o;
+  o.userHeight = 1.75f;
+  o.trackers = mask;
+  auto src = tracking::openPoseSource(spec, o);
+  REQUIRE(src.ok());
+  return std::move(src).value();
+}
+
+AvatarBodyOptions optionsFor(tracking::TrackerMask mask) {
+  AvatarBodyOptions o;
+  o.userHeight = 1.75f;
+  o.trackers = mask;
+  o.maxIterations = 12;
+  return o;
+}
+
+double maxAfter(const std::vector<double>& v, size_t from) {
+  double m = 0.0;
+  for (size_t i = from; i < v.size(); ++i) m = std::max(m, v[i]);
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("a body laid on the floor stands up under the head within half a second", "[runtime][plausibility]") {
+  auto src = open("synthetic:idle", tracking::TrackerMask::threePoint());
+  const double fps = 90.0;
+  double standingPelvis = 0.0;
+  // Two iterations a frame, as a 1 ms budget gives on a slow machine: too few to climb out of
+  // the heap by warm-started iterations alone.
+  AvatarBodyOptions o = optionsFor(tracking::TrackerMask::threePoint());
+  o.maxIterations = 2;
+  const Measures m = run(*src, o, int(1.5 * fps), fps,
+                         [&](int i, AvatarBodySolver& s) {
+                           if (i == 30) {
+                             standingPelvis = s.up().dot(s.jointPosition(s.trackerJoint(TrackerId::Hips)));
+                             // Lay it down: the pelvis 15 cm above the floor, turned 90 degrees
+                             // onto its back, the warm start the solver continues from.
+                             Eigen::VectorXd q = s.data().q();
+                             const auto& root = s.body().model.joints[size_t(s.body().hips)];
+                             q.segment<3>(root.first_dof) +=
+                                 root.desc.rest.linear().transpose() * (-s.up() * (standingPelvis - 0.15));
+                             q.segment<3>(root.first_dof + 3) = Eigen::Vector3d(2.8, 0.0, 0.0);
+                             REQUIRE(s.seedConfiguration(q).ok());
+                           }
+                         });
+  INFO("standing pelvis " << standingPelvis << " m, recoveries " << m.recoveries);
+  CHECK(m.nonFinite == 0);
+  CHECK(m.recoveries >= 1);
+  // From half a second after the fall: standing (pelvis within 10 % of its height) with the head
+  // on its target.
+  const size_t settled = size_t(30 + 0.5 * fps);
+  double lowest = 1e9;
+  for (size_t i = settled; i < m.pelvisHeight.size(); ++i) lowest = std::min(lowest, m.pelvisHeight[i]);
+  CHECK(lowest > 0.9 * standingPelvis);
+  CHECK(maxAfter(m.headError, settled) < 0.01);
+}
+
+TEST_CASE("a head glitch to the floor and back: the body stands again, never NaN", "[runtime][plausibility]") {
+  auto src = open("synthetic:idle", tracking::TrackerMask::threePoint());
+  const double fps = 90.0;
+  auto solver = AvatarBodySolver::create(defaultAvatar(), optionsFor(tracking::TrackerMask::threePoint()));
+  REQUIRE(solver.ok());
+  AvatarBodySolver& s = **solver;
+  ManualClock clock;
+  IkStageConfig cfg;
+  cfg.filter = false;
+  cfg.guard.userHeight = 1.75f;
+  IkStage stage(s, clock, cfg);
+  SolvedFrame frame;
+  frame.pose = avatar::SkeletonPose::rest(defaultAvatar().skeleton);
+  double standingPelvis = 0.0, worstHead = 0.0, lowest = 1e9;
+  for (int i = 0; i < int(2.0 * fps); ++i) {
+    tracking::PoseSample sample = src->sample(i / fps);
+    // 0.3 s with the head 1.3 m lower, folded forward 90 degrees (a tracking glitch or a
+    // dropped headset), then back.
+    if (i >= 30 && i < 57) {
+      sample[TrackerId::Head].position.y -= 1.3f;
+      sample[TrackerId::Head].orientation = glm::angleAxis(1.57f, glm::vec3(1, 0, 0)) * sample[TrackerId::Head].orientation;
+    }
+    const FrameStats& st = stage.process(sample, frame);
+    for (const auto& t : frame.pose.local) REQUIRE(std::isfinite(t.rotation.w + t.translation.y));
+    const double pelvis = s.up().dot(s.jointPosition(s.trackerJoint(TrackerId::Hips)));
+    if (i == 29) standingPelvis = pelvis;
+    if (i >= 57 + int(0.6 * fps)) {
+      worstHead = std::max(worstHead, double(st.residual[0]));
+      lowest = std::min(lowest, pelvis);
+    }
+  }
+  INFO("standing pelvis " << standingPelvis << ", lowest after " << lowest << ", head " << worstHead
+                          << ", recoveries " << s.collapseGuard().recoveries());
+  CHECK(lowest > 0.9 * standingPelvis);
+  CHECK(worstHead < 0.01);
+}
+
+TEST_CASE("three-point squat: the knees bend forward over the feet and the head reaches its depth",
+          "[runtime][plausibility]") {
+  auto src = open("synthetic:squat", tracking::TrackerMask::threePoint());
+  const double fps = 90.0;
+  const Measures m = run(*src, optionsFor(tracking::TrackerMask::threePoint()), int(src->duration() * fps), fps);
+  std::vector<double> sorted = m.headError;
+  std::sort(sorted.begin(), sorted.end());
+  const double headP95 = sorted[size_t(0.95 * double(sorted.size() - 1))];
+  INFO("knees " << m.minHinge[0] << ".." << m.maxHinge[0] << " / " << m.minHinge[1] << ".." << m.maxHinge[1]
+                << " rad, head p95 " << headP95 << " m, knee behind " << m.worstKneeBehind << " m");
+  CHECK(m.nonFinite == 0);
+  CHECK(headP95 < 0.01);           // the squat's depth is reached (it stalled at straight knees)
+  CHECK(m.maxHinge[0] > 0.8);      // the knees really bend (> 45 degrees)
+  CHECK(m.maxHinge[1] > 0.8);
+  CHECK(m.worstKneeBehind > -0.01);  // forward, over the feet
+  CHECK(m.recoveries == 0);          // a squat is no collapse
+}
+
+TEST_CASE("no knee or elbow bends backwards over the synthetic motions, three trackers and all",
+          "[runtime][plausibility]") {
+  for (const char* motion : {"synthetic:reach", "synthetic:bow", "synthetic:look", "synthetic:figure8"}) {
+    for (bool three : {true, false}) {
+      const auto mask = three ? tracking::TrackerMask::threePoint() : tracking::TrackerMask::all();
+      auto src = open(motion, mask);
+      const double fps = 60.0;
+      const Measures m = run(*src, optionsFor(mask), int(std::min(src->duration(), 6.0) * fps), fps);
+      INFO(motion << (three ? " three-point" : " all trackers") << ": hinge minima " << m.minHinge[0] << " "
+                  << m.minHinge[1] << " " << m.minHinge[2] << " " << m.minHinge[3] << ", knee behind "
+                  << m.worstKneeBehind << " m, recoveries " << m.recoveries);
+      CHECK(m.nonFinite == 0);
+      for (double h : m.minHinge) CHECK(h >= 0.0);
+      CHECK(m.worstKneeBehind > -0.01);
+      CHECK(m.recoveries == 0);
+    }
+  }
+}
+
+TEST_CASE("limb poles sit below the trackers; joint markers replace them", "[runtime][plausibility]") {
+  auto poles = [](bool markers) {
+    AvatarBodyOptions o = optionsFor(tracking::TrackerMask::threePoint());
+    o.jointMarkers = markers;
+    auto s = AvatarBodySolver::create(defaultAvatar(), o);
+    REQUIRE(s.ok());
+    const ik::Model& m = (*s)->body().model;
+    int count = 0, poleLevel = -1, markerLevel = -1, lowestTracker = -1;
+    for (const auto& t : m.tasks) {
+      if (t.desc.name.rfind("pole_", 0) == 0) ++count, poleLevel = t.desc.level;
+      else if (t.desc.name.rfind("marker_", 0) == 0) markerLevel = t.desc.level;
+      else lowestTracker = std::max(lowestTracker, t.desc.level);
+    }
+    return std::array<int, 4>{count, poleLevel, markerLevel, lowestTracker};
+  };
+  const auto without = poles(false);
+  CHECK(without[0] == 4);               // both knees, both elbows
+  CHECK(without[1] > without[3]);       // below every tracker task
+  const auto with = poles(true);
+  CHECK(with[0] == 0);                  // a marker says where the knee is: no pole pulls it off
+  CHECK(with[2] == with[3] + 1);        // the markers right below the trackers
+}
+
+TEST_CASE("a head lying on the floor is not stood up: no standing seed, a stall only restarts the solve cold", "[runtime][plausibility]") {
+  // A person on their back: the head 15 cm above the floor, the hands beside it, for 3 s.
+  tracking::PoseSample lying;
+  lying.time = 0.0;
+  auto set = [&](TrackerId id, glm::vec3 p, glm::quat q) {
+    lying[id].position = p;
+    lying[id].orientation = q;
+    lying[id].valid = true;
+  };
+  set(TrackerId::Head, {0.0f, 0.15f, 0.0f}, glm::quat(0.7071f, 0.7071f, 0.0f, 0.0f));
+  set(TrackerId::LeftHand, {-0.3f, 0.1f, 0.4f}, glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+  set(TrackerId::RightHand, {0.3f, 0.1f, 0.4f}, glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+  struct Still : tracking::PoseSource {
+    tracking::PoseSample pose;
+    tracking::PoseSample sample(double t) override {
+      tracking::PoseSample p = pose;
+      p.time = t;
+      return p;
+    }
+    double duration() const override { return 3.0; }
+    std::string name() const override { return "lying"; }
+    tracking::TrackerMask trackers() const override { return tracking::TrackerMask::threePoint(); }
+  } source;
+  source.pose = lying;
+  const Measures m = run(source, optionsFor(tracking::TrackerMask::threePoint()), 90, 30.0);
+  INFO("recoveries " << m.recoveries << ", last " << collapseReasonName(m.lastReason) << ", head error " << maxAfter(m.headError, 60));
+  CHECK(m.nonFinite == 0);
+  CHECK(maxAfter(m.pelvisHeight, 1) < 0.5);  // lying from the first solve on, never stood up (standing: ~0.95 m)
+}
