@@ -169,10 +169,19 @@ void AvatarBodySolver::measureRest(ik::JointId leftElbow, bool legs) {
     legs_.hipAboveSeat = 0.05 * avatarHeight_;
   }
   trackerFrames();
-  // Feet for three-point mode: rest ankles relative to the hips' ground point.
+  // Feet for three-point mode: the stance relative to the hips' ground point.
   const Eigen::Vector3d hipsGround = pos(body_.hips) - up_ * up_.dot(pos(body_.hips));
-  planner_.configure(options_.feet, FootShape{}, up_, forward_,
-                     {pos(body_.leftFoot) - hipsGround, pos(body_.rightFoot) - hipsGround}, avatarHeight_ / 1.75);
+  std::array<Eigen::Vector3d, 2> stance{pos(body_.leftFoot) - hipsGround, pos(body_.rightFoot) - hipsGround};
+  if (legs)
+    for (size_t s = 0; s < 2; ++s) stance[s] = standingAnkle(pos(hipJoint_[s]), stance[s] + hipsGround) - hipsGround;
+  planner_.configure(options_.feet, FootShape{}, up_, forward_, stance, avatarHeight_ / 1.75);
+}
+
+// Where a person stands a foot: the ankle under its hip joint (feet about hip-width apart), at the
+// rest ankle's height. Rest poses spread the legs as their authors chose (CMU's zero pose stands
+// them 60 cm apart, a T-pose or A-pose often 30-40 cm): a stance taken from them walks wide-legged.
+Eigen::Vector3d AvatarBodySolver::standingAnkle(const Eigen::Vector3d& hipJoint, const Eigen::Vector3d& restAnkle) const {
+  return hipJoint - up_ * up_.dot(hipJoint) + up_ * up_.dot(restAnkle);
 }
 
 // Height and floor from the skinned rest mesh (the skeleton alone misses the skull and soles);

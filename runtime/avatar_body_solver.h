@@ -168,6 +168,7 @@ class AvatarBodySolver final : public BodySolver {
   void measureRest(ik::JointId leftElbow, bool legs);
   void measureHeight(const Eigen::Vector3d& head, const Eigen::Vector3d& leftFoot, const Eigen::Vector3d& rightFoot);
   void trackerFrames();
+  Eigen::Vector3d standingAnkle(const Eigen::Vector3d& hipJoint, const Eigen::Vector3d& restAnkle) const;
   void addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskDesc>& tasks);
   void addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks);
   void calibrate(float userHeight);
