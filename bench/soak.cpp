@@ -267,8 +267,25 @@ Result<std::vector<std::unique_ptr<tracking::PoseSource>>> openSources(const Opt
 
 namespace {
 
-nlohmann::json summarize(const std::vector<Slot>& slots, const RenderSide& render, const runtime::IkThread& ik,
-                         size_t rssStart, size_t rssEnd, double seconds) {
+// Per source: slots and recovered ones (a clip the avatar cannot follow within recoveredWithin
+// never counts as recovered, whatever the fault).
+nlohmann::json perSource(const std::vector<Slot>& slots, const std::vector<std::string>& names) {
+  nlohmann::json out = nlohmann::json::object();
+  for (size_t k = 0; k < names.size(); ++k) {
+    size_t count = 0, recovered = 0;
+    for (const auto& s : slots)
+      if (static_cast<size_t>(s.source) == k) {
+        ++count;
+        recovered += s.recoverySeconds >= 0.0 ? 1 : 0;
+      }
+    out[names[k]] = {{"slots", count}, {"recovered", recovered}};
+  }
+  return out;
+}
+
+nlohmann::json summarize(const std::vector<Slot>& slots, const std::vector<std::string>& sourceNames,
+                         const RenderSide& render, const runtime::IkThread& ik, size_t rssStart, size_t rssEnd,
+                         double seconds) {
   nlohmann::json faults = nlohmann::json::object();
   double recoveryMax = 0.0, errorMax = 0.0;
   size_t unrecovered = 0;
@@ -306,7 +323,8 @@ nlohmann::json summarize(const std::vector<Slot>& slots, const RenderSide& rende
           {"error_after_recovery_max_m", errorMax},
           {"rss_start_mb", mb(rssStart)},
           {"rss_end_mb", mb(rssEnd)},
-          {"faults", faults}};
+          {"faults", faults},
+          {"sources", perSource(slots, sourceNames)}};
 }
 
 int soak(const Options& o) {
@@ -349,7 +367,9 @@ int soak(const Options& o) {
   render.stop = true;
   renderThread.join();
   ik.stop();
-  const nlohmann::json j = summarize(slots, render, ik, rssStart, residentBytes(), end);
+  std::vector<std::string> names;
+  for (const auto& src : *sources) names.push_back(src->name());
+  const nlohmann::json j = summarize(slots, names, render, ik, rssStart, residentBytes(), end);
   std::printf("%s\n", j.dump(2).c_str());
   if (!o.json.empty()) std::ofstream(o.json) << j.dump(2) << "\n";
   return render.nonFinite == 0 ? 0 : 1;

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <fstream>
 
 namespace embody::avatar {
@@ -235,7 +236,9 @@ class Parser {
                     " values, expected " + std::to_string(perFrame));
       for (const auto& t : tokens_) {
         double v;
-        if (!parseDouble(t, v)) return fail("frame value '" + std::string(t) + "' is not a finite number");
+        // Frames are stored as float: a finite double beyond float's range would become inf.
+        if (!parseDouble(t, v) || !(std::abs(v) <= std::numeric_limits<float>::max()))
+          return fail("frame value '" + std::string(t) + "' is not a finite number within float range");
         clip_.values.push_back(static_cast<float>(v));
       }
       ++frames;

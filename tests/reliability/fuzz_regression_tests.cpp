@@ -8,6 +8,7 @@
 #include <iterator>
 #include <sstream>
 
+#include "avatar/bvh/bvh.h"
 #include "avatar/gltf/gltf_loader.h"
 #include "avatar/humanoid/humanoid_map.h"
 #include "test_paths.h"
@@ -57,4 +58,13 @@ TEST_CASE("fuzz regression: a VRM humanoid that is not an object is ignored, not
   in.gltfJson = doc;
   in.gltfNodeToJoint = {0};
   CHECK_NOTHROW(avatar::mapHumanoid(in));
+}
+
+TEST_CASE("fuzz regression: a BVH frame value beyond float range is an error, not an infinite channel",
+          "[reliability][fuzz]") {
+  const auto bytes = regression("bvh/value_beyond_float.bvh");
+  auto clip = avatar::parseBvh(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), "big.bvh");
+  REQUIRE_FALSE(clip.ok());
+  CHECK(clip.error().find("within float range") != std::string::npos);
+  CHECK(clip.error().find("big.bvh:19") != std::string::npos);  // names the line
 }
