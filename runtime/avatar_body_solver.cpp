@@ -282,7 +282,7 @@ void AvatarBodySolver::addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskD
                        : spec.tracker == TrackerId::LeftHand  ? 2
                                                               : 3;
       // Joint markers say where every knee and elbow is: a pole would only pull it off.
-      if (!options_.limbPoles || options_.jointMarkers || limbMiddle_[k] < 0 || limbRoot_[k] < 0 || !(limb_[k].upper > 0.0)) break;
+      if (!options_.limbPoles || (k >= 2 && !options_.elbowPoles) || options_.jointMarkers || limbMiddle_[k] < 0 || limbRoot_[k] < 0 || !(limb_[k].upper > 0.0)) break;
       t.name = std::string(k < 2 ? "pole_knee_" : "pole_elbow_") + (k % 2 == 0 ? "left" : "right");
       t.type = ik::TaskType::Position;
       t.joint = limbMiddle_[k];

@@ -217,9 +217,10 @@ TEST_CASE("no knee or elbow bends backwards over the synthetic motions, three tr
 }
 
 TEST_CASE("limb poles sit below the trackers; joint markers replace them", "[runtime][plausibility]") {
-  auto poles = [](bool markers) {
+  auto poles = [](bool markers, bool elbows = true) {
     AvatarBodyOptions o = optionsFor(tracking::TrackerMask::threePoint());
     o.jointMarkers = markers;
+    o.elbowPoles = elbows;
     auto s = AvatarBodySolver::create(defaultAvatar(), o);
     REQUIRE(s.ok());
     const ik::Model& m = (*s)->body().model;
@@ -231,6 +232,7 @@ TEST_CASE("limb poles sit below the trackers; joint markers replace them", "[run
     }
     return std::array<int, 4>{count, poleLevel, markerLevel, lowestTracker};
   };
+  CHECK(poles(false, false)[0] == 2);    // the default: knees only
   const auto without = poles(false);
   CHECK(without[0] == 4);               // both knees, both elbows
   CHECK(without[1] > without[3]);       // below every tracker task
