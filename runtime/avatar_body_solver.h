@@ -78,7 +78,7 @@ struct AvatarBodyOptions {
   bool limbPoles = true;
   // The elbows' poles too (a swivel from the palm's direction, pole_tasks.h). Off: on the eval
   // clips they pulled elbows off the performers' (3 trackers: upper body 6.7 -> 8.2 cm, reverse
-  // elbows 65 -> 273 frames; 6 trackers worse on 6 of 8 clips; docs/eval.md).
+  // elbows 65 -> 273 frames; 6 trackers worse on 7 of 8 clips; docs/eval.md).
   bool elbowPoles = false;
   // The tracked person IS this avatar (embody eval: the avatar is the clip's own skeleton, built
   // in tracking space, tracking/bvh_avatar.h): tracking space is avatar space (scale 1, floor at
