@@ -169,10 +169,19 @@ void AvatarBodySolver::measureRest(ik::JointId leftElbow, bool legs) {
     legs_.hipAboveSeat = 0.05 * avatarHeight_;
   }
   trackerFrames();
-  // Feet for three-point mode: rest ankles relative to the hips' ground point.
+  // Feet for three-point mode: the stance relative to the hips' ground point.
   const Eigen::Vector3d hipsGround = pos(body_.hips) - up_ * up_.dot(pos(body_.hips));
-  planner_.configure(options_.feet, FootShape{}, up_, forward_,
-                     {pos(body_.leftFoot) - hipsGround, pos(body_.rightFoot) - hipsGround}, avatarHeight_ / 1.75);
+  std::array<Eigen::Vector3d, 2> stance{pos(body_.leftFoot) - hipsGround, pos(body_.rightFoot) - hipsGround};
+  if (legs)
+    for (size_t s = 0; s < 2; ++s) stance[s] = standingAnkle(pos(hipJoint_[s]), stance[s] + hipsGround) - hipsGround;
+  planner_.configure(options_.feet, FootShape{}, up_, forward_, stance, avatarHeight_ / 1.75);
+}
+
+// Where a person stands a foot: the ankle under its hip joint (feet about hip-width apart), at the
+// rest ankle's height. Rest poses spread the legs as their authors chose (CMU's zero pose stands
+// them 60 cm apart, a T-pose or A-pose often 30-40 cm): a stance taken from them walks wide-legged.
+Eigen::Vector3d AvatarBodySolver::standingAnkle(const Eigen::Vector3d& hipJoint, const Eigen::Vector3d& restAnkle) const {
+  return hipJoint - up_ * up_.dot(hipJoint) + up_ * up_.dot(restAnkle);
 }
 
 // Height and floor from the skinned rest mesh (the skeleton alone misses the skull and soles);
@@ -273,7 +282,7 @@ void AvatarBodySolver::addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskD
                        : spec.tracker == TrackerId::LeftHand  ? 2
                                                               : 3;
       // Joint markers say where every knee and elbow is: a pole would only pull it off.
-      if (!options_.limbPoles || options_.jointMarkers || limbMiddle_[k] < 0 || limbRoot_[k] < 0 || !(limb_[k].upper > 0.0)) break;
+      if (!options_.limbPoles || (k >= 2 && !options_.elbowPoles) || options_.jointMarkers || limbMiddle_[k] < 0 || limbRoot_[k] < 0 || !(limb_[k].upper > 0.0)) break;
       t.name = std::string(k < 2 ? "pole_knee_" : "pole_elbow_") + (k % 2 == 0 ? "left" : "right");
       t.type = ik::TaskType::Position;
       t.joint = limbMiddle_[k];

@@ -76,6 +76,10 @@ struct AvatarBodyOptions {
   double recoveryBlendSeconds = 0.2;
   // Knee and elbow direction tasks at the lowest level (pole_tasks.h).
   bool limbPoles = true;
+  // The elbows' poles too (a swivel from the palm's direction, pole_tasks.h). Off: on the eval
+  // clips they pulled elbows off the performers' (3 trackers: upper body 6.7 -> 8.2 cm, reverse
+  // elbows 65 -> 273 frames; 6 trackers worse on 7 of 8 clips; docs/eval.md).
+  bool elbowPoles = false;
   // The tracked person IS this avatar (embody eval: the avatar is the clip's own skeleton, built
   // in tracking space, tracking/bvh_avatar.h): tracking space is avatar space (scale 1, floor at
   // y = 0, no turn), no height or stride calibration, and the trackers' rest references are the
@@ -168,6 +172,7 @@ class AvatarBodySolver final : public BodySolver {
   void measureRest(ik::JointId leftElbow, bool legs);
   void measureHeight(const Eigen::Vector3d& head, const Eigen::Vector3d& leftFoot, const Eigen::Vector3d& rightFoot);
   void trackerFrames();
+  Eigen::Vector3d standingAnkle(const Eigen::Vector3d& hipJoint, const Eigen::Vector3d& restAnkle) const;
   void addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskDesc>& tasks);
   void addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks);
   void calibrate(float userHeight);

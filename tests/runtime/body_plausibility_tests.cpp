@@ -217,9 +217,10 @@ TEST_CASE("no knee or elbow bends backwards over the synthetic motions, three tr
 }
 
 TEST_CASE("limb poles sit below the trackers; joint markers replace them", "[runtime][plausibility]") {
-  auto poles = [](bool markers) {
+  auto poles = [](bool markers, bool elbows = true) {
     AvatarBodyOptions o = optionsFor(tracking::TrackerMask::threePoint());
     o.jointMarkers = markers;
+    o.elbowPoles = elbows;
     auto s = AvatarBodySolver::create(defaultAvatar(), o);
     REQUIRE(s.ok());
     const ik::Model& m = (*s)->body().model;
@@ -231,6 +232,7 @@ TEST_CASE("limb poles sit below the trackers; joint markers replace them", "[run
     }
     return std::array<int, 4>{count, poleLevel, markerLevel, lowestTracker};
   };
+  CHECK(poles(false, false)[0] == 2);    // the default: knees only
   const auto without = poles(false);
   CHECK(without[0] == 4);               // both knees, both elbows
   CHECK(without[1] > without[3]);       // below every tracker task
@@ -267,4 +269,37 @@ TEST_CASE("a head lying on the floor is not stood up: no standing seed, a stall 
   INFO("recoveries " << m.recoveries << ", last " << collapseReasonName(m.lastReason) << ", head error " << maxAfter(m.headError, 60));
   CHECK(m.nonFinite == 0);
   CHECK(maxAfter(m.pelvisHeight, 1) < 0.5);  // lying from the first solve on, never stood up (standing: ~0.95 m)
+}
+
+TEST_CASE("three points on a wide-legged rest pose: the feet stand under the hip joints, not where the rest put them",
+          "[runtime][plausibility]") {
+  // The default avatar with each leg spread 15 degrees outwards in its rest pose (as T-poses,
+  // A-poses and CMU's zero pose stand): ankles ~45 cm apart at rest.
+  avatar::AvatarAsset wide = defaultAvatar();
+  const avatar::HumanoidMap& map = wide.humanoid;
+  for (auto [bone, sign] : {std::pair{avatar::HumanBone::leftUpperLeg, 1.0f}, std::pair{avatar::HumanBone::rightUpperLeg, -1.0f}}) {
+    avatar::Transform& rest = wide.skeleton.joints[size_t(map.joint(bone))].rest;
+    rest.rotation = glm::angleAxis(sign * glm::radians(15.0f), glm::normalize(map.forward)) * rest.rotation;
+  }
+  auto solver = AvatarBodySolver::create(wide, optionsFor(tracking::TrackerMask::threePoint()));
+  REQUIRE(solver.ok());
+  AvatarBodySolver& s = **solver;
+  auto src = open("synthetic:idle", tracking::TrackerMask::threePoint());
+  ManualClock clock;
+  IkStageConfig cfg;
+  cfg.guard.userHeight = 1.75f;
+  IkStage stage(s, clock, cfg);
+  SolvedFrame frame;
+  frame.pose = avatar::SkeletonPose::rest(wide.skeleton);
+  for (int i = 0; i < 60; ++i) stage.process(src->sample(i / 30.0), frame);
+  const LowerBodyPosture p = s.posture();
+  const Eigen::Vector3d up = s.up();
+  auto across = [&](const Eigen::Vector3d& l, const Eigen::Vector3d& r) {
+    const Eigen::Vector3d d = l - r;
+    return (d - up * up.dot(d)).norm();
+  };
+  const double hips = across(p.hip[0], p.hip[1]), ankles = across(p.ankle[0], p.ankle[1]);
+  INFO("hip joints " << hips << " m apart, ankles " << ankles << " m");
+  CHECK(ankles < hips + 0.04);  // about hip-width (the rest pose's ~0.45 m is far wider)
+  CHECK(ankles > hips - 0.06);  // and not crossed in
 }
