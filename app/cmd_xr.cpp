@@ -227,9 +227,9 @@ void printBody(const XrCommand& c, const xr::XrLoopReport& r, const BodyHook& ho
   if (c.loop.vulkanValidation) std::printf("validation messages: %u\n", r.vulkanValidationMessages);
   if (!hook.body) return;
   const runtime::StatsSummary ik = r.ikFrames.summary();
-  std::printf("ik thread: solve p50 %.2f ms, p99 %.2f ms (budget %.2f ms), %zu deadline misses, %.1f iterations; "
-              "join wait p50 %.2f ms, max %.2f ms, %llu late joins\n",
-              ik.ikP50Ms, ik.ikP99Ms, c.budgetMs, ik.deadlineMisses, ik.iterationsMean,
+  std::printf("ik thread (%s priority): solve p50 %.2f ms, p99 %.2f ms (budget %.2f ms), %zu deadline misses, "
+              "%.1f iterations; join wait p50 %.2f ms, max %.2f ms, %llu late joins\n",
+              r.ik.priority, ik.ikP50Ms, ik.ikP99Ms, c.budgetMs, ik.deadlineMisses, ik.iterationsMean,
               percentileOf(r.ik.waitMs, 50), maxOf(r.ik.waitMs), static_cast<unsigned long long>(r.ik.lateJoins));
   if (!r.ik.bodyAgeMs.empty())
     std::printf("tracker-to-photon: body p50 %.1f ms, hands (late-latched) p50 %.1f ms\n",
@@ -279,7 +279,8 @@ nlohmann::json sessionJson(const XrCommand& c, const xr::XrLoopReport& r, int at
 
 // "ik_thread" and "late_latch": the render thread's view of the IK thread.
 void ikThreadJson(nlohmann::json& j, const xr::XrLoopReport& r) {
-  j["ik_thread"] = {{"submitted", r.ik.submitted},
+  j["ik_thread"] = {{"priority", r.ik.priority},
+                    {"submitted", r.ik.submitted},
                     {"joins", r.ik.joins},
                     {"late_joins", r.ik.lateJoins},
                     {"wait_p50_ms", percentileOf(r.ik.waitMs, 50)},

@@ -1,5 +1,7 @@
 #include "runtime/ik_thread.h"
 
+#include <pthread.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -29,11 +31,17 @@ namespace {
 
 // The IK thread sleeps between samples and works a budget of about a millisecond when one comes:
 // it should win the CPU over bulk work (shader compiles, a build, the rasteriser's workers) the
-// way a headset runtime's compositor does. A higher priority (nice -10) is asked for; without
-// the right to it (not root, no CAP_SYS_NICE) the thread keeps the normal one, silently.
-void raiseThisThreadsPriority() {
+// way a headset runtime's compositor does. It asks for the lowest real-time priority (SCHED_FIFO
+// 1: it preempts every normal thread at once, and the kernel's real-time throttling still leaves
+// the others their share should a solve ever run away), else nice -10; without the right to
+// either (not root, no CAP_SYS_NICE) it keeps the normal priority. Which one it got is reported.
+IkThreadPriority raiseThisThreadsPriority() {
+  sched_param param{};
+  param.sched_priority = 1;
+  if (pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0) return IkThreadPriority::Realtime;
   const auto tid = static_cast<id_t>(syscall(SYS_gettid));
-  (void)setpriority(PRIO_PROCESS, tid, -10);
+  if (setpriority(PRIO_PROCESS, tid, -10) == 0) return IkThreadPriority::Raised;
+  return IkThreadPriority::Normal;
 }
 
 }  // namespace
@@ -41,9 +49,18 @@ void raiseThisThreadsPriority() {
 void IkThread::start() {
   if (running_.exchange(true)) return;
   thread_ = std::thread([this] {
-    raiseThisThreadsPriority();
+    priority_.store(raiseThisThreadsPriority(), std::memory_order_release);
     run();
   });
+}
+
+const char* toString(IkThreadPriority p) {
+  switch (p) {
+    case IkThreadPriority::Realtime: return "realtime";
+    case IkThreadPriority::Raised: return "nice -10";
+    case IkThreadPriority::Normal: return "normal";
+  }
+  return "normal";
 }
 
 void IkThread::stop() {

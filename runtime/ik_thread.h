@@ -16,6 +16,10 @@
 
 namespace embody::runtime {
 
+// The scheduling the IK thread obtained (IkThread::priority): SCHED_FIFO, nice -10, or neither.
+enum class IkThreadPriority { Normal, Raised, Realtime };
+const char* toString(IkThreadPriority p);
+
 class IkThread {
  public:
   // `initialPose` sizes every slot (and is what acquire() returns before the first solve).
@@ -47,6 +51,8 @@ class IkThread {
   uint32_t framesSolved() const { return solved_.load(std::memory_order_acquire); }
   uint32_t samplesSubmitted() const { return submitted_.load(std::memory_order_acquire); }
   uint32_t samplesSkipped() const { return skipped_.load(std::memory_order_relaxed); }
+  // What the thread got when it started (Normal before start()).
+  IkThreadPriority priority() const { return priority_.load(std::memory_order_acquire); }
   // Blocks the caller (a test, an offline driver; not the render loop) until at least `count`
   // frames are solved or `timeoutSeconds` of wall time pass; true when reached.
   bool waitForFrames(uint32_t count, double timeoutSeconds) const;
@@ -67,6 +73,7 @@ class IkThread {
   std::atomic<uint32_t> skipped_{0};
   std::atomic<bool> running_{false};
   std::atomic<bool> resetRequested_{false};
+  std::atomic<IkThreadPriority> priority_{IkThreadPriority::Normal};
   std::thread thread_;
   std::mutex doneMutex_;  // only for the join's timed wait (done_); the hand-offs stay lock-free
   std::condition_variable done_;

@@ -559,7 +559,10 @@ void HeadsetLoop::recordAges(const FrameWork& f) {
 }
 
 void HeadsetLoop::finish() {
-  if (ik_) ik_->stop();
+  if (ik_) {
+    rep_.ik.priority = runtime::toString(ik_->priority());
+    ik_->stop();
+  }
   if (run_) {
     for (; statesSeen_ < run_->stateHistory().size(); ++statesSeen_)
       rep_.states.push_back(sessionStateName(run_->stateHistory()[statesSeen_]));

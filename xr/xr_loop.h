@@ -68,6 +68,7 @@ struct IkJoinReport {
   uint64_t submitted = 0;     // samples handed to the IK thread
   uint64_t joins = 0;         // frames that joined (rendered with a body hook)
   uint64_t lateJoins = 0;     // joins that reached the deadline before this frame's solve ended
+  const char* priority = "normal";  // the IK thread's scheduling: "realtime", "nice -10" or "normal"
   std::vector<double> waitMs;       // time blocked at each join
   std::vector<double> bodyAgeMs;    // tracker-to-photon age of the body shown (locate -> display)
   std::vector<double> handAgeMs;    // the same for the late-latched hands
