@@ -7,6 +7,8 @@ CMAKE_ARGS ?=
 CTEST_ARGS ?=
 WERROR     := $(if $(CI),-DEMBODY_WERROR=ON,)
 
+space := $(empty) $(empty)
+
 .PHONY: all deps build demo test bench sanitize tsan fuzz soak format clean
 
 all: build
@@ -50,12 +52,17 @@ sanitize: deps
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --output-on-failure -j $(JOBS) -R '^cli:' $(CTEST_ARGS)
 
-# ThreadSanitizer on the `unit` tests (IK, tracking, runtime hand-off, and the cli tests, which start
-# lavapipe): Mesa and the validation layer are not instrumented, scripts/tsan.supp silences them.
+# ThreadSanitizer on the tests of the code that has threads: the runtime (IK thread, triple
+# buffers, IkStage), tracking, and xr (the XR frame loop with its IK thread and late latch, the
+# headless runtime's blocking xrWaitFrame, SIGINT handling; the CLI and the runtime library are
+# built with TSan too). Only those targets are built. Mesa and the validation layer are not
+# instrumented: scripts/tsan.supp silences them. TSAN_TESTS picks other suites.
+TSAN_TESTS ?= runtime tracking xr
 tsan: deps
 	cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMBODY_TSAN=ON -DEMBODY_BUILD_BENCH=OFF $(WERROR)
-	cmake --build build-tsan -j $(JOBS)
-	cd build-tsan && TSAN_OPTIONS=halt_on_error=1:suppressions=$(CURDIR)/scripts/tsan.supp ctest --output-on-failure -j $(JOBS) -L unit $(CTEST_ARGS)
+	cmake --build build-tsan -j $(JOBS) --target $(addprefix embody_tests_,$(TSAN_TESTS)) embody embody_xr_runtime
+	cd build-tsan && TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$(CURDIR)/scripts/tsan.supp \
+	  ctest --output-on-failure -j $(JOBS) -R '^($(subst $(space),|,$(strip $(TSAN_TESTS)))):' $(CTEST_ARGS)
 
 # libFuzzer (clang, build-fuzz/) on every parser of outside data, FUZZ_SECONDS per target, from the
 # kept corpus in fuzz/corpus; results in out/fuzz/summary.md (docs/reliability.md). CI's smoke is
