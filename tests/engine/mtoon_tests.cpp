@@ -6,6 +6,7 @@
 //     specification's formulas evaluated here on the CPU (lit, shade, toony ramp, GI
 //     equalization, parametric rim, matcap, shade texture, emission);
 //   - render order: renderQueueOffsetNumber and transparentWithZWrite over distance;
+//   - outline width on a sphere: world metres, screen share of the height at two distances;
 //   - goldens of the mannequin in VRM 1.0 and VRM 0.x MToon, with outline and rim checked by value.
 #include <unistd.h>
 
@@ -486,4 +487,84 @@ TEST_CASE("golden: VRM 0.x MToon materialProperties avatar", "[gpu][golden][mate
   INFO(differ << " of " << covered << " covered pixels differ from the unlit fallback");
   CHECK(differ > covered / 2);
   test::checkGolden("mtoon_vrm0", full, ctx.device->driverString());
+}
+
+namespace {
+
+// A UV sphere (smooth normals) of `radius` at the origin with one material.
+avatar::AvatarAsset sphereAsset(float radius, const avatar::Material& material) {
+  avatar::AvatarAsset a;
+  a.skeleton.joints.push_back({"root", -1, {}});
+  a.mesh.inverseBind = {glm::mat4(1.0f)};
+  constexpr int kRings = 48, kSegments = 96;
+  for (int i = 0; i <= kRings; ++i)
+    for (int j = 0; j <= kSegments; ++j) {
+      const float theta = float(M_PI) * float(i) / kRings, phi = 2.0f * float(M_PI) * float(j) / kSegments;
+      avatar::SkinnedVertex v;
+      v.normal = glm::vec3(std::sin(theta) * std::cos(phi), std::cos(theta), -std::sin(theta) * std::sin(phi));
+      v.position = radius * v.normal;
+      a.mesh.vertices.push_back(v);
+    }
+  for (uint32_t i = 0; i < kRings; ++i)
+    for (uint32_t j = 0; j < kSegments; ++j) {
+      const uint32_t p = i * (kSegments + 1) + j, q = p + kSegments + 1;
+      for (uint32_t k : {p, q, p + 1, p + 1, q, q + 1}) a.mesh.indices.push_back(k);
+    }
+  a.mesh.primitives.push_back({0, uint32_t(a.mesh.indices.size()), 0});
+  a.materials = {material};
+  return a;
+}
+
+// Radii (pixels) of the sphere's disc and of the disc with its outline ring (pure green), from
+// their areas in a 256 x 256 frame.
+std::pair<double, double> discRadii(const avatar::Image& img) {
+  int surface = 0, ring = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const glm::ivec4 c = test::rgbaAt(img, {x, y});
+      if (c.g > 200 && c.r < 60 && c.b < 60) ++ring;
+      else if (c.r + c.g + c.b > 0) ++surface;
+    }
+  return {std::sqrt(surface / M_PI), std::sqrt((surface + ring) / M_PI)};
+}
+
+}  // namespace
+
+TEST_CASE("MToon outline width: metres in world mode, a share of the height at any distance in screen mode",
+          "[gpu][materials]") {
+  avatar::Material m = toon(glm::vec3(0.8f, 0.1f, 0.1f), glm::vec3(0.4f, 0.0f, 0.0f));
+  m.mtoon.outlineColor = glm::vec3(0.0f, 1.0f, 0.0f);
+  m.mtoon.outlineLightingMix = 0.0f;
+  const float radius = 0.5f, fovY = 0.6f;
+  test::GpuContext ctx;
+  auto radii = [&](avatar::OutlineWidthMode mode, float width, float distance) {
+    m.mtoon.outlineMode = mode;
+    m.mtoon.outlineWidth = width;
+    const auto asset = sphereAsset(radius, m);
+    auto r = engine::AvatarRenderer::create(*ctx.device, asset);
+    REQUIRE(r);
+    engine::FrameOptions fo;
+    fo.grid = false;
+    fo.clearColor = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+    const auto cam = engine::cameraFromPose(glm::translate(glm::mat4(1.0f), glm::vec3(0, 0, distance)),
+                                            engine::FovAngles::symmetric(fovY, 1.0f), 0.1f, 50.0f);
+    auto img = (*r)->render(avatar::SkeletonPose::rest(asset.skeleton), cam, fo);
+    REQUIRE(img);
+    return discRadii(*img);
+  };
+  // The silhouette of a sphere of radius s at distance d: tan(asin(s / d)) / tan(fov / 2) x 128 px.
+  auto silhouette = [&](float s, float d) { return std::tan(std::asin(s / d)) / std::tan(fovY / 2) * 128.0; };
+  const auto world = radii(avatar::OutlineWidthMode::WorldCoordinates, 0.08f, 4.0f);
+  INFO("world: sphere " << world.first << " px (expected " << silhouette(radius, 4.0f) << "), with outline "
+                        << world.second << " px (expected " << silhouette(radius + 0.08f, 4.0f) << ")");
+  CHECK(std::abs(world.first - silhouette(radius, 4.0f)) < 0.5);
+  CHECK(std::abs(world.second - silhouette(radius + 0.08f, 4.0f)) < 0.5);
+  // Screen: 0.02 of 256 px = 5.12 px, near and twice as far.
+  for (float distance : {4.0f, 8.0f}) {
+    const auto screen = radii(avatar::OutlineWidthMode::ScreenCoordinates, 0.02f, distance);
+    INFO("screen at " << distance << " m: ring " << screen.second - screen.first << " px");
+    CHECK(std::abs(screen.second - screen.first - 5.12) < 0.3);
+  }
+  const auto none = radii(avatar::OutlineWidthMode::None, 0.08f, 4.0f);
+  CHECK(none.second == none.first);
 }
