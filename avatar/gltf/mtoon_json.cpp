@@ -113,13 +113,18 @@ class PropertyReader {
       warn(key, "textureInfo without an index; untextured");
       return -1;
     }
-    t.texCoord = int(number(*info, "texCoord", 0.0f, 0.0f, 1.0f));
+    float texCoord = number(*info, "texCoord", 0.0f, 0.0f, 65535.0f);
     const json* extensions = member(*info, "extensions");
     if (const json* tt = extensions ? member(*extensions, "KHR_texture_transform") : nullptr) {
       t.offset = vec2(*tt, "offset", glm::vec2(0.0f));
       t.scale = vec2(*tt, "scale", glm::vec2(1.0f));
       t.rotation = number(*tt, "rotation", 0.0f);
-      t.texCoord = int(number(*tt, "texCoord", float(t.texCoord), 0.0f, 1.0f));
+      texCoord = number(*tt, "texCoord", texCoord, 0.0f, 65535.0f);
+    }
+    t.texCoord = int(texCoord);
+    if (t.texCoord > 1) {  // as for glTF textures (gltf_loader.cpp)
+      warn(key, "TEXCOORD_" + std::to_string(t.texCoord) + " is not read; TEXCOORD_0 used");
+      t.texCoord = 0;
     }
     return imageOfTexture(*index, key);
   }

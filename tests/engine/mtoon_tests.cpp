@@ -55,6 +55,10 @@ void requireValid(const std::vector<uint8_t>& bytes, const char* name) {
   const auto report = json::parse(v.report, nullptr, false);
   REQUIRE_FALSE(report.is_discarded());
   CHECK(report["numErrors"].get<int>() == 0);
+  std::string codes;
+  for (const auto& w : report.value("warnings", json::array())) codes += " " + w.value("code", "");
+  WARN(name << ": Khronos validator " << report["numErrors"] << " errors, " << report["numWarnings"] << " warnings"
+            << codes << ", " << report["numInfos"] << " infos");
   if (report.contains("warnings"))
     for (const auto& w : report["warnings"]) {
       const std::string code = w.value("code", "");
