@@ -4,7 +4,8 @@
 //   - hostile MToon values load with warnings and the specification's defaults;
 //   - shading: flat quads facing the camera, each with one normal, drawn and compared with the
 //     specification's formulas evaluated here on the CPU (lit, shade, toony ramp, GI
-//     equalization, parametric rim, matcap, shade texture, emission);
+//     equalization, parametric rim, matcap, shade texture, emission, shading shift texture,
+//     KHR_texture_transform on an MToon texture);
 //   - render order: renderQueueOffsetNumber and transparentWithZWrite over distance;
 //   - outline width on a sphere: world metres, screen share of the height at two distances;
 //   - goldens of the mannequin in VRM 1.0 and VRM 0.x MToon, with outline and rim checked by value.
@@ -202,7 +203,7 @@ TEST_CASE("MToon: hostile values load with one warning each and the specificatio
 
 namespace {
 
-const test::TileGrid kGrid{4, 3};
+const test::TileGrid kGrid{4, 4};
 
 // The specification's MToon formulas (Lighting, Global Illumination, Rim Lighting) for one
 // material, normal and view direction, with the renderer's lights; textures given as their
@@ -327,25 +328,43 @@ TEST_CASE("MToon shading follows the specification's formulas; render queue and 
   auto emissive = toon(glm::vec3(0.2f), glm::vec3(0.05f));
   emissive.emissiveFactor = glm::vec3(0.3f, 0.2f, 0.0f);
   tiles.push_back({emissive, towardCamera});
+  // Shading shift texture: linear data (R 128 = +0.502 through the UNORM copy; an sRGB read would
+  // give +0.216), toony 0 so that the ramp shows the shift: linearstep(-1, 1, 0 + 0.502) = 0.751.
+  auto shift = toon(base, shade, 0.0f);
+  shift.mtoon.shadingShiftImage = 2;
+  tiles.push_back({shift, perp});
+  const float shiftR = 128 / 255.0f;  // the reference adds the texture through shadingShift
+  tiles.back().material.mtoon.shadingShift = shiftR;
+  // KHR_texture_transform on an MToon texture: the shade texture's right half (green) picked out
+  // of a red | green image by offset (0.5, 0) and scale (0.5, 1).
+  auto halves = toon(base, glm::vec3(1.0f));
+  halves.mtoon.shadeImage = 3;
+  halves.mtoon.shadeTransform.offset = {0.5f, 0.0f};
+  halves.mtoon.shadeTransform.scale = {0.5f, 1.0f};
+  tiles.push_back({halves, -l, glm::vec3(0.0f, 1.0f, 0.0f)});
 
   MToonTiles scene;
-  scene.asset.images = {solidImage(128, 200, 60), solidImage(200, 100, 50)};
-  for (size_t i = 0; i < tiles.size(); ++i)
-    scene.quad(int(i % 4), int(i / 4), scene.material(tiles[i].material), tiles[i].normal);
-  // Tile (2, 2): the near red quad (offset -5) is drawn before the far blue one (offset 0):
+  avatar::Image redGreen{2, 2, {255, 0, 0, 255, 0, 255, 0, 255, 255, 0, 0, 255, 0, 255, 0, 255}};
+  scene.asset.images = {solidImage(128, 200, 60), solidImage(200, 100, 50), solidImage(128, 0, 0), redGreen};
+  for (size_t i = 0; i < tiles.size(); ++i) {
+    avatar::Material drawn = tiles[i].material;
+    if (drawn.mtoon.shadingShiftImage >= 0) drawn.mtoon.shadingShift = 0.0f;  // the texture shifts instead
+    scene.quad(int(i % 4), int(i / 4), scene.material(drawn), tiles[i].normal);
+  }
+  // Tile (0, 3): the near red quad (offset -5) is drawn before the far blue one (offset 0):
   // blue over red where they overlap, although back to front alone would put red on top.
-  scene.quad(2, 2, scene.material(blended({1, 0, 0}, -5, false)), towardCamera, {0.0f, 0.0f, 0.7f, 1.0f}, 0.3f);
-  scene.quad(2, 2, scene.material(blended({0, 0, 1}, 0, false)), towardCamera, {0.3f, 0.0f, 1.0f, 1.0f}, 0.0f);
-  // Tile (3, 2): the near green quad writes depth (transparentWithZWrite, drawn first), so the
+  scene.quad(0, 3, scene.material(blended({1, 0, 0}, -5, false)), towardCamera, {0.0f, 0.0f, 0.7f, 1.0f}, 0.3f);
+  scene.quad(0, 3, scene.material(blended({0, 0, 1}, 0, false)), towardCamera, {0.3f, 0.0f, 1.0f, 1.0f}, 0.0f);
+  // Tile (1, 3): the near green quad writes depth (transparentWithZWrite, drawn first), so the
   // far blue quad is hidden behind it.
-  scene.quad(3, 2, scene.material(blended({0, 1, 0}, 0, true)), towardCamera, {0.0f, 0.0f, 0.7f, 1.0f}, 0.3f);
-  scene.quad(3, 2, scene.material(blended({0, 0, 1}, 0, false)), towardCamera, {0.3f, 0.0f, 1.0f, 1.0f}, 0.0f);
+  scene.quad(1, 3, scene.material(blended({0, 1, 0}, 0, true)), towardCamera, {0.0f, 0.0f, 0.7f, 1.0f}, 0.3f);
+  scene.quad(1, 3, scene.material(blended({0, 0, 1}, 0, false)), towardCamera, {0.3f, 0.0f, 1.0f, 1.0f}, 0.0f);
   scene.asset.mesh.firstPersonIndices.clear();
 
   test::GpuContext ctx;
   engine::AvatarRendererOptions o;
   o.width = 256;
-  o.height = 192;
+  o.height = 256;
   auto r = engine::AvatarRenderer::create(*ctx.device, scene.asset, o);
   REQUIRE(r);
   engine::FrameOptions fo;
@@ -354,7 +373,7 @@ TEST_CASE("MToon shading follows the specification's formulas; render queue and 
   const engine::Camera cam = kGrid.camera();
   auto img = (*r)->render(avatar::SkeletonPose::rest(scene.asset.skeleton), cam, fo);
   REQUIRE(img);
-  auto at = [&](int column, int row, glm::vec2 f) { return test::rgbaAt(*img, kGrid.pixel(cam, column, row, f, 256, 192)); };
+  auto at = [&](int column, int row, glm::vec2 f) { return test::rgbaAt(*img, kGrid.pixel(cam, column, row, f, 256, 256)); };
 
   for (size_t i = 0; i < tiles.size(); ++i) {
     const int column = int(i % 4), row = int(i / 4);
@@ -366,14 +385,13 @@ TEST_CASE("MToon shading follows the specification's formulas; render queue and 
                  << got.r << " " << got.g << " " << got.b);
     for (int c = 0; c < 3; ++c) CHECK(std::abs(got[c] - srgbByte(expected[c])) <= 3);
   }
-  // The ramp tile is between its lit and shade colours, not at either end (toony 0.5, shading 0.6).
-  const glm::ivec4 overlapQueue = at(2, 2, {0.5f, 0.5f}), overlapZWrite = at(3, 2, {0.5f, 0.5f});
+  const glm::ivec4 overlapQueue = at(0, 3, {0.5f, 0.5f}), overlapZWrite = at(1, 3, {0.5f, 0.5f});
   INFO("queue overlap " << overlapQueue.r << " " << overlapQueue.b << "; z-write overlap " << overlapZWrite.g << " "
                         << overlapZWrite.b);
   CHECK(overlapQueue.b > overlapQueue.r + 40);  // blue (later queue) over red
   CHECK(overlapZWrite.g > 150);
   CHECK(overlapZWrite.b < 8);  // the far quad is behind the z-writing one
-  CHECK(at(3, 2, {0.9f, 0.5f}).b > 150);  // and drawn where nothing hides it
+  CHECK(at(1, 3, {0.9f, 0.5f}).b > 150);  // and drawn where nothing hides it
 }
 
 namespace {
