@@ -49,6 +49,41 @@ struct TextureTransform {
   glm::vec2 apply(glm::vec2 uv) const;
 };
 
+// VRM's toon material (VRMC_materials_mtoon 1.0; VRM 0.x "VRM/MToon" materialProperties are
+// converted to it on load, avatar/gltf/mtoon_json.h). Colours are linear. Textures are indices
+// into AvatarAsset::images (-1: none) with their KHR_texture_transform. Defaults are the 1.0
+// specification's.
+enum class OutlineWidthMode { None, WorldCoordinates, ScreenCoordinates };
+
+struct MToon {
+  glm::vec3 shadeColor{0.0f};  // shadeColorFactor
+  int shadeImage = -1;         // shadeMultiplyTexture (sRGB)
+  TextureTransform shadeTransform;
+  float shadingShift = 0.0f;  // shadingShiftFactor
+  int shadingShiftImage = -1;  // shadingShiftTexture (linear, R)
+  TextureTransform shadingShiftTransform;
+  float shadingShiftScale = 1.0f;
+  float shadingToony = 0.9f;    // shadingToonyFactor, 0..1
+  float giEqualization = 0.9f;  // giEqualizationFactor, 0..1
+  glm::vec3 matcapFactor{1.0f};
+  int matcapImage = -1;  // matcapTexture (sRGB, sampled by the view-space normal; none: no matcap)
+  glm::vec3 rimColor{0.0f};     // parametricRimColorFactor
+  float rimFresnelPower = 5.0f;  // parametricRimFresnelPowerFactor, >= 0
+  float rimLift = 0.0f;          // parametricRimLiftFactor
+  int rimImage = -1;             // rimMultiplyTexture (sRGB)
+  TextureTransform rimTransform;
+  float rimLightingMix = 1.0f;  // rimLightingMixFactor, 0..1
+  OutlineWidthMode outlineMode = OutlineWidthMode::None;
+  float outlineWidth = 0.0f;  // metres (world) or a fraction of the screen height (screen)
+  int outlineWidthImage = -1;  // outlineWidthMultiplyTexture (linear, G)
+  TextureTransform outlineWidthTransform;
+  glm::vec3 outlineColor{0.0f};
+  float outlineLightingMix = 1.0f;  // 0..1
+  int renderQueueOffset = 0;        // BLEND only: -9..0, or 0..+9 with transparentWithZWrite
+  bool transparentWithZWrite = false;
+  bool hasOutline() const { return outlineMode != OutlineWidthMode::None && outlineWidth > 0.0f; }
+};
+
 struct Material {
   std::string name;
   glm::vec4 baseColorFactor{1.0f};
@@ -62,6 +97,8 @@ struct Material {
   AlphaMode alphaMode = AlphaMode::Opaque;
   float alphaCutoff = 0.5f;
   bool doubleSided = false;
+  bool isMToon = false;  // drawn with `mtoon` (VRMC_materials_mtoon or VRM 0.x MToon)
+  MToon mtoon;
 };
 
 struct Primitive {

@@ -9,6 +9,88 @@
 
 namespace embody::engine {
 
+namespace {
+
+static_assert(sizeof(avatar::SkinnedVertex) == 26 * 4, "shaders/skin.comp reads the vertex as 26 words");
+
+// std140 mirror of `Material` in shaders/material.glsl.
+struct MaterialBlock {
+  glm::vec4 baseColorFactor{1.0f};
+  glm::vec4 emissive{0.0f};
+  glm::vec4 baseColorUv[2];
+  glm::vec4 emissiveUv[2];
+  glm::vec4 params{0.5f, 0.0f, 0.0f, 0.0f};
+  glm::vec4 shadeColor{0.0f}, shading{0.0f}, rimColor{0.0f}, mixes{0.0f}, matcapFactor{0.0f}, outlineColor{0.0f};
+  glm::vec4 shadeUv[2], shadingShiftUv[2], rimUv[2], outlineWidthUv[2];
+};
+static_assert(sizeof(MaterialBlock) == 21 * sizeof(glm::vec4), "std140: vec4 members only, no padding");
+
+// KHR_texture_transform as the two rows of its 2x3 matrix (see avatar::TextureTransform); the
+// first row's w carries the texture coordinate set.
+void uvRows(const avatar::TextureTransform& t, glm::vec4 rows[2]) {
+  const float c = std::cos(t.rotation), s = std::sin(t.rotation);
+  rows[0] = glm::vec4(c * t.scale.x, s * t.scale.y, t.offset.x, float(t.texCoord));
+  rows[1] = glm::vec4(-s * t.scale.x, c * t.scale.y, t.offset.y, 0.0f);
+}
+
+MaterialBlock materialBlock(const avatar::Material& m) {
+  MaterialBlock b;
+  b.baseColorFactor = m.baseColorFactor;
+  b.emissive = glm::vec4(m.emissiveFactor * m.emissiveStrength, 0.0f);
+  uvRows(m.baseColorTransform, b.baseColorUv);
+  uvRows(m.emissiveTransform, b.emissiveUv);
+  const avatar::MToon& t = m.mtoon;
+  const bool outline = m.isMToon && t.hasOutline();
+  b.params = glm::vec4(m.alphaCutoff, m.unlit ? 1.0f : 0.0f, m.isMToon ? 1.0f : 0.0f,
+                       outline ? float(static_cast<int>(t.outlineMode)) : 0.0f);
+  b.shadeColor = glm::vec4(t.shadeColor, t.shadingShift);
+  // Without a shading-shift texture the white default would shift by its scale: scale 0 instead.
+  b.shading = glm::vec4(t.shadingToony, t.giEqualization, t.shadingShiftImage >= 0 ? t.shadingShiftScale : 0.0f,
+                        t.rimFresnelPower);
+  b.rimColor = glm::vec4(t.rimColor, t.rimLift);
+  b.mixes = glm::vec4(t.rimLightingMix, t.outlineWidth, t.outlineLightingMix, 0.0f);
+  b.matcapFactor = glm::vec4(t.matcapImage >= 0 ? t.matcapFactor : glm::vec3(0.0f), 0.0f);  // no texture: no matcap
+  b.outlineColor = glm::vec4(t.outlineColor, 1.0f);
+  uvRows(t.shadeTransform, b.shadeUv);
+  uvRows(t.shadingShiftTransform, b.shadingShiftUv);
+  uvRows(t.rimTransform, b.rimUv);
+  uvRows(t.outlineWidthTransform, b.outlineWidthUv);
+  return b;
+}
+
+// A material's textures in binding order (set 1, bindings 1..7), and whether each holds linear
+// data (shading shift, outline width) rather than sRGB colour.
+struct MaterialTextures {
+  int image[kMaterialTextureCount];
+  static constexpr bool kLinear[kMaterialTextureCount] = {false, false, false, true, false, false, true};
+};
+
+MaterialTextures materialTextures(const avatar::Material& m) {
+  const avatar::MToon& t = m.mtoon;
+  if (!m.isMToon) return {{m.baseColorImage, m.emissiveImage, -1, -1, -1, -1, -1}};
+  return {{m.baseColorImage, m.emissiveImage, t.shadeImage, t.shadingShiftImage, t.rimImage, t.matcapImage,
+           t.outlineWidthImage}};
+}
+
+// Centroid (bind space) and the joint with the most skin weight over a draw's vertices.
+void locateDraw(const avatar::SkinnedMesh& mesh, const std::vector<uint32_t>& indices, GpuDraw& d,
+                std::vector<float>& weightPerJoint) {
+  std::fill(weightPerJoint.begin(), weightPerJoint.end(), 0.0f);
+  glm::vec3 sum(0.0f);
+  for (uint32_t i = 0; i < d.indexCount; ++i) {
+    const avatar::SkinnedVertex& v = mesh.vertices[indices[d.firstIndex + i]];
+    sum += v.position;
+    for (int k = 0; k < 4; ++k) {
+      weightPerJoint[v.joints0[k]] += v.weights0[k];
+      weightPerJoint[v.joints1[k]] += v.weights1[k];
+    }
+  }
+  d.center = d.indexCount ? sum / float(d.indexCount) : glm::vec3(0.0f);
+  d.joint = uint32_t(std::max_element(weightPerJoint.begin(), weightPerJoint.end()) - weightPerJoint.begin());
+}
+
+}  // namespace
+
 std::string GpuAvatar::validate(const avatar::AvatarAsset& asset) {
   const auto& mesh = asset.mesh;
   const size_t joints = asset.skeleton.joints.size();
@@ -41,69 +123,22 @@ std::string GpuAvatar::validate(const avatar::AvatarAsset& asset) {
   if (auto s = checkList(mesh.indices, mesh.primitives, "third-person"); !s.empty()) return s;
   if (auto s = checkList(mesh.firstPersonIndices, mesh.firstPersonPrimitives, "first-person"); !s.empty()) return s;
   for (const auto& m : asset.materials) {
-    for (int image : {m.baseColorImage, m.emissiveImage}) {
+    const MaterialTextures textures = materialTextures(m);
+    for (int image : textures.image) {
       if (image >= int(asset.images.size())) return "material '" + m.name + "' refers to a missing image";
       if (image < 0) continue;
       const auto& img = asset.images[image];
       if (img.width <= 0 || img.height <= 0 || img.rgba.size() != size_t(img.width) * img.height * 4)
         return "image " + std::to_string(image) + " has inconsistent size/data";
     }
-    if (m.baseColorTransform.texCoord < 0 || m.baseColorTransform.texCoord > 1 || m.emissiveTransform.texCoord < 0 ||
-        m.emissiveTransform.texCoord > 1)
-      return "material '" + m.name + "' reads a texture coordinate set other than 0 or 1";
+    for (const avatar::TextureTransform* t : {&m.baseColorTransform, &m.emissiveTransform, &m.mtoon.shadeTransform,
+                                              &m.mtoon.shadingShiftTransform, &m.mtoon.rimTransform,
+                                              &m.mtoon.outlineWidthTransform})
+      if (t->texCoord < 0 || t->texCoord > 1)
+        return "material '" + m.name + "' reads a texture coordinate set other than 0 or 1";
   }
   return {};
 }
-
-namespace {
-
-static_assert(sizeof(avatar::SkinnedVertex) == 26 * 4, "shaders/skin.comp reads the vertex as 26 words");
-
-// std140 mirror of `Material` in shaders/material.glsl.
-struct MaterialBlock {
-  glm::vec4 baseColorFactor{1.0f};
-  glm::vec4 emissive{0.0f};
-  glm::vec4 baseColorUv[2];
-  glm::vec4 emissiveUv[2];
-  glm::vec4 params{0.5f, 0.0f, 0.0f, 0.0f};
-};
-
-// KHR_texture_transform as the two rows of its 2x3 matrix (see avatar::TextureTransform); the
-// first row's w carries the texture coordinate set.
-void uvRows(const avatar::TextureTransform& t, glm::vec4 rows[2]) {
-  const float c = std::cos(t.rotation), s = std::sin(t.rotation);
-  rows[0] = glm::vec4(c * t.scale.x, s * t.scale.y, t.offset.x, float(t.texCoord));
-  rows[1] = glm::vec4(-s * t.scale.x, c * t.scale.y, t.offset.y, 0.0f);
-}
-
-MaterialBlock materialBlock(const avatar::Material& m) {
-  MaterialBlock b;
-  b.baseColorFactor = m.baseColorFactor;
-  b.emissive = glm::vec4(m.emissiveFactor * m.emissiveStrength, 0.0f);
-  uvRows(m.baseColorTransform, b.baseColorUv);
-  uvRows(m.emissiveTransform, b.emissiveUv);
-  b.params = glm::vec4(m.alphaCutoff, m.unlit ? 1.0f : 0.0f, 0.0f, 0.0f);
-  return b;
-}
-
-// Centroid (bind space) and the joint with the most skin weight over a draw's vertices.
-void locateDraw(const avatar::SkinnedMesh& mesh, const std::vector<uint32_t>& indices, GpuDraw& d,
-                std::vector<float>& weightPerJoint) {
-  std::fill(weightPerJoint.begin(), weightPerJoint.end(), 0.0f);
-  glm::vec3 sum(0.0f);
-  for (uint32_t i = 0; i < d.indexCount; ++i) {
-    const avatar::SkinnedVertex& v = mesh.vertices[indices[d.firstIndex + i]];
-    sum += v.position;
-    for (int k = 0; k < 4; ++k) {
-      weightPerJoint[v.joints0[k]] += v.weights0[k];
-      weightPerJoint[v.joints1[k]] += v.weights1[k];
-    }
-  }
-  d.center = d.indexCount ? sum / float(d.indexCount) : glm::vec3(0.0f);
-  d.joint = uint32_t(std::max_element(weightPerJoint.begin(), weightPerJoint.end()) - weightPerJoint.begin());
-}
-
-}  // namespace
 
 Status GpuAvatar::uploadMesh(const Device& device, Uploader& up, const avatar::SkinnedMesh& mesh) {
   // Storage usage too: the compute skinner (GpuSkinner) reads the same vertex buffer.
@@ -123,16 +158,17 @@ Status GpuAvatar::uploadMesh(const Device& device, Uploader& up, const avatar::S
 }
 
 // Every image a material uses, mipmapped (when the device can blit the format linearly), after a
-// 1x1 white texture (index 0) for untextured slots. Returns the texture index of each asset image.
-Result<std::vector<int>> GpuAvatar::uploadTextures(const Device& device, Uploader& up,
-                                                   const avatar::AvatarAsset& asset) {
-  constexpr VkFormat kFormat = VK_FORMAT_R8G8B8A8_SRGB;  // glTF base colour and emissive are sRGB-encoded
-  const bool mipmaps = device.supportsLinearBlit(kFormat);
-  auto makeTexture = [&](const avatar::Image& img) -> Status {
+// 1x1 white texture (index 0) for untextured slots. Colour images are sRGB; an image a material
+// reads as data (shading shift, outline width) gets a UNORM copy. Returns the texture index of
+// each asset image in each encoding (0 where unused).
+Result<GpuAvatar::TextureIndex> GpuAvatar::uploadTextures(const Device& device, Uploader& up,
+                                                          const std::vector<avatar::Material>& materials,
+                                                          const std::vector<avatar::Image>& images) {
+  auto makeTexture = [&](const avatar::Image& img, VkFormat format) -> Status {
     ImageDesc d;
     d.extent = {uint32_t(img.width), uint32_t(img.height)};
-    d.format = kFormat;
-    d.mipLevels = mipmaps ? fullMipChain(d.extent) : 1;
+    d.format = format;
+    d.mipLevels = device.supportsLinearBlit(format) ? fullMipChain(d.extent) : 1;
     d.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
     auto t = Image::create(device, d);
     if (!t) return Error{t.error()};
@@ -143,13 +179,17 @@ Result<std::vector<int>> GpuAvatar::uploadTextures(const Device& device, Uploade
   avatar::Image white;
   white.width = white.height = 1;
   white.rgba = {255, 255, 255, 255};
-  if (auto s = makeTexture(white); !s) return Error{s.error()};
-  std::vector<int> textureOf(asset.images.size(), 0);
-  for (const auto& m : asset.materials) {
-    for (int image : {m.baseColorImage, m.emissiveImage}) {
-      if (image < 0 || textureOf[image] > 0) continue;
-      if (auto s = makeTexture(asset.images[image]); !s) return Error{s.error()};
-      textureOf[image] = int(textures_.size() - 1);
+  if (auto s = makeTexture(white, VK_FORMAT_R8G8B8A8_SRGB); !s) return Error{s.error()};
+  TextureIndex index{std::vector<int>(images.size(), 0), std::vector<int>(images.size(), 0)};
+  for (const auto& m : materials) {
+    const MaterialTextures mt = materialTextures(m);
+    for (int k = 0; k < kMaterialTextureCount; ++k) {
+      const int image = mt.image[k];
+      auto& slot = MaterialTextures::kLinear[k] ? index.linear : index.srgb;
+      if (image < 0 || slot[image] > 0) continue;
+      const VkFormat format = MaterialTextures::kLinear[k] ? VK_FORMAT_R8G8B8A8_UNORM : VK_FORMAT_R8G8B8A8_SRGB;
+      if (auto s = makeTexture(images[image], format); !s) return Error{s.error()};
+      slot[image] = int(textures_.size() - 1);
     }
   }
   VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
@@ -161,11 +201,11 @@ Result<std::vector<int>> GpuAvatar::uploadTextures(const Device& device, Uploade
   VkSampler sampler = VK_NULL_HANDLE;
   if (vkCreateSampler(device.handle(), &sci, nullptr, &sampler) != VK_SUCCESS) return Error{"vkCreateSampler failed"};
   sampler_ = UniqueSampler(device.handle(), sampler);
-  return textureOf;
+  return index;
 }
 
 Status GpuAvatar::createMaterials(const Device& device, Uploader& up, VkDescriptorSetLayout layout,
-                                  const std::vector<avatar::Material>& materials, const std::vector<int>& textureOf) {
+                                  const std::vector<avatar::Material>& materials, const TextureIndex& textureOf) {
   const VkDevice dev = device.handle();
   const VkDeviceSize align = std::max<VkDeviceSize>(device.limits().minUniformBufferOffsetAlignment, 16);
   const VkDeviceSize stride = (sizeof(MaterialBlock) + align - 1) / align * align;
@@ -181,7 +221,7 @@ Status GpuAvatar::createMaterials(const Device& device, Uploader& up, VkDescript
 
   const uint32_t setCount = static_cast<uint32_t>(materials.size());
   const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, setCount},
-                                         {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 * setCount}};
+                                         {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, kMaterialTextureCount * setCount}};
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dpci.maxSets = setCount;
   dpci.poolSizeCount = 2;
@@ -189,27 +229,37 @@ Status GpuAvatar::createMaterials(const Device& device, Uploader& up, VkDescript
   VkDescriptorPool pool = VK_NULL_HANDLE;
   if (vkCreateDescriptorPool(dev, &dpci, nullptr, &pool) != VK_SUCCESS) return Error{"vkCreateDescriptorPool failed"};
   pool_ = UniqueDescriptorPool(dev, pool);
-  auto textureFor = [&](int image) { return textures_[image >= 0 ? textureOf[image] : 0].view(); };
   for (size_t i = 0; i < materials.size(); ++i) {
     const avatar::Material& m = materials[i];
     auto set = allocateDescriptorSet(dev, pool, layout);
     if (!set) return Error{set.error()};
     const VkDescriptorBufferInfo block{materialBlocks_.handle(), i * stride, sizeof(MaterialBlock)};
-    const VkDescriptorImageInfo images[2] = {
-        {sampler_.get(), textureFor(m.baseColorImage), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL},
-        {sampler_.get(), textureFor(m.emissiveImage), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL}};
-    VkWriteDescriptorSet w[3];
-    for (uint32_t b = 0; b < 3; ++b) {
-      w[b] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-      w[b].dstSet = *set;
-      w[b].dstBinding = b;
-      w[b].descriptorCount = 1;
-      w[b].descriptorType = b == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-      if (b == 0) w[b].pBufferInfo = &block;
-      else w[b].pImageInfo = &images[b - 1];
+    const MaterialTextures mt = materialTextures(m);
+    VkDescriptorImageInfo images[kMaterialTextureCount];
+    for (int k = 0; k < kMaterialTextureCount; ++k) {
+      const int image = mt.image[k];
+      const int texture = image < 0 ? 0 : (MaterialTextures::kLinear[k] ? textureOf.linear : textureOf.srgb)[image];
+      images[k] = {sampler_.get(), textures_[texture].view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     }
-    vkUpdateDescriptorSets(dev, 3, w, 0, nullptr);
-    materials_.push_back({m.alphaMode, m.doubleSided, *set});
+    VkWriteDescriptorSet w[2] = {{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}, {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}};
+    w[0].dstSet = w[1].dstSet = *set;
+    w[0].dstBinding = 0;
+    w[0].descriptorCount = 1;
+    w[0].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+    w[0].pBufferInfo = &block;
+    w[1].dstBinding = 1;  // bindings 1..7 are consecutive, one descriptor each
+    w[1].descriptorCount = kMaterialTextureCount;
+    w[1].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+    w[1].pImageInfo = images;
+    vkUpdateDescriptorSets(dev, 2, w, 0, nullptr);
+    GpuMaterial g;
+    g.alphaMode = m.alphaMode;
+    g.doubleSided = m.doubleSided;
+    g.outline = m.isMToon && m.mtoon.hasOutline();
+    g.zwrite = m.alphaMode != avatar::AlphaMode::Blend || (m.isMToon && m.mtoon.transparentWithZWrite);
+    g.queueOffset = m.isMToon && m.alphaMode == avatar::AlphaMode::Blend ? m.mtoon.renderQueueOffset : 0;
+    g.descriptorSet = *set;
+    materials_.push_back(g);
   }
   return {};
 }
@@ -252,7 +302,7 @@ Result<std::unique_ptr<GpuAvatar>> Renderer::upload(const avatar::AvatarAsset& a
   materials.push_back(avatar::Material{});
   Uploader up(device_);
   if (auto s = a->uploadMesh(device_, up, mesh); !s) return Error{s.error()};
-  auto textureOf = a->uploadTextures(device_, up, asset);
+  auto textureOf = a->uploadTextures(device_, up, materials, asset.images);
   if (!textureOf) return Error{textureOf.error()};
   if (auto s = a->createMaterials(device_, up, materialLayout_.get(), materials, *textureOf); !s)
     return Error{s.error()};

@@ -11,10 +11,17 @@
 
 namespace embody::engine {
 
+// Textures a material binds (set 1, bindings 1..7): base colour, emissive, then MToon's shade,
+// shading shift, rim, matcap and outline width (the white texture where a material has none).
+constexpr int kMaterialTextureCount = 7;
+
 struct GpuMaterial {
   avatar::AlphaMode alphaMode = avatar::AlphaMode::Opaque;
   bool doubleSided = false;
-  // set 1: the material's uniform block (shaders/material.glsl), base-colour and emissive textures
+  bool outline = false;  // MToon outline: an inverted-hull pass after the surface
+  bool zwrite = true;    // BLEND writes depth only with MToon's transparentWithZWrite
+  int queueOffset = 0;   // MToon renderQueueOffsetNumber (BLEND): later draws have higher offsets
+  // set 1: the material's uniform block (shaders/material.glsl) and its textures
   VkDescriptorSet descriptorSet = VK_NULL_HANDLE;
 };
 
@@ -57,9 +64,13 @@ class GpuAvatar {
   GpuAvatar() = default;
   // Steps of Renderer::upload.
   Status uploadMesh(const Device& device, Uploader& up, const avatar::SkinnedMesh& mesh);
-  Result<std::vector<int>> uploadTextures(const Device& device, Uploader& up, const avatar::AvatarAsset& asset);
+  struct TextureIndex {  // per asset image: its texture as sRGB colour and as linear data (0: none)
+    std::vector<int> srgb, linear;
+  };
+  Result<TextureIndex> uploadTextures(const Device& device, Uploader& up, const std::vector<avatar::Material>& materials,
+                                      const std::vector<avatar::Image>& images);
   Status createMaterials(const Device& device, Uploader& up, VkDescriptorSetLayout layout,
-                         const std::vector<avatar::Material>& materials, const std::vector<int>& textureOf);
+                         const std::vector<avatar::Material>& materials, const TextureIndex& textureOf);
   void buildDrawLists(const avatar::AvatarAsset& asset, const std::vector<avatar::Material>& materials);
   Buffer vertices_, indices_, materialBlocks_;
   std::vector<Image> textures_;

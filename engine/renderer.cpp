@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 #include <string>
+#include <utility>
 
 namespace embody::engine {
 
@@ -20,6 +21,7 @@ struct SceneBlock {
 // Mirror of `Push` in shaders/common.glsl.
 struct PushBlock {
   uint32_t viewBase = 0;
+  float aspect = 1.0f;  // target width / height
 };
 constexpr VkShaderStageFlags kPushStages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
 
@@ -238,7 +240,8 @@ void Renderer::drawAvatarList(VkCommandBuffer cmd, const GpuAvatar& a, const std
                               std::span<const uint32_t> order, VkPipeline pipeline) {
   if (draws.empty()) return;
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
-  for (size_t i = 0; i < draws.size(); ++i) {
+  const size_t count = order.empty() ? draws.size() : order.size();
+  for (size_t i = 0; i < count; ++i) {
     const GpuDraw& d = draws[order.empty() ? i : order[i]];
     const GpuMaterial& m = a.materials()[d.material];
     vkCmdSetCullMode(cmd, m.doubleSided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
@@ -249,11 +252,48 @@ void Renderer::drawAvatarList(VkCommandBuffer cmd, const GpuAvatar& a, const std
   }
 }
 
-void Renderer::sortBlendBackToFront(FrameSlot& f, glm::vec3 eye) {
+void Renderer::drawOutlines(VkCommandBuffer cmd, const GpuAvatar& a, std::span<const GpuDraw> draws,
+                            VkPipeline pipeline) {
+  bool bound = false;
+  for (const GpuDraw& d : draws) {
+    const GpuMaterial& m = a.materials()[d.material];
+    if (!m.outline) continue;
+    if (!bound) {
+      vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+      vkCmdSetCullMode(cmd, VK_CULL_MODE_FRONT_BIT);  // the hull's inside: always, whatever doubleSided says
+      bound = true;
+    }
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout_.get(), 1, 1, &m.descriptorSet, 0,
+                            nullptr);
+    vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, 0, 0);
+    ++stats_.drawCalls;
+  }
+}
+
+void Renderer::drawBlended(VkCommandBuffer cmd, const GpuAvatar& a, const std::vector<GpuDraw>& draws,
+                           std::span<const uint32_t> order, const PipelineSet& p) {
+  for (uint32_t i : order) {
+    const GpuDraw& d = draws[i];
+    const GpuMaterial& m = a.materials()[d.material];
+    // Blended surfaces test against depth but do not occlude, unless transparentWithZWrite.
+    vkCmdSetDepthWriteEnable(cmd, m.zwrite ? VK_TRUE : VK_FALSE);
+    drawAvatarList(cmd, a, draws, std::span<const uint32_t>(&i, 1), p.blend.get());
+    if (m.outline) drawOutlines(cmd, a, std::span<const GpuDraw>(&d, 1), p.outlineBlend.get());
+  }
+  vkCmdSetDepthWriteEnable(cmd, VK_TRUE);
+}
+
+void Renderer::sortBlendBackToFront(FrameSlot& f, const GpuAvatar& a, const std::vector<GpuDraw>& draws,
+                                    glm::vec3 eye) {
   f.blendOrder.resize(f.blendCenters.size());
   for (uint32_t i = 0; i < f.blendOrder.size(); ++i) f.blendOrder[i] = i;
+  auto key = [&](uint32_t i) {
+    const GpuMaterial& m = a.materials()[draws[i].material];
+    return std::pair<int, int>(m.zwrite ? 0 : 1, m.queueOffset);
+  };
   // std::sort (stable_sort may allocate); equal distances keep file order.
   std::sort(f.blendOrder.begin(), f.blendOrder.end(), [&](uint32_t x, uint32_t y) {
+    if (key(x) != key(y)) return key(x) < key(y);
     const float dx = glm::dot(f.blendCenters[x] - eye, f.blendCenters[x] - eye);
     const float dy = glm::dot(f.blendCenters[y] - eye, f.blendCenters[y] - eye);
     return dx != dy ? dx > dy : x < y;
@@ -270,8 +310,9 @@ void Renderer::drawLines(VkCommandBuffer cmd, const PipelineSet& p, VkBuffer buf
 }
 
 // The pass's contents: opaque and alpha-tested avatar first (it occludes most of what follows, so
-// the grid and gizmos behind it are rejected by the depth test before shading), then the grid and
-// gizmos, then blended avatar surfaces back to front, then the skeleton overlay on top.
+// the grid and gizmos behind it are rejected by the depth test before shading) and their MToon
+// outlines, then the grid and gizmos, then blended avatar surfaces (MToon render queue order, back
+// to front, each with its outline), then the skeleton overlay on top.
 void Renderer::recordScene(VkCommandBuffer cmd, const PipelineSet& p, FrameSlot& f, glm::vec3 eye) {
   const GpuAvatar* a = f.avatar;
   const GpuDrawList* list = a ? (f.firstPerson ? &a->firstPerson() : &a->thirdPerson()) : nullptr;
@@ -285,15 +326,15 @@ void Renderer::recordScene(VkCommandBuffer cmd, const PipelineSet& p, FrameSlot&
     vkCmdBindIndexBuffer(cmd, a->indexBuffer(), 0, VK_INDEX_TYPE_UINT32);
     drawAvatarList(cmd, *a, list->opaque, {}, p.opaque.get());
     drawAvatarList(cmd, *a, list->mask, {}, p.mask.get());
+    drawOutlines(cmd, *a, list->opaque, p.outlineOpaque.get());
+    drawOutlines(cmd, *a, list->mask, p.outlineMask.get());
   }
   if (f.grid) drawLines(cmd, p, grid_.handle(), 0, gridVertexCount_);
   if (f.lineCount > 0) drawLines(cmd, p, f.lines.handle(), 0, f.lineCount);
   if (a && !list->blend.empty()) {
-    sortBlendBackToFront(f, eye);
+    sortBlendBackToFront(f, *a, list->blend, eye);
     bindAvatar();
-    vkCmdSetDepthWriteEnable(cmd, VK_FALSE);  // blended surfaces test against depth but do not occlude
-    drawAvatarList(cmd, *a, list->blend, f.blendOrder, p.blend.get());
-    vkCmdSetDepthWriteEnable(cmd, VK_TRUE);
+    drawBlended(cmd, *a, list->blend, f.blendOrder, p);
   }
   if (f.overlayCount > 0) {
     vkCmdSetDepthTestEnable(cmd, VK_FALSE);
@@ -418,7 +459,7 @@ Status Renderer::drawPass(std::span<const Camera> cameras, const PassTarget& tar
   const VkCommandBuffer cmd = f.cmd;
   beginRendering(cmd, target, *att, viewMask);
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout_.get(), 0, 1, &f.set, 0, nullptr);
-  const PushBlock push{viewBase};
+  const PushBlock push{viewBase, float(target.color.extent.width) / float(target.color.extent.height)};
   vkCmdPushConstants(cmd, pipelineLayout_.get(), kPushStages, 0, sizeof(push), &push);
   recordScene(cmd, **pset, f, eye);
   endRendering(cmd, target, *att);

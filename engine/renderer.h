@@ -141,6 +141,7 @@ class Renderer {
   };
   struct PipelineSet {
     UniquePipeline opaque, mask, blend, lines;
+    UniquePipeline outlineOpaque, outlineMask, outlineBlend;  // MToon outline hulls
   };
   using PipelineKey = std::tuple<VkFormat, VkFormat, VkSampleCountFlagBits, uint32_t>;
   struct Transient {  // renderer-owned depth / MSAA colour for a given target shape
@@ -163,11 +164,18 @@ class Renderer {
   void beginRendering(VkCommandBuffer cmd, const PassTarget& target, const PassAttachments& att, uint32_t viewMask);
   void recordScene(VkCommandBuffer cmd, const PipelineSet& p, FrameSlot& f, glm::vec3 eye);
   void endRendering(VkCommandBuffer cmd, const PassTarget& target, const PassAttachments& att);
-  // `order` indexes `draws` (empty: as listed).
+  // `order` lists the indices into `draws` to draw (empty: all, as listed).
   void drawAvatarList(VkCommandBuffer cmd, const GpuAvatar& a, const std::vector<GpuDraw>& draws,
                       std::span<const uint32_t> order, VkPipeline pipeline);
+  // The outline hulls of the draws whose material has one (front faces culled).
+  void drawOutlines(VkCommandBuffer cmd, const GpuAvatar& a, std::span<const GpuDraw> draws, VkPipeline pipeline);
+  // Blended draws in `order`, each followed by its outline; depth writes per material.
+  void drawBlended(VkCommandBuffer cmd, const GpuAvatar& a, const std::vector<GpuDraw>& draws,
+                   std::span<const uint32_t> order, const PipelineSet& p);
   void drawLines(VkCommandBuffer cmd, const PipelineSet& p, VkBuffer buffer, VkDeviceSize offset, uint32_t count);
-  static void sortBlendBackToFront(FrameSlot& f, glm::vec3 eye);
+  // MToon's render order: transparentWithZWrite before plain blending, then by
+  // renderQueueOffsetNumber, then back to front.
+  static void sortBlendBackToFront(FrameSlot& f, const GpuAvatar& a, const std::vector<GpuDraw>& draws, glm::vec3 eye);
 
   const Device& device_;
   UniqueDescriptorSetLayout sceneLayout_, materialLayout_;

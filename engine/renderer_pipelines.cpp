@@ -1,6 +1,7 @@
 // Pipeline construction for Renderer: one skinned pipeline per alpha mode (a specialization
-// constant selects it, so OPAQUE keeps early depth testing) and one line pipeline, per target
-// format / sample count / view mask. Cull mode, depth test and depth write are dynamic state.
+// constant selects it, so OPAQUE keeps early depth testing), the same three for the MToon outline
+// hull (a second constant), and one line pipeline, per target format / sample count / view mask. Cull mode, depth test and depth write are dynamic state.
+#include <cstddef>
 #include <string>
 
 #include "engine/renderer.h"
@@ -15,9 +16,15 @@ namespace {
 
 struct PipelineDesc {
   VkShaderModule vert, frag;
-  const VkSpecializationInfo* fragSpec = nullptr;
+  const VkSpecializationInfo* spec = nullptr;  // both stages (constant 0: alpha mode, 1: outline)
   bool lines = false;
   bool blend = false;
+};
+
+// Specialization constants of skinned.vert / skinned.frag.
+struct SkinnedSpec {
+  int32_t alphaMode = 0;
+  VkBool32 outline = VK_FALSE;
 };
 
 }  // namespace
@@ -45,17 +52,20 @@ Status Renderer::init() {
   VkDescriptorSetLayout layout = VK_NULL_HANDLE;
   if (vkCreateDescriptorSetLayout(dev, &lci, nullptr, &layout) != VK_SUCCESS) return Error{"descriptor set layout"};
   sceneLayout_ = UniqueDescriptorSetLayout(dev, layout);
-  const VkDescriptorSetLayoutBinding materialBindings[3] = {
-      {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
-      {1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr},
-      {2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr}};
-  lci.bindingCount = 3;
+  // The vertex stage reads the block and the outline-width texture (the outline hull); every
+  // texture binding has the same stages so that one descriptor write fills them all.
+  constexpr VkShaderStageFlags kMaterialStages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+  VkDescriptorSetLayoutBinding materialBindings[1 + kMaterialTextureCount];
+  materialBindings[0] = {0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1, kMaterialStages, nullptr};
+  for (uint32_t b = 1; b <= kMaterialTextureCount; ++b)
+    materialBindings[b] = {b, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, kMaterialStages, nullptr};
+  lci.bindingCount = 1 + kMaterialTextureCount;
   lci.pBindings = materialBindings;
   if (vkCreateDescriptorSetLayout(dev, &lci, nullptr, &layout) != VK_SUCCESS) return Error{"descriptor set layout"};
   materialLayout_ = UniqueDescriptorSetLayout(dev, layout);
 
   VkDescriptorSetLayout sets[2] = {sceneLayout_.get(), materialLayout_.get()};
-  VkPushConstantRange push{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(uint32_t)};
+  VkPushConstantRange push{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, 2 * sizeof(uint32_t)};
   VkPipelineLayoutCreateInfo pli{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
   pli.setLayoutCount = 2;
   pli.pSetLayouts = sets;
@@ -77,10 +87,11 @@ Result<const Renderer::PipelineSet*> Renderer::pipelines(const PipelineKey& key)
     stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
     stages[0].module = d.vert;
     stages[0].pName = "main";
+    stages[0].pSpecializationInfo = d.spec;
     stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
     stages[1].module = d.frag;
     stages[1].pName = "main";
-    stages[1].pSpecializationInfo = d.fragSpec;
+    stages[1].pSpecializationInfo = d.spec;
 
     VkVertexInputBindingDescription binding{0, 0, VK_VERTEX_INPUT_RATE_VERTEX};
     std::vector<VkVertexInputAttributeDescription> attrs;
@@ -165,12 +176,18 @@ Result<const Renderer::PipelineSet*> Renderer::pipelines(const PipelineKey& key)
   };
 
   PipelineSet set;
-  const VkSpecializationMapEntry entry{0, 0, sizeof(int32_t)};
+  const VkSpecializationMapEntry entries[2] = {{0, offsetof(SkinnedSpec, alphaMode), sizeof(int32_t)},
+                                               {1, offsetof(SkinnedSpec, outline), sizeof(VkBool32)}};
   for (int32_t mode = 0; mode < 3; ++mode) {
-    VkSpecializationInfo spec{1, &entry, sizeof(int32_t), &mode};
-    auto p = build({skinnedVert_.get(), skinnedFrag_.get(), &spec, false, mode == 2});
-    if (!p) return Error{p.error()};
-    (mode == 0 ? set.opaque : mode == 1 ? set.mask : set.blend) = std::move(p).value();
+    for (VkBool32 outline : {VK_FALSE, VK_TRUE}) {
+      const SkinnedSpec values{mode, outline};
+      const VkSpecializationInfo spec{2, entries, sizeof(values), &values};
+      auto p = build({skinnedVert_.get(), skinnedFrag_.get(), &spec, false, mode == 2});
+      if (!p) return Error{p.error()};
+      UniquePipeline* slot[2][3] = {{&set.opaque, &set.mask, &set.blend},
+                                    {&set.outlineOpaque, &set.outlineMask, &set.outlineBlend}};
+      *slot[outline][mode] = std::move(p).value();
+    }
   }
   auto lines = build({linesVert_.get(), linesFrag_.get(), nullptr, true, false});
   if (!lines) return Error{lines.error()};

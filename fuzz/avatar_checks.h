@@ -40,6 +40,21 @@ inline void checkAvatar(const avatar::AvatarAsset& a) {
     EMBODY_FUZZ_CHECK(std::isfinite(mat.baseColorFactor.r + mat.baseColorFactor.g + mat.baseColorFactor.b +
                                     mat.baseColorFactor.a + mat.emissiveStrength + mat.alphaCutoff));
   }
+  for (const auto& mat : a.materials) {  // MToon: finite, in the specification's ranges, images that exist
+    const auto& t = mat.mtoon;
+    for (int image : {t.shadeImage, t.shadingShiftImage, t.matcapImage, t.rimImage, t.outlineWidthImage})
+      EMBODY_FUZZ_CHECK(image < static_cast<int>(a.images.size()));
+    EMBODY_FUZZ_CHECK(finite(t.shadeColor) && finite(t.matcapFactor) && finite(t.rimColor) && finite(t.outlineColor) &&
+                      finite(mat.emissiveFactor));
+    EMBODY_FUZZ_CHECK(std::isfinite(t.shadingShift + t.shadingShiftScale + t.rimLift));
+    EMBODY_FUZZ_CHECK(t.shadingToony >= 0.0f && t.shadingToony <= 1.0f && t.giEqualization >= 0.0f &&
+                      t.giEqualization <= 1.0f && t.rimLightingMix >= 0.0f && t.rimLightingMix <= 1.0f &&
+                      t.outlineLightingMix >= 0.0f && t.outlineLightingMix <= 1.0f);
+    EMBODY_FUZZ_CHECK(t.rimFresnelPower >= 0.0f && t.rimFresnelPower <= 100.0f && t.outlineWidth >= 0.0f &&
+                      t.outlineWidth <= 1.0f && t.renderQueueOffset >= -9 && t.renderQueueOffset <= 9);
+    for (const auto* tt : {&t.shadeTransform, &t.shadingShiftTransform, &t.rimTransform, &t.outlineWidthTransform})
+      EMBODY_FUZZ_CHECK(tt->texCoord == 0 || tt->texCoord == 1);
+  }
   for (const auto& img : a.images)
     EMBODY_FUZZ_CHECK(img.rgba.size() == static_cast<size_t>(img.width) * static_cast<size_t>(img.height) * 4);
   for (int j : a.humanoid.bones) EMBODY_FUZZ_CHECK(j < static_cast<int>(joints));

@@ -12,6 +12,7 @@
 #include "avatar/procedural/default_avatar.h"
 #include "avatar/humanoid_test_files.h"
 #include "ik/spine/spine_description.h"
+#include "tests/support/mtoon_test_avatar.h"
 #include "tracking/pose_source.h"
 #include "tracking/trace.h"
 
@@ -112,6 +113,32 @@ void vrmSeeds() {
   write("bone_map/partial.json", json{{"hips", a.skeleton.joints[0].name}, {"head", head}}.dump());
 }
 
+// MToon: the JSON of the project's VRM 1.0 and 0.x MToon test avatars (materials, textures and
+// extensions; the vrm target does not read buffers), and a 1.0 material with hostile values.
+void mtoonSeeds() {
+  auto keep = [](const Result<std::vector<uint8_t>>& glb, const char* name) {
+    if (!glb.ok()) return;
+    (void)test::editGlbJson(glb.value(), [&](json& doc) {
+      json seed = json::object();
+      for (const char* key : {"extensionsUsed", "extensions", "materials", "textures"})
+        if (doc.contains(key)) seed[key] = doc[key];
+      write(std::string("vrm/") + name, seed.dump(1));
+    });
+  };
+  keep(test::mtoonVrm1File(), "mtoon1.json");
+  keep(test::mtoonVrm0File(), "mtoon0.json");
+  write("vrm/mtoon1_hostile.json",
+        json{{"textures", {{{"source", 1}}, {{"source", 7}}}},
+             {"materials",
+              {{{"extensions",
+                 {{"VRMC_materials_mtoon",
+                   {{"shadingToonyFactor", "high"}, {"giEqualizationFactor", 7}, {"shadeColorFactor", {0.5, "x"}},
+                    {"outlineWidthMode", "screenCoordinates"}, {"outlineWidthFactor", 1e30},
+                    {"shadeMultiplyTexture", {{"index", 1}}}, {"rimMultiplyTexture", {{"index", 0}, {"texCoord", 3}}},
+                    {"renderQueueOffsetNumber", -42}}}}}}}}}
+            .dump(1));
+}
+
 // A BVH of the default mannequin's skeleton (offsets in centimetres), three frames.
 void bvhSeeds() {
   const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
@@ -202,6 +229,7 @@ int main(int argc, char** argv) {
   gRoot = argv[1];
   gltfSeeds();
   vrmSeeds();
+  mtoonSeeds();
   bvhSeeds();
   traceSeeds();
   xrPosesSeeds();

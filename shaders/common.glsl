@@ -19,6 +19,7 @@ layout(set = 0, binding = 0, std140) uniform Scene {
 
 layout(push_constant) uniform Push {
   uint viewBase;  // first view of this pass; gl_ViewIndex adds 0 or 1 under multiview
+  float aspect;   // the target's width / height (screen-space outline widths)
 } pc;
 
 uint viewIndex() { return pc.viewBase + gl_ViewIndex; }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <glm/gtc/type_ptr.hpp>
 #include <nlohmann/json.hpp>
@@ -110,6 +111,39 @@ json textureInfo(int image, const TextureTransform& t, std::set<std::string>& ex
   return info;
 }
 
+// VRMC_materials_mtoon (every property written; textures where the image exists).
+json mtoonJson(const MToon& t, const std::function<bool(int)>& hasImage, std::set<std::string>& extensionsUsed) {
+  auto rgb = [](glm::vec3 c) { return json::array({c.r, c.g, c.b}); };
+  static const char* const kModes[] = {"none", "worldCoordinates", "screenCoordinates"};
+  json e = {{"specVersion", "1.0"},
+            {"transparentWithZWrite", t.transparentWithZWrite},
+            {"renderQueueOffsetNumber", t.renderQueueOffset},
+            {"shadeColorFactor", rgb(t.shadeColor)},
+            {"shadingShiftFactor", t.shadingShift},
+            {"shadingToonyFactor", t.shadingToony},
+            {"giEqualizationFactor", t.giEqualization},
+            {"matcapFactor", rgb(t.matcapFactor)},
+            {"parametricRimColorFactor", rgb(t.rimColor)},
+            {"parametricRimFresnelPowerFactor", t.rimFresnelPower},
+            {"parametricRimLiftFactor", t.rimLift},
+            {"rimLightingMixFactor", t.rimLightingMix},
+            {"outlineWidthMode", kModes[static_cast<int>(t.outlineMode)]},
+            {"outlineWidthFactor", t.outlineWidth},
+            {"outlineColorFactor", rgb(t.outlineColor)},
+            {"outlineLightingMixFactor", t.outlineLightingMix}};
+  if (hasImage(t.shadeImage)) e["shadeMultiplyTexture"] = textureInfo(t.shadeImage, t.shadeTransform, extensionsUsed);
+  if (hasImage(t.shadingShiftImage)) {
+    e["shadingShiftTexture"] = textureInfo(t.shadingShiftImage, t.shadingShiftTransform, extensionsUsed);
+    e["shadingShiftTexture"]["scale"] = t.shadingShiftScale;
+  }
+  if (hasImage(t.matcapImage)) e["matcapTexture"] = textureInfo(t.matcapImage, {}, extensionsUsed);
+  if (hasImage(t.rimImage)) e["rimMultiplyTexture"] = textureInfo(t.rimImage, t.rimTransform, extensionsUsed);
+  if (hasImage(t.outlineWidthImage))
+    e["outlineWidthMultiplyTexture"] = textureInfo(t.outlineWidthImage, t.outlineWidthTransform, extensionsUsed);
+  extensionsUsed.insert("VRMC_materials_mtoon");
+  return e;
+}
+
 json materialJson(const Material& m, const AvatarAsset& asset, std::set<std::string>& extensionsUsed) {
   auto hasImage = [&](int image) { return image >= 0 && static_cast<size_t>(image) < asset.images.size(); };
   json pbr = {{"baseColorFactor", {m.baseColorFactor.r, m.baseColorFactor.g, m.baseColorFactor.b, m.baseColorFactor.a}},
@@ -138,6 +172,7 @@ json materialJson(const Material& m, const AvatarAsset& asset, std::set<std::str
     mat["alphaMode"] = "BLEND";
   }
   if (m.doubleSided) mat["doubleSided"] = true;
+  if (m.isMToon) mat["extensions"]["VRMC_materials_mtoon"] = mtoonJson(m.mtoon, hasImage, extensionsUsed);
   return mat;
 }
 
@@ -184,7 +219,9 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
   bool secondUv = false;  // TEXCOORD_1 is written when a material reads it or a vertex sets it
   for (const auto& v : mesh.vertices) secondUv |= v.uv1 != glm::vec2(0.0f);
   for (const auto& m : asset.materials)
-    secondUv |= m.baseColorTransform.texCoord == 1 || m.emissiveTransform.texCoord == 1;
+    secondUv |= m.baseColorTransform.texCoord == 1 || m.emissiveTransform.texCoord == 1 ||
+                (m.isMToon && (m.mtoon.shadeTransform.texCoord == 1 || m.mtoon.shadingShiftTransform.texCoord == 1 ||
+                               m.mtoon.rimTransform.texCoord == 1 || m.mtoon.outlineWidthTransform.texCoord == 1));
   for (const auto& v : mesh.vertices) {
     positions.insert(positions.end(), {v.position.x, v.position.y, v.position.z});
     lo = glm::min(lo, v.position);

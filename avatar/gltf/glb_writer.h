@@ -5,7 +5,7 @@
 // vertex has more than four influences; TEXCOORD_1 when a material or vertex uses it), one
 // primitive per draw-list primitive, materials with base colour (factor, texture,
 // KHR_texture_transform), emissive (+ KHR_materials_emissive_strength), KHR_materials_unlit, alpha
-// mode and double-sidedness. Images are embedded as PNG. The skeleton must have a single root
+// mode, double-sidedness and VRMC_materials_mtoon (avatar::MToon, every property). Images are embedded as PNG. The skeleton must have a single root
 // (glTF requires the joints of a skin to share one).
 #include <cstdint>
 #include <string>

@@ -16,6 +16,8 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <limits>
 
+#include "avatar/gltf/mtoon_json.h"
+
 namespace embody::avatar {
 namespace {
 
@@ -834,6 +836,7 @@ Result<AvatarAsset> loadGltfFromMemory(const std::vector<uint8_t>& bytes, const 
   if (auto s = builder.addSkins(); !s.ok()) return Error{s.error()};
   if (auto s = builder.addMeshes(); !s.ok()) return Error{s.error()};
   addMaterialsAndImages(model, asset, warnings);
+  readMToonMaterials(asset, warnings);  // VRMC_materials_mtoon, VRM 0.x materialProperties
   asset.mesh.firstPersonIndices = asset.mesh.indices;
   asset.mesh.firstPersonPrimitives = asset.mesh.primitives;
   return asset;

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <glm/gtc/matrix_transform.hpp>
 #include <sstream>
 
 #include "engine/image_io.h"
@@ -15,6 +16,30 @@ GpuContext::GpuContext() {
   auto d = engine::Device::create(vk.instance(), vk.lavapipe());
   if (!d) FAIL("could not create a lavapipe device: " << d.error());
   device = std::move(d).value();
+}
+
+glm::vec2 TileGrid::corner(int column, int row) const {
+  return {(float(column) - float(columns) * 0.5f) * kPitch + kGap * 0.5f,
+          (float(rows) * 0.5f - float(row + 1)) * kPitch + kGap * 0.5f};
+}
+
+engine::Camera TileGrid::camera() const {
+  const float halfHeight = float(rows) * kPitch * 0.5f, distance = 10.0f;
+  const auto fov = engine::FovAngles::symmetric(2.0f * std::atan(halfHeight / distance), float(columns) / float(rows));
+  return engine::cameraFromPose(glm::translate(glm::mat4(1.0f), glm::vec3(0, 0, distance)), fov, 1.0f, 20.0f);
+}
+
+glm::ivec2 TileGrid::pixel(const engine::Camera& cam, int column, int row, glm::vec2 f, uint32_t width,
+                           uint32_t height) const {
+  const glm::vec2 c = corner(column, row) + f * kTile;
+  const glm::vec4 clip = cam.viewProjection() * glm::vec4(c, 0.0f, 1.0f);
+  const glm::vec2 ndc = glm::vec2(clip) / clip.w;
+  return {int((ndc.x * 0.5f + 0.5f) * float(width)), int((ndc.y * 0.5f + 0.5f) * float(height))};
+}
+
+glm::ivec4 rgbaAt(const avatar::Image& img, glm::ivec2 p) {
+  const uint8_t* px = &img.rgba[(size_t(p.y) * size_t(img.width) + size_t(p.x)) * 4];
+  return {px[0], px[1], px[2], px[3]};
 }
 
 avatar::SkeletonPose wobblePose(const avatar::Skeleton& skeleton, float amount) {

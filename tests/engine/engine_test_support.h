@@ -6,6 +6,7 @@
 #include <string>
 
 #include "avatar/avatar_asset.h"
+#include "engine/camera.h"
 #include "engine/device.h"
 #include "tests/support/vulkan_test_instance.h"
 
@@ -21,6 +22,19 @@ struct GpuContext {
 
 // Every joint but the roots turned by a small joint-dependent rotation: a fixed non-rest pose.
 avatar::SkeletonPose wobblePose(const avatar::Skeleton& skeleton, float amount = 0.35f);
+
+// Tiles of 1 m (0.12 m apart) in the z = 0 plane, row 0 at the top, seen head-on from z = 10 m
+// by a camera whose frame they fill (columns x rows in a 4:3 or other aspect).
+struct TileGrid {
+  int columns = 4, rows = 3;
+  static constexpr float kTile = 1.0f, kGap = 0.12f, kPitch = kTile + kGap;
+  glm::vec2 corner(int column, int row) const;  // lower-left corner
+  engine::Camera camera() const;
+  // Pixel of a point given in tile fractions (x right, y up), in a width x height frame.
+  glm::ivec2 pixel(const engine::Camera& cam, int column, int row, glm::vec2 f, uint32_t width, uint32_t height) const;
+};
+
+glm::ivec4 rgbaAt(const avatar::Image& img, glm::ivec2 p);
 
 // Compares `image` with tests/golden/<name>.png (per channel tolerance 5/255, at most 0.1 % of
 // pixels failing). With EMBODY_UPDATE_GOLDENS=1 it (re)writes the golden and its driver string

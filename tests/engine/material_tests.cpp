@@ -25,14 +25,11 @@ using namespace embody;
 
 namespace {
 
-constexpr int kColumns = 4, kRows = 3;
-constexpr float kTile = 1.0f, kGap = 0.12f, kPitch = kTile + kGap;
+const test::TileGrid kGrid{4, 3};
+constexpr float kTile = test::TileGrid::kTile;
 const glm::vec4 kGreen(0.0f, 0.63f, 0.0f, 1.0f), kRed(0.78f, 0.0f, 0.0f, 1.0f);
 
-// Lower-left corner of tile (column, row) in the z = 0 plane, row 0 at the top.
-glm::vec2 tileCorner(int column, int row) {
-  return {(float(column) - kColumns * 0.5f) * kPitch + kGap * 0.5f, (kRows * 0.5f - float(row + 1)) * kPitch + kGap * 0.5f};
-}
+glm::vec2 tileCorner(int column, int row) { return kGrid.corner(column, row); }
 
 // Paints a check mark (or a cross) in white over a coloured square of `size` pixels at (x0, y0).
 void paintGlyph(avatar::Image& img, int x0, int y0, int size, glm::vec4 background, bool check) {
@@ -175,25 +172,13 @@ avatar::AvatarAsset materialTestAsset() {
   return a;
 }
 
-// The camera looks down -Z at the tiles from 10 m; the 4 x 3 tiles fill a 256 x 192 frame.
-engine::Camera tileCamera() {
-  const float halfHeight = kRows * kPitch * 0.5f, distance = 10.0f;
-  const auto fov = engine::FovAngles::symmetric(2.0f * std::atan(halfHeight / distance), float(kColumns) / kRows);
-  return engine::cameraFromPose(glm::translate(glm::mat4(1.0f), glm::vec3(0, 0, distance)), fov, 1.0f, 20.0f);
-}
+engine::Camera tileCamera() { return kGrid.camera(); }
 
-// Pixel of a point given in tile fractions, in a width x height frame.
 glm::ivec2 pixelOf(const engine::Camera& cam, int column, int row, glm::vec2 f, uint32_t width, uint32_t height) {
-  const glm::vec2 c = tileCorner(column, row) + f * kTile;
-  const glm::vec4 clip = cam.viewProjection() * glm::vec4(c, 0.0f, 1.0f);
-  const glm::vec2 ndc = glm::vec2(clip) / clip.w;
-  return {int((ndc.x * 0.5f + 0.5f) * float(width)), int((ndc.y * 0.5f + 0.5f) * float(height))};
+  return kGrid.pixel(cam, column, row, f, width, height);
 }
 
-glm::ivec4 rgbaAt(const avatar::Image& img, glm::ivec2 p) {
-  const uint8_t* px = &img.rgba[(size_t(p.y) * img.width + size_t(p.x)) * 4];
-  return {px[0], px[1], px[2], px[3]};
-}
+using test::rgbaAt;
 
 // Share of a tile's inner pixels (10 % margin) that are green-dominant among the coloured ones.
 float greenShare(const avatar::Image& img, const engine::Camera& cam, int column, int row) {
