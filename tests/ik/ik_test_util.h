@@ -43,11 +43,28 @@ inline Model randomAllTypesModel(std::mt19937& rng, bool coupled = false) {
     b.addEquality("couple swing-ball2", {swing, 0}, 1.0, {ball2, 1}, -0.7);
     b.addEquality("couple rev-branch", {rev, 0}, 1.0, {branch, 0}, 0.4);
   }
-  b.addTask({.name = "pos_xz", .type = TaskType::Position, .joint = tip,
-              .offset = Eigen::Vector3d(0.05, 0.02, -0.03), .axes = kAxisX | kAxisZ, .level = 0});
-  b.addTask({.name = "orient", .type = TaskType::Orientation, .joint = ball2, .level = 1});
-  b.addTask({.name = "pose", .type = TaskType::Pose, .joint = branch, .level = 1});
-  b.addTask({.name = "com", .type = TaskType::CenterOfMass, .joint = branch, .level = 2});
+  TaskDesc t;
+  t.name = "pos_xz";
+  t.type = TaskType::Position;
+  t.joint = tip;
+  t.axes = kAxisX | kAxisZ;
+  t.offset = Eigen::Vector3d(0.05, 0.02, -0.03);
+  t.level = 0;
+  b.addTask(t);
+  t.name = "orient";
+  t.type = TaskType::Orientation;
+  t.joint = ball2;
+  t.level = 1;
+  b.addTask(t);
+  t.name = "pose";
+  t.type = TaskType::Pose;
+  t.joint = branch;
+  t.level = 1;
+  b.addTask(t);
+  t.name = "com";
+  t.type = TaskType::CenterOfMass;
+  t.level = 2;
+  b.addTask(t);
   Result<Model> m = b.build();
   if (!m) throw std::runtime_error(m.error());
   return std::move(m).value();
