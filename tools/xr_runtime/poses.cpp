@@ -25,11 +25,16 @@ std::string toBodySamples(const tracking::Trace& trace, const std::string& name,
     return name + ": the samples' times span more than a day";
   out.reserve(trace.samples.size());
   for (const tracking::PoseSample& p : trace.samples) {
+    // Lost tracking is an identity pose marked invalid, never NaN (a BVH chain that overflows).
+    auto clean = [&](tracking::TrackerId id) {
+      const TrackerPose& t = p[id];
+      return t.valid && tracking::isUsable(t) ? t : TrackerPose{};
+    };
     BodySample s;
     s.t = p.time;
-    s.head = p[tracking::TrackerId::Head];
-    s.left = p[tracking::TrackerId::LeftHand];
-    s.right = p[tracking::TrackerId::RightHand];
+    s.head = clean(tracking::TrackerId::Head);
+    s.left = clean(tracking::TrackerId::LeftHand);
+    s.right = clean(tracking::TrackerId::RightHand);
     s.leftTrigger = p.triggers[0];
     s.rightTrigger = p.triggers[1];
     out.push_back(s);
