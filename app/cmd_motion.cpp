@@ -89,6 +89,99 @@ int list() {
   return 0;
 }
 
+// What one tracker does over a whole motion.
+struct TrackerRange {
+  size_t valid = 0;
+  glm::vec3 lo{1e9f}, hi{-1e9f};
+  float path = 0.0f, maxSpeed = 0.0f;
+  glm::vec3 first{0.0f}, last{0.0f};
+  bool any = false;
+};
+using TrackerRanges = std::array<TrackerRange, kTrackerCount>;
+
+// Walks the motion at `rate` Hz over `n` samples and summarises each tracker.
+TrackerRanges walkMotion(PoseSource& s, double rate, size_t n) {
+  TrackerRanges r{};
+  for (size_t i = 0; i < n; ++i) {
+    const PoseSample p = s.sample(static_cast<double>(i) / rate);
+    for (auto id : kAllTrackers) {
+      const TrackerPose& t = p[id];
+      TrackerRange& g = r[static_cast<size_t>(index(id))];
+      if (!t.valid) continue;
+      ++g.valid;
+      g.lo = glm::min(g.lo, t.position);
+      g.hi = glm::max(g.hi, t.position);
+      if (g.any) {
+        const float d = glm::length(t.position - g.last);
+        g.path += d;
+        g.maxSpeed = std::max(g.maxSpeed, d * static_cast<float>(rate));
+      } else {
+        g.first = t.position;
+      }
+      g.last = t.position;
+      g.any = true;
+    }
+  }
+  return r;
+}
+
+// The `embody motion info --json` object (the text output prints from it too).
+nlohmann::json motionInfoJson(const PoseSource& s, const SourceOptions& opts, const TrackerRanges& r, size_t n) {
+  nlohmann::json j;
+  j["source"] = s.name();
+  j["trackers"] = nlohmann::json::array();
+  for (auto id : kAllTrackers)
+    if (s.trackers().has(id)) j["trackers"].push_back(trackerKey(id));
+  j["duration_s"] = s.duration();
+  j["periodic"] = s.periodic();
+  j["native_rate_hz"] = s.nativeRate();
+  j["frames"] = s.frameCount();
+  j["notes"] = s.notes();
+  j["user_height_m"] = opts.userHeight;
+  nlohmann::json per = nlohmann::json::object();
+  for (auto id : kAllTrackers) {
+    const TrackerRange& g = r[static_cast<size_t>(index(id))];
+    if (!s.trackers().has(id)) continue;
+    nlohmann::json t = {{"valid_fraction", static_cast<double>(g.valid) / static_cast<double>(n)}};
+    if (g.any) {
+      t["min"] = {g.lo.x, g.lo.y, g.lo.z};
+      t["max"] = {g.hi.x, g.hi.y, g.hi.z};
+      t["path_m"] = g.path;
+      t["displacement_m"] = glm::length(glm::vec2(g.last.x - g.first.x, g.last.z - g.first.z));
+      t["max_speed_m_s"] = g.maxSpeed;
+    }
+    per[std::string(trackerKey(id))] = t;
+  }
+  j["per_tracker"] = per;
+  return j;
+}
+
+void printMotionInfo(const PoseSource& s, const TrackerRanges& r, const nlohmann::json& j,
+                     const runtime::TaskLayout& layout) {
+  std::printf("source:    %s\n", s.name().c_str());
+  std::printf("trackers:  %s\n", trackerList(s.trackers()).c_str());
+  std::printf("duration:  %.3f s%s", s.duration(), s.periodic() ? " (repeats)" : "");
+  if (s.frameCount() > 0) std::printf(", %zu frames at %.2f Hz", s.frameCount(), s.nativeRate());
+  std::printf("\n");
+  for (const auto& note : s.notes()) std::printf("note:      %s\n", note.c_str());
+  std::printf("\n%-11s %6s %20s %20s %8s %8s\n", "tracker", "valid", "height (y) m", "path m", "moved m", "max m/s");
+  for (auto id : kAllTrackers) {
+    if (!s.trackers().has(id)) continue;
+    const TrackerRange& g = r[static_cast<size_t>(index(id))];
+    const auto& t = j["per_tracker"][std::string(trackerKey(id))];
+    if (!g.any) {
+      std::printf("%-11s %5.0f%%  never valid\n", std::string(trackerKey(id)).c_str(), 0.0);
+      continue;
+    }
+    char height[32];
+    std::snprintf(height, sizeof height, "%.3f .. %.3f", g.lo.y, g.hi.y);
+    std::printf("%-11s %5.0f%% %20s %20.3f %8.3f %8.2f\n", std::string(trackerKey(id)).c_str(),
+                100.0 * t["valid_fraction"].get<double>(), height, g.path, t["displacement_m"].get<double>(),
+                g.maxSpeed);
+  }
+  std::printf("\nIK tasks for these trackers (priority, task):\n%s", layout.describe().c_str());
+}
+
 int info(app::Argv argv) {
   app::Args args("embody motion info", "Describes a pose source: trackers, duration, rate, notes, and what the "
                                        "trackers do over the whole motion.");
@@ -113,88 +206,15 @@ int info(app::Argv argv) {
   // Walk the motion at 90 Hz (or its native rate) and summarise each tracker.
   const double rate = s.nativeRate() > 0.0 ? s.nativeRate() : 90.0;
   const size_t n = static_cast<size_t>(std::floor(s.duration() * rate + 1e-6)) + 1;
-  struct Range {
-    size_t valid = 0;
-    glm::vec3 lo{1e9f}, hi{-1e9f};
-    float path = 0.0f, maxSpeed = 0.0f;
-    glm::vec3 first{0.0f}, last{0.0f};
-    bool any = false;
-  };
-  std::array<Range, kTrackerCount> r{};
-  for (size_t i = 0; i < n; ++i) {
-    const PoseSample p = s.sample(static_cast<double>(i) / rate);
-    for (auto id : kAllTrackers) {
-      const TrackerPose& t = p[id];
-      Range& g = r[static_cast<size_t>(index(id))];
-      if (!t.valid) continue;
-      ++g.valid;
-      g.lo = glm::min(g.lo, t.position);
-      g.hi = glm::max(g.hi, t.position);
-      if (g.any) {
-        const float d = glm::length(t.position - g.last);
-        g.path += d;
-        g.maxSpeed = std::max(g.maxSpeed, d * static_cast<float>(rate));
-      } else {
-        g.first = t.position;
-      }
-      g.last = t.position;
-      g.any = true;
-    }
-  }
-  nlohmann::json j;
-  j["source"] = s.name();
-  j["trackers"] = nlohmann::json::array();
-  for (auto id : kAllTrackers)
-    if (s.trackers().has(id)) j["trackers"].push_back(trackerKey(id));
-  j["duration_s"] = s.duration();
-  j["periodic"] = s.periodic();
-  j["native_rate_hz"] = s.nativeRate();
-  j["frames"] = s.frameCount();
-  j["notes"] = s.notes();
-  j["user_height_m"] = opts.userHeight;
-  nlohmann::json per = nlohmann::json::object();
-  for (auto id : kAllTrackers) {
-    const Range& g = r[static_cast<size_t>(index(id))];
-    if (!s.trackers().has(id)) continue;
-    nlohmann::json t = {{"valid_fraction", static_cast<double>(g.valid) / static_cast<double>(n)}};
-    if (g.any) {
-      t["min"] = {g.lo.x, g.lo.y, g.lo.z};
-      t["max"] = {g.hi.x, g.hi.y, g.hi.z};
-      t["path_m"] = g.path;
-      t["displacement_m"] = glm::length(glm::vec2(g.last.x - g.first.x, g.last.z - g.first.z));
-      t["max_speed_m_s"] = g.maxSpeed;
-    }
-    per[std::string(trackerKey(id))] = t;
-  }
-  j["per_tracker"] = per;
+  const TrackerRanges r = walkMotion(s, rate, n);
+  nlohmann::json j = motionInfoJson(s, opts, r, n);
   const runtime::TaskLayout layout = runtime::taskLayoutFor(s.trackers());
   if (args.has("json")) {
     j["inferred_lower_body"] = layout.inferLowerBody;
     std::printf("%s\n", j.dump(2).c_str());
     return 0;
   }
-  std::printf("source:    %s\n", s.name().c_str());
-  std::printf("trackers:  %s\n", trackerList(s.trackers()).c_str());
-  std::printf("duration:  %.3f s%s", s.duration(), s.periodic() ? " (repeats)" : "");
-  if (s.frameCount() > 0) std::printf(", %zu frames at %.2f Hz", s.frameCount(), s.nativeRate());
-  std::printf("\n");
-  for (const auto& note : s.notes()) std::printf("note:      %s\n", note.c_str());
-  std::printf("\n%-11s %6s %20s %20s %8s %8s\n", "tracker", "valid", "height (y) m", "path m", "moved m", "max m/s");
-  for (auto id : kAllTrackers) {
-    if (!s.trackers().has(id)) continue;
-    const Range& g = r[static_cast<size_t>(index(id))];
-    const auto& t = per[std::string(trackerKey(id))];
-    if (!g.any) {
-      std::printf("%-11s %5.0f%%  never valid\n", std::string(trackerKey(id)).c_str(), 0.0);
-      continue;
-    }
-    char height[32];
-    std::snprintf(height, sizeof height, "%.3f .. %.3f", g.lo.y, g.hi.y);
-    std::printf("%-11s %5.0f%% %20s %20.3f %8.3f %8.2f\n", std::string(trackerKey(id)).c_str(),
-                100.0 * t["valid_fraction"].get<double>(), height, g.path, t["displacement_m"].get<double>(),
-                g.maxSpeed);
-  }
-  std::printf("\nIK tasks for these trackers (priority, task):\n%s", layout.describe().c_str());
+  printMotionInfo(s, r, j, layout);
   return 0;
 }
 

@@ -1,7 +1,7 @@
-// The headless OpenXR runtime's EMBODY_XR_POSES input (tools/xr_runtime/poses*.cpp). The runtime
-// is self-contained on purpose (it must not share code paths with the application it tests), so
-// it has its own JSON Lines and BVH readers; every input goes through both, then the accepted
-// samples are replayed by PoseProvider the way xrLocateSpace/xrLocateViews read them.
+// The headless OpenXR runtime's EMBODY_XR_POSES input (tools/xr_runtime/poses.cpp): every input
+// goes through both of its readers (the project's trace reader and BVH reader + bvhToTrace, as
+// the runtime calls them), then the accepted samples are replayed by PoseProvider the way
+// xrLocateSpace/xrLocateViews read them.
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -13,12 +13,12 @@
 namespace {
 
 using embody::xr_runtime::BodySample;
-using embody::xr_runtime::TrackedPose;
+using embody::xr_runtime::TrackerPose;
 
-void checkPose(const TrackedPose& p) {
+void checkPose(const TrackerPose& p) {
   if (!p.valid) return;
-  EMBODY_FUZZ_CHECK(std::isfinite(p.pose.p.x + p.pose.p.y + p.pose.p.z));
-  const float n = glm::length(p.pose.q);
+  EMBODY_FUZZ_CHECK(std::isfinite(p.position.x + p.position.y + p.position.z));
+  const float n = glm::length(p.orientation);
   EMBODY_FUZZ_CHECK(std::isfinite(n) && std::abs(n - 1.0f) < 1e-3f);
 }
 

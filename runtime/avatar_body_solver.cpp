@@ -78,7 +78,7 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
   restQ_ = Eigen::VectorXd::Zero(body_.model.dofs);
   for (size_t k = 0; k < 4; ++k)
     if (limbHinge_[k] >= 0) restQ_[body_.model.joints[size_t(limbHinge_[k])].first_dof] = k < 2 ? 0.15 : 0.3;
-  (void)data_->setConfiguration(restQ_);
+  require(data_->setConfiguration(restQ_));
   lastGoodQ_ = restQ_;
   if (options.userHeight > 0.0f && !options.sameBody.enabled) calibrate(options.userHeight);
   return Status::success();
@@ -131,7 +131,7 @@ void AvatarBodySolver::bindLimbs(ik::JointId leftElbow, ik::JointId rightElbow) 
 // the seated legs, the tracker -> joint frames and the foot planner's rest stance.
 void AvatarBodySolver::measureRest(ik::JointId leftElbow, bool legs) {
   ik::Data rest(body_.model);
-  (void)rest.setConfiguration(Eigen::VectorXd::Zero(body_.model.dofs));
+  require(rest.setConfiguration(Eigen::VectorXd::Zero(body_.model.dofs)));
   ik::kinematics(body_.model, rest, false);
   auto pos = [&](ik::JointId j) { return Eigen::Vector3d(rest.jointFrame(j).translation()); };
   for (size_t k = 0; k < 4; ++k)
@@ -354,10 +354,16 @@ Eigen::Vector3d AvatarBodySolver::toAvatar(const glm::vec3& p) const {
   return fromTracking_ * (scale_ * toEigen(p)) + up_ * floor_;
 }
 
+// The ik::Data setters refuse only non-finite values and unknown ids, which the solver never hands
+// them: a refusal is counted (refusedCalls(), 0 in every test run), the state stays as it was.
+void AvatarBodySolver::require(const Status& s) {
+  if (!s) ++refusedCalls_;
+}
+
 Eigen::Vector3d AvatarBodySolver::eyePosition() const { return data_->jointFrame(body_.head) * eyeInHead_; }
 
 void AvatarBodySolver::resetWarmStart() {
-  (void)data_->setConfiguration(restQ_);
+  require(data_->setConfiguration(restQ_));
   lastGoodQ_ = restQ_;
   heightsCalibrated_ = false;
   seatPlaced_ = false;
@@ -376,81 +382,66 @@ void AvatarBodySolver::setPose(ik::TaskId position, ik::TaskId orientation, cons
   for (ik::TaskId t : {position, orientation}) {
     if (t < 0) continue;
     if (!(weight > 0.0)) {
-      (void)d.setEnabled(t, false);
+      require(d.setEnabled(t, false));
       continue;
     }
-    (void)d.setEnabled(t, true);
-    (void)d.setWeight(t, weight * body_.model.tasks[size_t(t)].desc.weight);
+    require(d.setEnabled(t, true));
+    require(d.setWeight(t, weight * body_.model.tasks[size_t(t)].desc.weight));
     const ik::TaskType type = body_.model.tasks[size_t(t)].desc.type;
     if (type == ik::TaskType::Pose) {
       Eigen::Isometry3d iso = Eigen::Isometry3d::Identity();
       iso.linear() = q.toRotationMatrix();
       iso.translation() = p;
-      (void)d.setTarget(t, iso);
+      require(d.setTarget(t, iso));
     } else if (type == ik::TaskType::Orientation) {
-      (void)d.setTarget(t, q);
+      require(d.setTarget(t, q));
     } else {
-      (void)d.setTarget(t, p);
+      require(d.setTarget(t, p));
     }
   }
 }
 
-void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
+// On the first sample with a tracked head: the vertical offsets that stand the user's ankles and
+// pelvis at the avatar's rest heights, and the stride scaling (avatar leg / user leg).
+void AvatarBodySolver::calibrateHeights(const tracking::GuardedSample& targets) {
+  heightsCalibrated_ = true;
+  const auto& lf = targets.pose[TrackerId::LeftFoot];
+  const auto& rf = targets.pose[TrackerId::RightFoot];
+  if (targets[TrackerId::LeftFoot] == TrackerStatus::Tracked && targets[TrackerId::RightFoot] == TrackerStatus::Tracked) {
+    const double lowest = scale_ * std::min(lf.position.y, rf.position.y);
+    for (auto id : {TrackerId::LeftFoot, TrackerId::RightFoot})
+      heightOffset_[size_t(tracking::index(id))] = restHeight_[size_t(tracking::index(id))] - lowest;
+  }
+  if (targets[TrackerId::Hips] == TrackerStatus::Tracked) {
+    const size_t h = size_t(tracking::index(TrackerId::Hips));
+    heightOffset_[h] = restHeight_[h] - scale_ * targets.pose[TrackerId::Hips].position.y;
+    // Stride scaling: the user's leg (pelvis to ankle) against the avatar's.
+    const double userLeg = scale_ * (targets.pose[TrackerId::Hips].position.y - std::min(lf.position.y, rf.position.y));
+    const double avatarLeg = restHeight_[h] - restHeight_[size_t(tracking::index(TrackerId::LeftFoot))];
+    if (userLeg > 0.2 && avatarLeg > 0.2) legRatio_ = std::clamp(avatarLeg / userLeg, 0.5, 2.0);
+  }
+}
+
+// Tracked feet with a tracked pelvis: strides scaled by the leg ratio about the pelvis's ground
+// point, so a longer-legged user's steps stay within the avatar's legs.
+void AvatarBodySolver::scaleStrides(const tracking::GuardedSample& targets) {
+  const size_t hipsI = size_t(tracking::index(TrackerId::Hips));
+  if (legRatio_ == 1.0 || targets.status[hipsI] == TrackerStatus::Absent) return;
+  const Eigen::Vector3d pelvis = targetPoint_[hipsI];
+  for (auto id : {TrackerId::LeftFoot, TrackerId::RightFoot}) {
+    const size_t i = size_t(tracking::index(id));
+    if (positionTask_[i] < 0 || !data_->enabled(positionTask_[i])) continue;
+    Eigen::Vector3d offset = targetPoint_[i] - pelvis;
+    offset -= up_ * up_.dot(offset);
+    targetPoint_[i] += (legRatio_ - 1.0) * offset;
+    require(data_->setTarget(positionTask_[i], targetPoint_[i]));
+  }
+}
+
+// Three-point mode: the pelvis and the feet are inferred from the head (the foot planner steps).
+void AvatarBodySolver::setInferredLowerBody(const tracking::GuardedSample& targets) {
   ik::Data& d = *data_;
   const size_t headIndex = size_t(tracking::index(TrackerId::Head));
-  if (!heightsCalibrated_ && !options_.sameBody.enabled && targets.status[headIndex] == TrackerStatus::Tracked) {
-    heightsCalibrated_ = true;
-    const auto& lf = targets.pose[TrackerId::LeftFoot];
-    const auto& rf = targets.pose[TrackerId::RightFoot];
-    if (targets[TrackerId::LeftFoot] == TrackerStatus::Tracked && targets[TrackerId::RightFoot] == TrackerStatus::Tracked) {
-      const double lowest = scale_ * std::min(lf.position.y, rf.position.y);
-      for (auto id : {TrackerId::LeftFoot, TrackerId::RightFoot})
-        heightOffset_[size_t(tracking::index(id))] = restHeight_[size_t(tracking::index(id))] - lowest;
-    }
-    if (targets[TrackerId::Hips] == TrackerStatus::Tracked) {
-      const size_t h = size_t(tracking::index(TrackerId::Hips));
-      heightOffset_[h] = restHeight_[h] - scale_ * targets.pose[TrackerId::Hips].position.y;
-      // Stride scaling: the user's leg (pelvis to ankle) against the avatar's.
-      const double userLeg = scale_ * (targets.pose[TrackerId::Hips].position.y - std::min(lf.position.y, rf.position.y));
-      const double avatarLeg = restHeight_[h] - restHeight_[size_t(tracking::index(TrackerId::LeftFoot))];
-      if (userLeg > 0.2 && avatarLeg > 0.2) legRatio_ = std::clamp(avatarLeg / userLeg, 0.5, 2.0);
-    }
-  }
-  // Every tracker's target, in avatar space, as its joint's pose.
-  for (auto id : tracking::kAllTrackers) {
-    const size_t i = size_t(tracking::index(id));
-    const tracking::TrackerPose& tp = targets.pose[id];
-    double w = tp.valid ? statusWeight(targets.status[i]) : 0.0;
-    if (id == TrackerId::Hips && !options_.pelvisRow) w = 0.0;
-    targetPoint_[i] = toAvatar(tp.position) + up_ * heightOffset_[i];
-    targetRotation_[i] = (fromTracking_ * toEigen(tp.orientation)).normalized() * jointFromTracker_[i];
-    if (positionTask_[i] >= 0 && body_.model.tasks[size_t(positionTask_[i])].desc.type == ik::TaskType::Pose) continue;
-    setPose(positionTask_[i], orientationTask_[i], targetPoint_[i], targetRotation_[i], w);
-  }
-  if (layout_.seated) {
-    setSeatedTargets(targets);
-    return;
-  }
-  // Tracked feet with a tracked pelvis: strides scaled by the leg ratio about the pelvis's ground
-  // point, so a longer-legged user's steps stay within the avatar's legs.
-  const size_t hipsI = size_t(tracking::index(TrackerId::Hips));
-  if (!layout_.inferLowerBody && legRatio_ != 1.0 && targets.status[hipsI] != TrackerStatus::Absent) {
-    const Eigen::Vector3d pelvis = targetPoint_[hipsI];
-    for (auto id : {TrackerId::LeftFoot, TrackerId::RightFoot}) {
-      const size_t i = size_t(tracking::index(id));
-      if (positionTask_[i] < 0 || !d.enabled(positionTask_[i])) continue;
-      Eigen::Vector3d offset = targetPoint_[i] - pelvis;
-      offset -= up_ * up_.dot(offset);
-      targetPoint_[i] += (legRatio_ - 1.0) * offset;
-      (void)d.setTarget(positionTask_[i], targetPoint_[i]);
-    }
-  }
-  if (!layout_.inferLowerBody) {
-    setPoleTargets();
-    return;
-  }
-
-  // Three-point mode: the pelvis and the feet are inferred from the head.
   const Eigen::Quaterniond headTurn = targetRotation_[headIndex] * restRotation_[headIndex].conjugate();
   const double yaw = headingOf(headTurn, up_, forward_);
   const Eigen::Quaterniond heading = yawRotation(yaw, up_);
@@ -472,9 +463,34 @@ void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
   // Balance as an inequality: only while the centre of mass is off the support polygon.
   if (balanceTask_ >= 0) {
     const bool over = !solvedOnce_ || planner_.overSupport(com);
-    (void)d.setEnabled(balanceTask_, !over && options_.balanceRow);
-    if (!over) (void)d.setTarget(balanceTask_, planner_.nearestSupportPoint(com, 0.01 * avatarHeight_ / 1.75));
+    require(d.setEnabled(balanceTask_, !over && options_.balanceRow));
+    if (!over) require(d.setTarget(balanceTask_, planner_.nearestSupportPoint(com, 0.01 * avatarHeight_ / 1.75)));
   }
+}
+
+void AvatarBodySolver::setTargets(const tracking::GuardedSample& targets) {
+  const size_t headIndex = size_t(tracking::index(TrackerId::Head));
+  if (!heightsCalibrated_ && !options_.sameBody.enabled && targets.status[headIndex] == TrackerStatus::Tracked)
+    calibrateHeights(targets);
+  // Every tracker's target, in avatar space, as its joint's pose.
+  for (auto id : tracking::kAllTrackers) {
+    const size_t i = size_t(tracking::index(id));
+    const tracking::TrackerPose& tp = targets.pose[id];
+    double w = tp.valid ? statusWeight(targets.status[i]) : 0.0;
+    if (id == TrackerId::Hips && !options_.pelvisRow) w = 0.0;
+    targetPoint_[i] = toAvatar(tp.position) + up_ * heightOffset_[i];
+    targetRotation_[i] = (fromTracking_ * toEigen(tp.orientation)).normalized() * jointFromTracker_[i];
+    if (positionTask_[i] >= 0 && body_.model.tasks[size_t(positionTask_[i])].desc.type == ik::TaskType::Pose) continue;
+    setPose(positionTask_[i], orientationTask_[i], targetPoint_[i], targetRotation_[i], w);
+  }
+  if (layout_.seated) {
+    setSeatedTargets(targets);
+    return;
+  }
+  if (layout_.inferLowerBody)
+    setInferredLowerBody(targets);
+  else
+    scaleStrides(targets);
   setPoleTargets();
 }
 
@@ -496,7 +512,7 @@ void AvatarBodySolver::setSeatedTargets(const tracking::GuardedSample& targets) 
         const Eigen::Vector3d shift = 0.5 * (seat_.hip[0] + seat_.hip[1] - jointPosition(hipJoint_[0]) - jointPosition(hipJoint_[1]));
         Eigen::VectorXd q = d.q();
         q.segment<3>(root.first_dof) += root.desc.rest.linear().transpose() * shift;
-        (void)d.setConfiguration(q);
+        require(d.setConfiguration(q));
       }
       settleSeat = true;
     }
@@ -566,9 +582,10 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   setTargets(targets);
   if (!solvedOnce_ && !layout_.seated) seedStanding(targets);
 
-  // One PIK iteration per call, each timed: the next one starts only when the largest recent
-  // iteration (iterations with many clamping passes cost several times the average) and the
-  // retargeting still fit before the deadline.
+  // One PIK iteration per call, under the runtime's one deadline policy (IterationBudget with
+  // this solver's IterationCostModel): the next one starts only when the largest recent iteration
+  // (iterations with many clamping passes cost several times the average) still fits before the
+  // deadline less the predicted retargeting.
   ik::SolveOptions o;
   o.max_iterations = 1;
   // A cold start (the first solve, or after resetWarmStart) begins far from the targets: the
@@ -582,15 +599,14 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   const int cap = fixed ? request.fixedIterations : options_.maxIterations;
   const int maxIterations = cold ? 4 * cap : cap;
   o.clock = &clock;
+  const TimePoint iterationDeadline = request.deadline - finishCost_.predicted();
+  IterationBudget budget(clock, iterationDeadline, &iterationCost_);
   int iterations = 0;
   bool converged = false, broken = false;
   while (iterations < maxIterations) {
-    const TimePoint start = clock.now();
-    if (!fixed && start + fromSeconds(predictedIteration_ + predictedFinish_) > request.deadline && iterations > 0) break;
-    if (!fixed && start + fromSeconds(predictedFinish_) >= request.deadline) break;
+    // Not even the retargeting fits: no iteration (the first one otherwise always runs).
+    if (!fixed && (clock.now() >= iterationDeadline || !budget.startIteration())) break;
     const ik::SolveReport& report = ik::solve(body_.model, *data_, o);
-    const double cost = toSeconds(clock.now() - start);
-    predictedIteration_ = std::max(cost, 0.9 * predictedIteration_);
     iterations += report.iterations;
     if (report.converged()) converged = true;
     if (report.stop == ik::StopReason::InvalidState) broken = true;
@@ -603,7 +619,7 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   // Never publish a broken configuration: fall back to the last good one.
   broken_ = !data_->q().allFinite() || broken;
   if (broken_) {
-    (void)data_->setConfiguration(lastGoodQ_);
+    require(data_->setConfiguration(lastGoodQ_));
     ik::kinematics(body_.model, *data_, false);
   } else {
     lastGoodQ_ = data_->q();
@@ -624,7 +640,7 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   }
   if (!layout_.seated) guardAgainstCollapse(targets, result, pose);
   fade_.apply(targets.pose.time, pose);
-  predictedFinish_ = std::max(toSeconds(clock.now() - solvedAt), 0.9 * predictedFinish_);
+  finishCost_.observe(clock.now() - solvedAt);
   return result;
 }
 
@@ -650,7 +666,7 @@ bool AvatarBodySolver::seedStanding(const tracking::GuardedSample& targets) {
   in.restHipsHeight = restHeight_[size_t(tracking::index(TrackerId::Hips))];
   in.scale = avatarHeight_ / 1.75;
   const double yaw = seedYaw(in);
-  (void)data_->setConfiguration(placeRoot(body_.model, body_.hips, restQ_, seedPelvis(in, yaw), yaw, up_));
+  require(data_->setConfiguration(placeRoot(body_.model, body_.hips, restQ_, seedPelvis(in, yaw), yaw, up_)));
   ik::kinematics(body_.model, *data_, false);
   return true;
 }

@@ -19,9 +19,9 @@
 // hand the grip pose of the rest hand) maps onto the joint's rest orientation.
 //
 // Budget. The solve runs PIK iterations until converged, the iteration cap, or the deadline minus
-// the predicted cost of one more iteration (the largest recent one), so it returns before the
-// deadline while iterations cost what they did and by the deadline plus at most one iteration
-// when one suddenly costs more.
+// the predicted cost of one more iteration (the runtime's one deadline policy: IterationBudget and
+// IterationCostModel, runtime/clock.h), so it returns before the deadline while iterations cost
+// what they did and by the deadline plus at most one iteration when one suddenly costs more.
 #include <memory>
 
 #include "avatar/avatar_asset.h"
@@ -161,6 +161,8 @@ class AvatarBodySolver final : public BodySolver {
   // ignored; call before each solve.
   void setMarkers(const std::vector<glm::dvec3>& positions, const std::vector<glm::dquat>& rotations);
   size_t markerCount() const { return markerTask_.size(); }
+  // ik::Data setter calls that were refused (non-finite values, unknown ids): 0 unless broken.
+  int refusedCalls() const { return refusedCalls_; }
 
  private:
   AvatarBodySolver(const avatar::AvatarAsset& avatar) : avatar_(avatar) {}
@@ -177,7 +179,12 @@ class AvatarBodySolver final : public BodySolver {
   void addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks);
   void calibrate(float userHeight);
   void useSameBody(const AvatarBodyOptions::SameBody& same);
+  // setTargets' steps: the first sample's height calibration, stride scaling (tracked feet), the
+  // inferred pelvis and feet (three-point).
   void setTargets(const tracking::GuardedSample& targets);
+  void calibrateHeights(const tracking::GuardedSample& targets);
+  void scaleStrides(const tracking::GuardedSample& targets);
+  void setInferredLowerBody(const tracking::GuardedSample& targets);
   void setSeatedTargets(const tracking::GuardedSample& targets);
   // Standing start: the root under the head, facing the head's and hands' heading (body_seed.h).
   // False (nothing changed) without a live head or under a head lower than the standing pelvis.
@@ -185,6 +192,7 @@ class AvatarBodySolver final : public BodySolver {
   void setPoleTargets();
   // After a solve: asks the collapse guard; on a collapse re-seeds and starts the fade.
   void guardAgainstCollapse(const tracking::GuardedSample& targets, const SolveResult& result, avatar::SkeletonPose& pose);
+  void require(const Status& s);  // counts a refused ik::Data call
   // Enables (weight > 0, times the task's own) or disables a position/orientation/pose task pair.
   void setPose(ik::TaskId position, ik::TaskId orientation, const Eigen::Vector3d& p, const Eigen::Quaterniond& q, double weight);
 
@@ -238,10 +246,11 @@ class AvatarBodySolver final : public BodySolver {
   std::array<double, tracking::kTrackerCount> restHeight_{};  // joint pivot above the floor at rest
   bool heightsCalibrated_ = false;
   double legRatio_ = 1.0;  // avatar leg / user leg, for tracked feet
-  double predictedIteration_ = 0.0;  // seconds: the largest recent iteration cost
-  double predictedFinish_ = 0.0;     // seconds: retargeting and residuals after the iterations
+  IterationCostModel iterationCost_;  // one PIK iteration
+  IterationCostModel finishCost_;     // retargeting and residuals after the iterations
   bool solvedOnce_ = false;
   bool calibratedFromHead_ = false;
+  int refusedCalls_ = 0;
 };
 
 }  // namespace embody::runtime

@@ -93,6 +93,16 @@ bool readTracker(const nlohmann::json& j, TrackerPose& pose, std::string& error)
   return true;
 }
 
+// A hand's optional "trigger" (0..1): anything else (not a number, out of range) clamps to it,
+// as a controller's analogue value would.
+float readTrigger(const nlohmann::json& tracker) {
+  if (!tracker.is_object()) return 0.0f;
+  const auto t = tracker.find("trigger");
+  if (t == tracker.end() || !t->is_number()) return 0.0f;
+  const double v = t->get<double>();
+  return std::isfinite(v) ? static_cast<float>(std::clamp(v, 0.0, 1.0)) : 0.0f;
+}
+
 void appendNumber(std::string& s, double v, const char* fmt) {
   if (!std::isfinite(v)) {
     s += "null";
@@ -164,6 +174,8 @@ Result<Trace> parseTrace(std::istream& in, const std::string& name) {
       }
       std::string error;
       if (!readTracker(it.value(), s[*id], error)) return fail("\"" + it.key() + "\": " + error);
+      if (*id == TrackerId::LeftHand || *id == TrackerId::RightHand)
+        s.triggers[*id == TrackerId::LeftHand ? 0 : 1] = readTrigger(it.value());
       trace.trackers.set(*id);
     }
     trace.samples.push_back(s);

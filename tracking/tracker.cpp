@@ -78,6 +78,21 @@ glm::quat headingOf(const glm::quat& orientation) {
   return glm::angleAxis(yaw, glm::vec3(0, 1, 0));
 }
 
+glm::mat4 Pose::matrix() const {
+  glm::mat4 m = glm::mat4_cast(orientation);
+  m[3] = glm::vec4(position, 1.0f);
+  return m;
+}
+
+Pose Pose::operator*(const Pose& b) const {
+  return {position + orientation * b.position, glm::normalize(orientation * b.orientation)};
+}
+
+Pose Pose::inverse() const {
+  const glm::quat qi = glm::conjugate(orientation);
+  return {qi * -position, qi};
+}
+
 TrackerPose interpolate(const TrackerPose& a, const TrackerPose& b, float t) {
   TrackerPose r;
   r.position = glm::mix(a.position, b.position, t);

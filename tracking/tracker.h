@@ -52,15 +52,30 @@ class TrackerMask {
   uint8_t bits_ = 0;
 };
 
-struct TrackerPose {
+// A rigid pose in these conventions: the project's one pose type (trackers, the OpenXR side,
+// the headless OpenXR runtime).
+struct Pose {
   glm::vec3 position{0.0f};
   glm::quat orientation{1.0f, 0.0f, 0.0f, 0.0f};  // glm order (w, x, y, z); files use [x, y, z, w]
+  glm::mat4 matrix() const;
+  Pose operator*(const Pose& b) const;  // this * b (orientation renormalised)
+  Pose inverse() const;
+};
+
+// A tracker's pose and whether it can be used this sample.
+struct TrackerPose : Pose {
+  TrackerPose() = default;
+  TrackerPose(const glm::vec3& p, const glm::quat& q, bool isValid) : Pose{p, q}, valid(isValid) {}
+  TrackerPose(const Pose& pose, bool isValid) : Pose(pose), valid(isValid) {}
   bool valid = false;
 };
 
 struct PoseSample {
   double time = 0.0;  // seconds since the start of the source
   std::array<TrackerPose, kTrackerCount> trackers{};
+  // The hand controllers' trigger values (0..1; left, right) where a trace records them: the
+  // headless OpenXR runtime curls its simulated fingers with them. The body ignores them.
+  std::array<float, 2> triggers{};
 
   TrackerPose& operator[](TrackerId id) { return trackers[static_cast<size_t>(index(id))]; }
   const TrackerPose& operator[](TrackerId id) const { return trackers[static_cast<size_t>(index(id))]; }

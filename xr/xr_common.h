@@ -12,21 +12,17 @@
 #include <glm/gtc/quaternion.hpp>
 #include <string>
 
+#include "tracking/tracker.h"
+#include "xr/xr_pose.h"
+
 namespace embody::xr {
 
 // "XR_ERROR_SESSION_LOST" (through the runtime when an instance exists, else the number).
 std::string resultString(XrInstance instance, XrResult r);
 
-// A rigid pose in OpenXR conventions (metres, right-handed, +Y up, -Z forward).
-struct Pose {
-  glm::vec3 position{0.0f};
-  glm::quat orientation{1.0f, 0.0f, 0.0f, 0.0f};
-  glm::mat4 matrix() const;
-  Pose operator*(const Pose& b) const;  // this * b
-  Pose inverse() const;
-  static Pose fromXr(const XrPosef& p);
-  XrPosef toXr() const;
-};
+// The project's one rigid pose (tracking/tracker.h: OpenXR conventions, metres, +Y up, -Z
+// forward); fromXr / toXr convert it from and to OpenXR's XrPosef (xr_pose.h).
+using Pose = tracking::Pose;
 
 // A pose with the tracking state OpenXR reported for it. valid: the pose can be used (maybe
 // inferred); tracked: it is actively tracked now. Consumers treat !valid as "tracking lost".

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "xr/xr_session.h"
@@ -72,12 +73,19 @@ Result<std::unique_ptr<XrInput>> XrInput::create(XrSystem& system, XrSessionRunn
 }
 
 Status XrInput::init() {
-  const XrInstance inst = system_.instance();
+  if (auto s = createActions(); !s) return s;
+  if (auto s = suggestBindings(); !s) return s;
+  if (auto s = createHandSpaces(); !s) return s;
+  createHandTrackers();
+  return {};
+}
+
+Status XrInput::createActions() {
   handPaths_ = {system_.path("/user/hand/left"), system_.path("/user/hand/right")};
   XrActionSetCreateInfo si{XR_TYPE_ACTION_SET_CREATE_INFO};
   std::strcpy(si.actionSetName, "embody");
   std::strcpy(si.localizedActionSetName, "Embody");
-  if (auto s = check(system_, xrCreateActionSet(inst, &si, &set_), "xrCreateActionSet"); !s) return s;
+  if (auto s = check(system_, xrCreateActionSet(system_.instance(), &si, &set_), "xrCreateActionSet"); !s) return s;
   auto action = [&](const char* name, const char* localized, XrActionType type, XrAction& out,
                     uint32_t hands) {
     XrActionCreateInfo ai{XR_TYPE_ACTION_CREATE_INFO};
@@ -91,8 +99,10 @@ Status XrInput::init() {
   if (auto s = action("grip_pose", "Hand grip", XR_ACTION_TYPE_POSE_INPUT, grip_, 2); !s) return s;
   if (auto s = action("aim_pose", "Hand aim", XR_ACTION_TYPE_POSE_INPUT, aim_, 2); !s) return s;
   if (auto s = action("trigger", "Trigger", XR_ACTION_TYPE_FLOAT_INPUT, trigger_, 2); !s) return s;
-  if (auto s = action("recenter", "Recenter", XR_ACTION_TYPE_BOOLEAN_INPUT, recenter_, 0); !s) return s;
+  return action("recenter", "Recenter", XR_ACTION_TYPE_BOOLEAN_INPUT, recenter_, 0);
+}
 
+Status XrInput::suggestBindings() {
   for (const auto& p : kProfiles) {
     std::vector<XrActionSuggestedBinding> b;
     for (const char* side : {"left", "right"}) {
@@ -112,46 +122,43 @@ Status XrInput::init() {
     sb.countSuggestedBindings = static_cast<uint32_t>(b.size());
     sb.suggestedBindings = b.data();
     // A runtime may not know every profile: that is not an error for the application.
-    if (XrResult r = xrSuggestInteractionProfileBindings(inst, &sb);
+    if (XrResult r = xrSuggestInteractionProfileBindings(system_.instance(), &sb);
         XR_FAILED(r) && r != XR_ERROR_PATH_UNSUPPORTED)
       return Error{std::string("xrSuggestInteractionProfileBindings(") + p.profile +
                    ") failed: " + system_.result(r)};
   }
+  return {};
+}
+
+Status XrInput::createHandSpaces() {
   for (int h = 0; h < 2; ++h) {
     XrActionSpaceCreateInfo ai{XR_TYPE_ACTION_SPACE_CREATE_INFO};
-    ai.poseInActionSpace = Pose{}.toXr();
+    ai.poseInActionSpace = toXr(Pose{});
     ai.subactionPath = handPaths_[h];
-    ai.action = grip_;
-    if (auto s = check(system_, xrCreateActionSpace(session_.handle(), &ai, &gripSpaces_[h]),
-                       "xrCreateActionSpace");
-        !s)
-      return s;
-    ai.action = aim_;
-    if (auto s = check(system_, xrCreateActionSpace(session_.handle(), &ai, &aimSpaces_[h]),
-                       "xrCreateActionSpace");
-        !s)
-      return s;
+    for (auto [action, space] : {std::pair{grip_, &gripSpaces_[h]}, std::pair{aim_, &aimSpaces_[h]}}) {
+      ai.action = action;
+      if (auto s = check(system_, xrCreateActionSpace(session_.handle(), &ai, space), "xrCreateActionSpace"); !s)
+        return s;
+    }
   }
   XrSessionActionSetsAttachInfo at{XR_TYPE_SESSION_ACTION_SETS_ATTACH_INFO};
   at.countActionSets = 1;
   at.actionSets = &set_;
-  if (auto s = check(system_, xrAttachSessionActionSets(session_.handle(), &at), "xrAttachSessionActionSets");
-      !s)
-    return s;
+  return check(system_, xrAttachSessionActionSets(session_.handle(), &at), "xrAttachSessionActionSets");
+}
 
-  if (system_.handTrackingEnabled()) {
-    auto create = reinterpret_cast<PFN_xrCreateHandTrackerEXT>(system_.proc("xrCreateHandTrackerEXT"));
-    locateJoints_ = reinterpret_cast<PFN_xrLocateHandJointsEXT>(system_.proc("xrLocateHandJointsEXT"));
-    destroyTracker_ = reinterpret_cast<PFN_xrDestroyHandTrackerEXT>(system_.proc("xrDestroyHandTrackerEXT"));
-    if (create && locateJoints_ && destroyTracker_)
-      for (int h = 0; h < 2; ++h) {
-        XrHandTrackerCreateInfoEXT hi{XR_TYPE_HAND_TRACKER_CREATE_INFO_EXT};
-        hi.hand = h == 0 ? XR_HAND_LEFT_EXT : XR_HAND_RIGHT_EXT;
-        hi.handJointSet = XR_HAND_JOINT_SET_DEFAULT_EXT;
-        if (XR_FAILED(create(session_.handle(), &hi, &trackers_[h]))) trackers_[h] = XR_NULL_HANDLE;
-      }
+void XrInput::createHandTrackers() {
+  if (!system_.handTrackingEnabled()) return;
+  auto create = reinterpret_cast<PFN_xrCreateHandTrackerEXT>(system_.proc("xrCreateHandTrackerEXT"));
+  locateJoints_ = reinterpret_cast<PFN_xrLocateHandJointsEXT>(system_.proc("xrLocateHandJointsEXT"));
+  destroyTracker_ = reinterpret_cast<PFN_xrDestroyHandTrackerEXT>(system_.proc("xrDestroyHandTrackerEXT"));
+  if (!create || !locateJoints_ || !destroyTracker_) return;
+  for (int h = 0; h < 2; ++h) {
+    XrHandTrackerCreateInfoEXT hi{XR_TYPE_HAND_TRACKER_CREATE_INFO_EXT};
+    hi.hand = h == 0 ? XR_HAND_LEFT_EXT : XR_HAND_RIGHT_EXT;
+    hi.handJointSet = XR_HAND_JOINT_SET_DEFAULT_EXT;
+    if (XR_FAILED(create(session_.handle(), &hi, &trackers_[h]))) trackers_[h] = XR_NULL_HANDLE;
   }
-  return {};
 }
 
 XrInput::~XrInput() {

@@ -58,7 +58,13 @@ class XrInput {
 
  private:
   XrInput(XrSystem& s, XrSessionRunner& r) : system_(s), session_(r) {}
+  // init's steps: the action set and its actions, the bindings per controller profile, the hand
+  // spaces (and attaching the set), XR_EXT_hand_tracking's trackers when the runtime has them.
   Status init();
+  Status createActions();
+  Status suggestBindings();
+  Status createHandSpaces();
+  void createHandTrackers();
   void refreshProfile();
   void locateHand(int hand, XrTime time);  // grip, aim, wrist and joints of hands_[hand]
 

@@ -54,7 +54,7 @@ Status XrSessionRunner::init() {
   xrEnumerateReferenceSpaces(session_, n, &n, types.data());
   usingStage_ = std::find(types.begin(), types.end(), XR_REFERENCE_SPACE_TYPE_STAGE) != types.end();
   XrReferenceSpaceCreateInfo si{XR_TYPE_REFERENCE_SPACE_CREATE_INFO};
-  si.poseInReferenceSpace = Pose{}.toXr();
+  si.poseInReferenceSpace = toXr(Pose{});
   si.referenceSpaceType = usingStage_ ? XR_REFERENCE_SPACE_TYPE_STAGE : XR_REFERENCE_SPACE_TYPE_LOCAL;
   if (XrResult r = xrCreateReferenceSpace(session_, &si, &world_); XR_FAILED(r)) {
     if (!usingStage_) return Error{"cannot create the LOCAL reference space: " + system_.result(r)};
@@ -262,7 +262,7 @@ Views XrSessionRunner::locateViews(XrTime time) {
               (vs.viewStateFlags & XR_VIEW_STATE_POSITION_VALID_BIT);
   out.tracked = out.valid && (vs.viewStateFlags & XR_VIEW_STATE_ORIENTATION_TRACKED_BIT) &&
                 (vs.viewStateFlags & XR_VIEW_STATE_POSITION_TRACKED_BIT);
-  for (int i = 0; i < 2; ++i) out.eyes[i] = {Pose::fromXr(views[i].pose), views[i].fov};
+  for (int i = 0; i < 2; ++i) out.eyes[i] = {fromXr(views[i].pose), views[i].fov};
   return out;
 }
 
@@ -298,7 +298,7 @@ Status XrSessionRunner::endFrame(const FrameTiming& timing, const Views* views, 
   ei.environmentBlendMode = XR_ENVIRONMENT_BLEND_MODE_OPAQUE;
   if (views) {
     for (int i = 0; i < 2; ++i) {
-      pv[i].pose = views->eyes[i].pose.toXr();
+      pv[i].pose = toXr(views->eyes[i].pose);
       pv[i].fov = views->eyes[i].fov;
       pv[i].subImage.swapchain = color_[i].handle;
       pv[i].subImage.imageRect = {{0, 0},

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "engine/device.h"
+#include "engine/instance.h"
 
 namespace embody::xr {
 
@@ -25,16 +26,6 @@ VKAPI_ATTR VkBool32 VKAPI_CALL countMessage(VkDebugUtilsMessageSeverityFlagBitsE
 bool hasExtension(const std::vector<XrExtensionProperties>& exts, const char* name) {
   for (const auto& e : exts)
     if (std::strcmp(e.extensionName, name) == 0) return true;
-  return false;
-}
-
-bool vulkanLayerPresent(const char* name) {
-  uint32_t n = 0;
-  vkEnumerateInstanceLayerProperties(&n, nullptr);
-  std::vector<VkLayerProperties> layers(n);
-  vkEnumerateInstanceLayerProperties(&n, layers.data());
-  for (const auto& l : layers)
-    if (std::strcmp(l.layerName, name) == 0) return true;
   return false;
 }
 
@@ -100,12 +91,16 @@ Status XrSystem::createInstance(const XrSystemOptions& o) {
 }
 
 Status XrSystem::createVulkan(const XrSystemOptions& o) {
+  if (auto s = checkVulkanVersion(); !s) return s;
+  if (auto s = createVulkanInstance(o); !s) return s;
+  return createVulkanDevice(o);
+}
+
+Status XrSystem::checkVulkanVersion() {
   auto requirements =
       reinterpret_cast<PFN_xrGetVulkanGraphicsRequirements2KHR>(proc("xrGetVulkanGraphicsRequirements2KHR"));
-  auto createInstance = reinterpret_cast<PFN_xrCreateVulkanInstanceKHR>(proc("xrCreateVulkanInstanceKHR"));
-  auto getDevice = reinterpret_cast<PFN_xrGetVulkanGraphicsDevice2KHR>(proc("xrGetVulkanGraphicsDevice2KHR"));
-  auto createDevice = reinterpret_cast<PFN_xrCreateVulkanDeviceKHR>(proc("xrCreateVulkanDeviceKHR"));
-  if (!requirements || !createInstance || !getDevice || !createDevice)
+  if (!requirements || !proc("xrCreateVulkanInstanceKHR") || !proc("xrGetVulkanGraphicsDevice2KHR") ||
+      !proc("xrCreateVulkanDeviceKHR"))
     return Error{"the runtime lists XR_KHR_vulkan_enable2 but does not provide its functions"};
   XrGraphicsRequirementsVulkan2KHR req{XR_TYPE_GRAPHICS_REQUIREMENTS_VULKAN2_KHR};
   if (XrResult r = requirements(instance_, systemId_, &req); XR_FAILED(r))
@@ -116,8 +111,12 @@ Status XrSystem::createVulkan(const XrSystemOptions& o) {
     return Error{"the runtime supports Vulkan only up to " +
                  std::to_string(XR_VERSION_MAJOR(req.maxApiVersionSupported)) + "." +
                  std::to_string(XR_VERSION_MINOR(req.maxApiVersionSupported)) + "; Embody needs 1.3"};
+  return {};
+}
 
-  const bool validate = o.vulkanValidation && vulkanLayerPresent("VK_LAYER_KHRONOS_validation");
+Status XrSystem::createVulkanInstance(const XrSystemOptions& o) {
+  auto createInstance = reinterpret_cast<PFN_xrCreateVulkanInstanceKHR>(proc("xrCreateVulkanInstanceKHR"));
+  const bool validate = o.vulkanValidation && engine::Instance::validationLayerAvailable();
   if (o.vulkanValidation && !validate)
     std::fprintf(stderr, "warning: the Vulkan validation layer is not installed (vulkan-validationlayers)\n");
   std::vector<const char*> exts;
@@ -156,7 +155,12 @@ Status XrSystem::createVulkan(const XrSystemOptions& o) {
     if (!create || create(vkInstance_, &mci, nullptr, &messenger_) != VK_SUCCESS)
       return Error{"could not create the Vulkan debug messenger"};
   }
+  return {};
+}
 
+Status XrSystem::createVulkanDevice(const XrSystemOptions& o) {
+  auto getDevice = reinterpret_cast<PFN_xrGetVulkanGraphicsDevice2KHR>(proc("xrGetVulkanGraphicsDevice2KHR"));
+  auto createDevice = reinterpret_cast<PFN_xrCreateVulkanDeviceKHR>(proc("xrCreateVulkanDeviceKHR"));
   XrVulkanGraphicsDeviceGetInfoKHR gi{XR_TYPE_VULKAN_GRAPHICS_DEVICE_GET_INFO_KHR};
   gi.systemId = systemId_;
   gi.vulkanInstance = vkInstance_;
@@ -192,6 +196,7 @@ Status XrSystem::createVulkan(const XrSystemOptions& o) {
   xdi.pfnGetInstanceProcAddr = &vkGetInstanceProcAddr;
   xdi.vulkanPhysicalDevice = vkPhysical_;
   xdi.vulkanCreateInfo = &dci;
+  VkResult vr = VK_SUCCESS;
   if (XrResult r = createDevice(instance_, &xdi, &vkDevice_, &vr); XR_FAILED(r) || vr != VK_SUCCESS)
     return Error{"xrCreateVulkanDeviceKHR failed: " + result(r) + " / VkResult " + std::to_string(vr)};
   return {};

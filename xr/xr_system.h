@@ -59,7 +59,12 @@ class XrSystem {
  private:
   XrSystem() = default;
   Status createInstance(const XrSystemOptions& o);
+  // createVulkan's steps: the runtime's Vulkan version, the instance (with the validation
+  // messenger), the device on the physical device the runtime names.
   Status createVulkan(const XrSystemOptions& o);
+  Status checkVulkanVersion();
+  Status createVulkanInstance(const XrSystemOptions& o);
+  Status createVulkanDevice(const XrSystemOptions& o);
 
   XrInstance instance_ = XR_NULL_HANDLE;
   XrSystemId systemId_ = XR_NULL_SYSTEM_ID;

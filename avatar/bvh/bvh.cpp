@@ -124,76 +124,87 @@ class Parser {
         const bool isRoot = iequals(tok, "ROOT"), isJoint = iequals(tok, "JOINT");
         const bool isEnd = iequals(tok, "End") && i + 1 < tokens_.size() && iequals(tokens_[i + 1], "Site");
         if (isRoot || isJoint || isEnd) {
-          if (isRoot && !stack.empty()) return fail("ROOT inside another joint");
-          if (!isRoot && stack.empty()) return fail(std::string(tok) + " outside of any joint");
-          if (!isRoot && clip_.joints[static_cast<size_t>(stack.back())].endSite)
-            return fail("a joint inside an End Site");
-          if (clip_.joints.size() >= limits_.maxJoints)
-            return fail("more than " + std::to_string(limits_.maxJoints) + " joints");
-          if (stack.size() >= limits_.maxDepth)
-            return fail("hierarchy deeper than " + std::to_string(limits_.maxDepth));
-          BvhJoint j;
-          j.parent = stack.empty() ? -1 : stack.back();
-          j.firstChannel = clip_.channelCount;
-          if (isEnd) {
-            j.endSite = true;
-            j.name = clip_.joints[static_cast<size_t>(j.parent)].name + "_End";
-            i += 2;
-          } else {
-            // The name is the rest of the line (some exporters put spaces in names), minus a '{'.
-            size_t last = tokens_.size();
-            if (last > i + 1 && tokens_[last - 1] == "{") --last;
-            if (last <= i + 1) return fail(std::string(tok) + " without a name");
-            const char* b = tokens_[i + 1].data();
-            const char* e = tokens_[last - 1].data() + tokens_[last - 1].size();
-            j.name.assign(b, static_cast<size_t>(e - b));
-            i = last;
-          }
+          if (auto st = openJoint(i, stack, isRoot, isEnd); !st) return st;
           anyRoot = anyRoot || isRoot;
-          stack.push_back(static_cast<int>(clip_.joints.size()));
-          clip_.joints.push_back(std::move(j));
           expectBrace = true;
           continue;
         }
         if (stack.empty()) return fail("expected ROOT, found '" + std::string(tok) + "'");
-        BvhJoint& cur = clip_.joints[static_cast<size_t>(stack.back())];
-        if (iequals(tok, "OFFSET")) {
-          if (tokens_.size() - i < 4) return fail("OFFSET needs 3 numbers");
-          for (size_t k = 0; k < 3; ++k)
-            if (!parseDouble(tokens_[i + 1 + k], cur.offset[static_cast<int>(k)]))
-              return fail("OFFSET value '" + std::string(tokens_[i + 1 + k]) + "' is not a finite number");
-          i += 4;
-          continue;
-        }
-        if (iequals(tok, "CHANNELS")) {
-          if (cur.endSite) return fail("CHANNELS inside an End Site");
-          if (!cur.channels.empty()) return fail("second CHANNELS line for joint '" + cur.name + "'");
-          // Channels must come before the children so the frame layout is depth-first order.
-          if (stack.back() != static_cast<int>(clip_.joints.size()) - 1)
-            return fail("CHANNELS of joint '" + cur.name + "' after its children");
-          double n = 0;
-          if (i + 1 >= tokens_.size() || !parseDouble(tokens_[i + 1], n) || n < 0 || n > 6 ||
-              n != std::floor(n))
-            return fail("CHANNELS needs a count from 0 to 6");
-          const size_t count = static_cast<size_t>(n);
-          if (tokens_.size() - i - 2 < count)
-            return fail("CHANNELS declares " + std::to_string(count) + " channels but lists " +
-                        std::to_string(tokens_.size() - i - 2));
-          for (size_t k = 0; k < count; ++k) {
-            BvhChannel c;
-            if (!parseChannel(tokens_[i + 2 + k], c))
-              return fail("unknown channel '" + std::string(tokens_[i + 2 + k]) +
-                          "' (expected X/Y/Z position or rotation)");
-            cur.channels.push_back(c);
-          }
-          cur.firstChannel = clip_.channelCount;
-          clip_.channelCount += static_cast<int>(count);
-          i += 2 + count;
-          continue;
-        }
-        return fail("unexpected '" + std::string(tok) + "' in HIERARCHY");
+        Status st = iequals(tok, "OFFSET")     ? readOffset(i, stack.back())
+                    : iequals(tok, "CHANNELS") ? readChannels(i, stack.back())
+                                               : fail("unexpected '" + std::string(tok) + "' in HIERARCHY");
+        if (!st) return st;
       }
     }
+  }
+
+  // ROOT / JOINT name, or End Site, at tokens_[i]: a new joint under the open one.
+  Status openJoint(size_t& i, std::vector<int>& stack, bool isRoot, bool isEnd) {
+    const std::string_view tok = tokens_[i];
+    if (isRoot && !stack.empty()) return fail("ROOT inside another joint");
+    if (!isRoot && stack.empty()) return fail(std::string(tok) + " outside of any joint");
+    if (!isRoot && clip_.joints[static_cast<size_t>(stack.back())].endSite) return fail("a joint inside an End Site");
+    if (clip_.joints.size() >= limits_.maxJoints)
+      return fail("more than " + std::to_string(limits_.maxJoints) + " joints");
+    if (stack.size() >= limits_.maxDepth) return fail("hierarchy deeper than " + std::to_string(limits_.maxDepth));
+    BvhJoint j;
+    j.parent = stack.empty() ? -1 : stack.back();
+    j.firstChannel = clip_.channelCount;
+    if (isEnd) {
+      j.endSite = true;
+      j.name = clip_.joints[static_cast<size_t>(j.parent)].name + "_End";
+      i += 2;
+    } else {
+      // The name is the rest of the line (some exporters put spaces in names), minus a '{'.
+      size_t last = tokens_.size();
+      if (last > i + 1 && tokens_[last - 1] == "{") --last;
+      if (last <= i + 1) return fail(std::string(tok) + " without a name");
+      const char* b = tokens_[i + 1].data();
+      const char* e = tokens_[last - 1].data() + tokens_[last - 1].size();
+      j.name.assign(b, static_cast<size_t>(e - b));
+      i = last;
+    }
+    stack.push_back(static_cast<int>(clip_.joints.size()));
+    clip_.joints.push_back(std::move(j));
+    return {};
+  }
+
+  // OFFSET x y z at tokens_[i], for the open joint `open`.
+  Status readOffset(size_t& i, int open) {
+    BvhJoint& cur = clip_.joints[static_cast<size_t>(open)];
+    if (tokens_.size() - i < 4) return fail("OFFSET needs 3 numbers");
+    for (size_t k = 0; k < 3; ++k)
+      if (!parseDouble(tokens_[i + 1 + k], cur.offset[static_cast<int>(k)]))
+        return fail("OFFSET value '" + std::string(tokens_[i + 1 + k]) + "' is not a finite number");
+    i += 4;
+    return {};
+  }
+
+  // CHANNELS n c1..cn at tokens_[i], for the open joint `open`.
+  Status readChannels(size_t& i, int open) {
+    BvhJoint& cur = clip_.joints[static_cast<size_t>(open)];
+    if (cur.endSite) return fail("CHANNELS inside an End Site");
+    if (!cur.channels.empty()) return fail("second CHANNELS line for joint '" + cur.name + "'");
+    // Channels must come before the children so the frame layout is depth-first order.
+    if (open != static_cast<int>(clip_.joints.size()) - 1)
+      return fail("CHANNELS of joint '" + cur.name + "' after its children");
+    double n = 0;
+    if (i + 1 >= tokens_.size() || !parseDouble(tokens_[i + 1], n) || n < 0 || n > 6 || n != std::floor(n))
+      return fail("CHANNELS needs a count from 0 to 6");
+    const size_t count = static_cast<size_t>(n);
+    if (tokens_.size() - i - 2 < count)
+      return fail("CHANNELS declares " + std::to_string(count) + " channels but lists " +
+                  std::to_string(tokens_.size() - i - 2));
+    for (size_t k = 0; k < count; ++k) {
+      BvhChannel c;
+      if (!parseChannel(tokens_[i + 2 + k], c))
+        return fail("unknown channel '" + std::string(tokens_[i + 2 + k]) + "' (expected X/Y/Z position or rotation)");
+      cur.channels.push_back(c);
+    }
+    cur.firstChannel = clip_.channelCount;
+    clip_.channelCount += static_cast<int>(count);
+    i += 2 + count;
+    return {};
   }
 
   Status motion() {

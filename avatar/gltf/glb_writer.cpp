@@ -7,6 +7,7 @@
 #include <fstream>
 #include <functional>
 #include <set>
+#include <type_traits>
 #include <glm/gtc/type_ptr.hpp>
 #include <nlohmann/json.hpp>
 
@@ -176,27 +177,22 @@ json materialJson(const Material& m, const AvatarAsset& asset, std::set<std::str
   return mat;
 }
 
-}  // namespace
-
-Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimation* animation) {
+// Why the skeleton cannot be written as one glTF skin, or "".
+std::string skinProblem(const AvatarAsset& asset) {
   const Skeleton& sk = asset.skeleton;
-  const SkinnedMesh& mesh = asset.mesh;
   const size_t n = sk.joints.size();
-  if (n == 0) return Error{"cannot write a glTF without joints"};
-  if (auto why = sk.validate(); !why.empty()) return Error{why};
+  if (n == 0) return "cannot write a glTF without joints";
+  if (auto why = sk.validate(); !why.empty()) return why;
   if (std::count_if(sk.joints.begin(), sk.joints.end(), [](const Joint& j) { return j.parent < 0; }) != 1)
-    return Error{"cannot write a skin: the skeleton must have exactly one root joint"};
-  if (mesh.inverseBind.size() != n) return Error{"inverseBind must have one matrix per joint"};
-  if (n > 65535) return Error{"too many joints for unsigned-short JOINTS"};
+    return "cannot write a skin: the skeleton must have exactly one root joint";
+  if (asset.mesh.inverseBind.size() != n) return "inverseBind must have one matrix per joint";
+  if (n > 65535) return "too many joints for unsigned-short JOINTS";
+  return "";
+}
 
-  json doc = {{"asset", {{"version", "2.0"}, {"generator", "Embody"}}},
-              {"scene", 0},
-              {"nodes", json::array()},
-              {"bufferViews", json::array()},
-              {"accessors", json::array()}};
-  BinBuilder bin;
-  for (size_t i = 0; i < n; ++i) {
-    const Joint& j = sk.joints[i];
+// One node per joint (rest TRS), children linked.
+void addJointNodes(const Skeleton& sk, json& doc) {
+  for (const Joint& j : sk.joints) {
     json node = {{"name", j.name}};
     if (j.rest.translation != glm::vec3(0.0f))
       node["translation"] = {j.rest.translation.x, j.rest.translation.y, j.rest.translation.z};
@@ -205,11 +201,13 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
     if (j.rest.scale != glm::vec3(1.0f)) node["scale"] = {j.rest.scale.x, j.rest.scale.y, j.rest.scale.z};
     doc["nodes"].push_back(node);
   }
-  for (size_t i = 0; i < n; ++i)
-    if (sk.joints[i].parent >= 0)
-      doc["nodes"][static_cast<size_t>(sk.joints[i].parent)]["children"].push_back(i);
+  for (size_t i = 0; i < sk.joints.size(); ++i)
+    if (sk.joints[i].parent >= 0) doc["nodes"][static_cast<size_t>(sk.joints[i].parent)]["children"].push_back(i);
+}
 
-  // Vertex streams, one bufferView each (tightly packed).
+// The mesh's vertex streams (one tightly packed bufferView each) as a primitive's "attributes".
+json vertexAttributes(const AvatarAsset& asset, BinBuilder& bin, json& doc) {
+  const SkinnedMesh& mesh = asset.mesh;
   const size_t vc = mesh.vertices.size();
   std::vector<float> positions, normals, uvs, uvs1, weights0, weights1;
   std::vector<uint16_t> joints0, joints1;
@@ -241,30 +239,31 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
     }
   }
   json attributes;
-  if (vc > 0) {
-    int a = accessor(doc, bin.view(positions.data(), positions.size() * 4, kArrayBuffer, doc), 0, kFloat, vc,
-                     "VEC3");
-    doc["accessors"][static_cast<size_t>(a)]["min"] = {lo.x, lo.y, lo.z};
-    doc["accessors"][static_cast<size_t>(a)]["max"] = {hi.x, hi.y, hi.z};
-    attributes["POSITION"] = a;
-    attributes["NORMAL"] =
-        accessor(doc, bin.view(normals.data(), normals.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC3");
-    attributes["TEXCOORD_0"] =
-        accessor(doc, bin.view(uvs.data(), uvs.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC2");
-    if (secondUv)
-      attributes["TEXCOORD_1"] =
-          accessor(doc, bin.view(uvs1.data(), uvs1.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC2");
-    attributes["JOINTS_0"] = accessor(doc, bin.view(joints0.data(), joints0.size() * 2, kArrayBuffer, doc), 0,
-                                      kUShort, vc, "VEC4");
-    attributes["WEIGHTS_0"] = accessor(doc, bin.view(weights0.data(), weights0.size() * 4, kArrayBuffer, doc),
-                                       0, kFloat, vc, "VEC4");
-    if (eight) {
-      attributes["JOINTS_1"] = accessor(doc, bin.view(joints1.data(), joints1.size() * 2, kArrayBuffer, doc),
-                                        0, kUShort, vc, "VEC4");
-      attributes["WEIGHTS_1"] = accessor(
-          doc, bin.view(weights1.data(), weights1.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC4");
-    }
+  if (vc == 0) return attributes;
+  auto stream = [&](const auto& values, int componentType, const char* type) {
+    using T = typename std::decay_t<decltype(values)>::value_type;
+    return accessor(doc, bin.view(values.data(), values.size() * sizeof(T), kArrayBuffer, doc), 0, componentType,
+                    vc, type);
+  };
+  const int a = stream(positions, kFloat, "VEC3");
+  doc["accessors"][static_cast<size_t>(a)]["min"] = {lo.x, lo.y, lo.z};
+  doc["accessors"][static_cast<size_t>(a)]["max"] = {hi.x, hi.y, hi.z};
+  attributes["POSITION"] = a;
+  attributes["NORMAL"] = stream(normals, kFloat, "VEC3");
+  attributes["TEXCOORD_0"] = stream(uvs, kFloat, "VEC2");
+  if (secondUv) attributes["TEXCOORD_1"] = stream(uvs1, kFloat, "VEC2");
+  attributes["JOINTS_0"] = stream(joints0, kUShort, "VEC4");
+  attributes["WEIGHTS_0"] = stream(weights0, kFloat, "VEC4");
+  if (eight) {
+    attributes["JOINTS_1"] = stream(joints1, kUShort, "VEC4");
+    attributes["WEIGHTS_1"] = stream(weights1, kFloat, "VEC4");
   }
+  return attributes;
+}
+
+// The mesh's primitives over one shared index bufferView.
+Result<json> meshPrimitives(const AvatarAsset& asset, const json& attributes, BinBuilder& bin, json& doc) {
+  const SkinnedMesh& mesh = asset.mesh;
   const int indexView = bin.view(mesh.indices.data(), mesh.indices.size() * 4, kElementArrayBuffer, doc);
   json primitives = json::array();
   for (const Primitive& p : mesh.primitives) {
@@ -279,16 +278,11 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
       prim["material"] = p.material;
     primitives.push_back(prim);
   }
+  return primitives;
+}
 
-  std::vector<float> ibm;
-  for (const auto& m : mesh.inverseBind) ibm.insert(ibm.end(), glm::value_ptr(m), glm::value_ptr(m) + 16);
-  const int ibmAccessor = accessor(doc, bin.view(ibm.data(), ibm.size() * 4, 0, doc), 0, kFloat, n, "MAT4");
-  json skinJoints = json::array();
-  for (size_t i = 0; i < n; ++i) skinJoints.push_back(i);
-  int root = 0;
-  while (sk.joints[static_cast<size_t>(root)].parent >= 0) ++root;
-
-  // Images as PNG, then textures and materials.
+// Images as PNG (one texture each), then the materials.
+void addImagesAndMaterials(const AvatarAsset& asset, BinBuilder& bin, json& doc) {
   for (size_t i = 0; i < asset.images.size(); ++i) {
     const Image& im = asset.images[i];
     std::vector<uint8_t> png;
@@ -305,21 +299,12 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
   std::set<std::string> extensionsUsed;
   for (const Material& m : asset.materials) doc["materials"].push_back(materialJson(m, asset, extensionsUsed));
   if (!extensionsUsed.empty()) doc["extensionsUsed"] = extensionsUsed;
+}
 
-  json sceneNodes = json::array({root});
-  if (!primitives.empty()) {
-    doc["meshes"] = json::array({{{"name", "body"}, {"primitives", primitives}}});
-    doc["skins"] =
-        json::array({{{"inverseBindMatrices", ibmAccessor}, {"joints", skinJoints}, {"skeleton", root}}});
-    doc["nodes"].push_back({{"name", "body"}, {"mesh", 0}, {"skin", 0}});
-    sceneNodes.push_back(n);
-  }
-  doc["scenes"] = json::array({{{"nodes", sceneNodes}}});
-  if (animation)
-    if (auto s = addAnimation(sk, *animation, bin, doc); !s) return Error{s.error()};
+// The GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded).
+Result<std::vector<uint8_t>> glbContainer(json& doc, BinBuilder& bin) {
   while (bin.bytes().size() % 4) bin.bytes().push_back(0);
   doc["buffers"] = json::array({{{"byteLength", bin.bytes().size()}}});
-
   std::string text = doc.dump();
   while (text.size() % 4) text.push_back(' ');
   const uint64_t total = 12 + 8 + text.size() + 8 + bin.bytes().size();
@@ -336,6 +321,46 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
   appendU32(out, 0x004E4942u);  // "BIN\0"
   for (uint8_t b : bin.bytes()) out.push_back(b);
   return out;
+}
+
+}  // namespace
+
+Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimation* animation) {
+  if (auto why = skinProblem(asset); !why.empty()) return Error{why};
+  const Skeleton& sk = asset.skeleton;
+  const size_t n = sk.joints.size();
+  json doc = {{"asset", {{"version", "2.0"}, {"generator", "Embody"}}},
+              {"scene", 0},
+              {"nodes", json::array()},
+              {"bufferViews", json::array()},
+              {"accessors", json::array()}};
+  BinBuilder bin;
+  addJointNodes(sk, doc);
+  const json attributes = vertexAttributes(asset, bin, doc);
+  auto primitives = meshPrimitives(asset, attributes, bin, doc);
+  if (!primitives) return Error{primitives.error()};
+
+  std::vector<float> ibm;
+  for (const auto& m : asset.mesh.inverseBind) ibm.insert(ibm.end(), glm::value_ptr(m), glm::value_ptr(m) + 16);
+  const int ibmAccessor = accessor(doc, bin.view(ibm.data(), ibm.size() * 4, 0, doc), 0, kFloat, n, "MAT4");
+  json skinJoints = json::array();
+  for (size_t i = 0; i < n; ++i) skinJoints.push_back(i);
+  int root = 0;
+  while (sk.joints[static_cast<size_t>(root)].parent >= 0) ++root;
+  addImagesAndMaterials(asset, bin, doc);
+
+  json sceneNodes = json::array({root});
+  if (!primitives->empty()) {
+    doc["meshes"] = json::array({{{"name", "body"}, {"primitives", *primitives}}});
+    doc["skins"] =
+        json::array({{{"inverseBindMatrices", ibmAccessor}, {"joints", skinJoints}, {"skeleton", root}}});
+    doc["nodes"].push_back({{"name", "body"}, {"mesh", 0}, {"skin", 0}});
+    sceneNodes.push_back(n);
+  }
+  doc["scenes"] = json::array({{{"nodes", sceneNodes}}});
+  if (animation)
+    if (auto s = addAnimation(sk, *animation, bin, doc); !s) return Error{s.error()};
+  return glbContainer(doc, bin);
 }
 
 Status writeGlbFile(const AvatarAsset& asset, const std::string& path, const GlbAnimation* animation) {

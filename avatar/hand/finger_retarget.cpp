@@ -118,92 +118,113 @@ bool handFrameFromKnuckles(const glm::vec3& wrist, const std::array<glm::vec3, 4
   return true;
 }
 
+namespace {
+
+// The rest skeleton in model space, as buildFingerRig measures it.
+struct RestHand {
+  const Skeleton& skeleton;
+  const HumanoidMap& map;
+  const SkeletonPose rest;
+  std::vector<glm::mat4> globals;
+  RestHand(const Skeleton& sk, const HumanoidMap& m) : skeleton(sk), map(m), rest(SkeletonPose::rest(sk)) {
+    computeGlobals(sk, rest, globals);
+  }
+  glm::vec3 position(int j) const { return glm::vec3(globals[static_cast<size_t>(j)][3]); }
+  int jointCount() const { return static_cast<int>(skeleton.joints.size()); }
+};
+
+// Where a finger bone points at rest (model space, not normalised; zero when it has no
+// direction): the next mapped finger bone below it, else its first child apart from it, else on
+// along the previous segment (or from the hand, for a lone bone).
+glm::vec3 restBoneDirection(const RestHand& r, bool left, int f, int s, int j, int hand, const glm::vec3& previousDir) {
+  glm::vec3 dir(0.0f);
+  const int next = s + 1 < kFingerSegments ? r.map.joint(fingerHumanBone(left, f, s + 1)) : -1;
+  if (next >= 0 && next < r.jointCount() && next != j && r.skeleton.isAncestor(j, next))
+    dir = r.position(next) - r.position(j);
+  if (glm::length(dir) < 1e-6f)
+    for (int c : r.skeleton.children(j))
+      if (glm::length(r.position(c) - r.position(j)) > 1e-6f) {
+        dir = r.position(c) - r.position(j);
+        break;
+      }
+  if (glm::length(dir) < 1e-6f) dir = glm::length(previousDir) > 0.0f ? previousDir : r.position(j) - r.position(hand);
+  return dir;
+}
+
+// The finger bones of one hand whose frame (frameGlobal, model space) is known.
+void rigFingerBones(const RestHand& r, const glm::quat& frameGlobal, FingerRigHand& rh, std::vector<std::string>& notes) {
+  const bool left = rh.left;
+  const int hand = rh.hand;
+  auto below = [&](int j) { return j >= 0 && j < r.jointCount() && j != hand && r.skeleton.isAncestor(hand, j); };
+  const glm::vec3 dorsalGlobal = frameGlobal * glm::vec3(0.0f, 1.0f, 0.0f);
+  for (int f = 0; f < kFingerCount; ++f) {
+    glm::vec3 previousDir = glm::vec3(0.0f);  // global rest direction of the previous segment
+    for (int s = 0; s < kFingerSegments; ++s) {
+      FingerBone& b = rh.bones[static_cast<size_t>(f * kFingerSegments + s)];
+      trackedSegment(f, s, b.trackedFrom, b.trackedTo);
+      b.limits = defaultFingerLimits(f, s);
+      const int j = r.map.joint(fingerHumanBone(left, f, s));
+      const std::string name(humanBoneName(fingerHumanBone(left, f, s)));
+      if (!below(j)) {
+        if (j >= 0) notes.push_back(name + ": not below the hand bone, not driven");
+        previousDir = glm::vec3(0.0f);
+        continue;
+      }
+      glm::vec3 dir = restBoneDirection(r, left, f, s, j, hand, previousDir);
+      if (glm::length(dir) < 1e-6f) {
+        notes.push_back(name + ": no direction (zero-length bone), not driven");
+        continue;
+      }
+      dir = glm::normalize(dir);
+      previousDir = dir;
+      glm::vec3 dorsal = dorsalGlobal - glm::dot(dorsalGlobal, dir) * dir;
+      if (glm::length(dorsal) < 1e-3f) {  // a bone along the back-of-hand normal
+        const glm::vec3 x = frameGlobal * glm::vec3(1.0f, 0.0f, 0.0f);
+        dorsal = x - glm::dot(x, dir) * dir;
+      }
+      dorsal = glm::normalize(dorsal);
+      const glm::quat inv = glm::conjugate(globalRotation(r.skeleton, r.rest, j));
+      b.joint = j;
+      b.axis = glm::normalize(inv * dir);
+      b.dorsal = glm::normalize(inv * dorsal);
+      b.lateral = glm::cross(b.axis, b.dorsal);
+      ++rh.mappedBones;
+    }
+  }
+}
+
+}  // namespace
+
 FingerRig buildFingerRig(const Skeleton& skeleton, const HumanoidMap& map) {
   FingerRig rig;
-  const SkeletonPose rest = SkeletonPose::rest(skeleton);
-  std::vector<glm::mat4> globals;
-  computeGlobals(skeleton, rest, globals);
-  auto position = [&](int j) { return glm::vec3(globals[static_cast<size_t>(j)][3]); };
-  const int jointCount = static_cast<int>(skeleton.joints.size());
+  const RestHand r(skeleton, map);
   for (int h = 0; h < 2; ++h) {
     const bool left = h == 0;
     FingerRigHand& rh = rig.hands[static_cast<size_t>(h)];
     rh.left = left;
-    const char* side = left ? "left" : "right";
     const int hand = map.joint(left ? HumanBone::leftHand : HumanBone::rightHand);
-    if (hand < 0 || hand >= jointCount) continue;
-    auto below = [&](int j) { return j >= 0 && j < jointCount && j != hand && skeleton.isAncestor(hand, j); };
+    if (hand < 0 || hand >= r.jointCount()) continue;
     std::array<glm::vec3, 4> knuckles{};
     std::array<bool, 4> use{};
     for (int f = 1; f < kFingerCount; ++f) {
       const int j = map.joint(fingerHumanBone(left, f, 0));
-      if (!below(j)) continue;
-      knuckles[static_cast<size_t>(f - 1)] = position(j);
+      if (!(j >= 0 && j < r.jointCount() && j != hand && skeleton.isAncestor(hand, j))) continue;
+      knuckles[static_cast<size_t>(f - 1)] = r.position(j);
       use[static_cast<size_t>(f - 1)] = true;
       rh.frameFinger[static_cast<size_t>(f)] = true;
     }
     glm::quat frameGlobal;
-    if (!handFrameFromKnuckles(position(hand), knuckles, use, left, frameGlobal)) {
+    if (!handFrameFromKnuckles(r.position(hand), knuckles, use, left, frameGlobal)) {
       if (countFingerBones(map) > 0)
-        rig.notes.push_back(std::string(side) +
+        rig.notes.push_back(std::string(left ? "left" : "right") +
                             " hand: fingers not driven (needs two of the index..little proximal bones "
                             "under the hand bone, apart from each other)");
       rh.frameFinger.fill(false);
       continue;
     }
-    const glm::quat handRest = globalRotation(skeleton, rest, hand);
     rh.hand = hand;
-    rh.handFrame = glm::normalize(glm::conjugate(handRest) * frameGlobal);
-    const glm::vec3 dorsalGlobal = frameGlobal * glm::vec3(0.0f, 1.0f, 0.0f);
-    for (int f = 0; f < kFingerCount; ++f) {
-      glm::vec3 previousDir = glm::vec3(0.0f);  // global rest direction of the previous segment
-      for (int s = 0; s < kFingerSegments; ++s) {
-        FingerBone& b = rh.bones[static_cast<size_t>(f * kFingerSegments + s)];
-        trackedSegment(f, s, b.trackedFrom, b.trackedTo);
-        b.limits = defaultFingerLimits(f, s);
-        const int j = map.joint(fingerHumanBone(left, f, s));
-        if (!below(j)) {
-          if (j >= 0)
-            rig.notes.push_back(std::string(humanBoneName(fingerHumanBone(left, f, s))) +
-                                ": not below the hand bone, not driven");
-          previousDir = glm::vec3(0.0f);
-          continue;
-        }
-        // Where the bone points: the next mapped finger bone below it, else its first child
-        // apart from it, else on along the previous segment (or from the hand, for a lone bone).
-        glm::vec3 dir(0.0f);
-        const int next = s + 1 < kFingerSegments ? map.joint(fingerHumanBone(left, f, s + 1)) : -1;
-        if (next >= 0 && next < jointCount && next != j && skeleton.isAncestor(j, next))
-          dir = position(next) - position(j);
-        if (glm::length(dir) < 1e-6f)
-          for (int c : skeleton.children(j))
-            if (glm::length(position(c) - position(j)) > 1e-6f) {
-              dir = position(c) - position(j);
-              break;
-            }
-        if (glm::length(dir) < 1e-6f)
-          dir = glm::length(previousDir) > 0.0f ? previousDir : position(j) - position(hand);
-        if (glm::length(dir) < 1e-6f) {
-          rig.notes.push_back(std::string(humanBoneName(fingerHumanBone(left, f, s))) +
-                              ": no direction (zero-length bone), not driven");
-          continue;
-        }
-        dir = glm::normalize(dir);
-        previousDir = dir;
-        glm::vec3 dorsal = dorsalGlobal - glm::dot(dorsalGlobal, dir) * dir;
-        if (glm::length(dorsal) < 1e-3f) {  // a bone along the back-of-hand normal
-          const glm::vec3 x = frameGlobal * glm::vec3(1.0f, 0.0f, 0.0f);
-          dorsal = x - glm::dot(x, dir) * dir;
-        }
-        dorsal = glm::normalize(dorsal);
-        const glm::quat inv = glm::conjugate(globalRotation(skeleton, rest, j));
-        b.joint = j;
-        b.axis = glm::normalize(inv * dir);
-        b.dorsal = glm::normalize(inv * dorsal);
-        b.lateral = glm::cross(b.axis, b.dorsal);
-        ++rh.mappedBones;
-      }
-    }
+    rh.handFrame = glm::normalize(glm::conjugate(globalRotation(skeleton, r.rest, hand)) * frameGlobal);
+    rigFingerBones(r, frameGlobal, rh, rig.notes);
   }
   return rig;
 }
@@ -222,127 +243,153 @@ bool FingerRetargetJob::Validate() const {
   return true;
 }
 
+namespace {
+
+bool jointOk(const TrackedHandJoints& t, HandJoint j) {
+  const auto i = static_cast<size_t>(j);
+  return t.valid[i] && finite(t.position[i]) && finite(t.orientation[i]);
+}
+
+// The tracked hand frame, from the same knuckles as the avatar's; false when not tracked.
+bool trackedHandFrame(const FingerRigHand& rh, const TrackedHandJoints* t, glm::quat& frame) {
+  frame = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+  if (!t || !t->active || !jointOk(*t, HandJoint::Wrist)) return false;
+  std::array<glm::vec3, 4> knuckles{};
+  std::array<bool, 4> use{};
+  for (int f = 1; f < kFingerCount; ++f) {
+    if (!rh.frameFinger[static_cast<size_t>(f)]) continue;
+    const HandJoint k = kKnuckles[static_cast<size_t>(f - 1)];
+    if (!jointOk(*t, k)) return false;
+    knuckles[static_cast<size_t>(f - 1)] = t->position[static_cast<size_t>(k)];
+    use[static_cast<size_t>(f - 1)] = true;
+  }
+  return handFrameFromKnuckles(t->position[static_cast<size_t>(HandJoint::Wrist)], knuckles, use, rh.left, frame);
+}
+
+// The bone's rotation from its rest frame to the tracked segment (`d`, unit, and `back` = the
+// tracked back of the finger, both in the bone's rest frame), within its limits.
+glm::quat limitedBoneDelta(const FingerBone& b, const glm::vec3& d, const glm::vec3& back) {
+  const float xa = glm::dot(d, b.axis), xn = glm::dot(d, b.dorsal), xl = glm::dot(d, b.lateral);
+  const float spread = std::clamp(std::asin(std::clamp(xl, -1.0f, 1.0f)), -b.limits.maxSpread, b.limits.maxSpread);
+  const float flexion = std::clamp(std::atan2(-xn, xa), b.limits.minFlexion, b.limits.maxFlexion);
+  const glm::vec3 clamped =
+      std::cos(spread) * (std::cos(flexion) * b.axis - std::sin(flexion) * b.dorsal) + std::sin(spread) * b.lateral;
+  glm::quat delta = fromTo(b.axis, glm::normalize(clamped));
+  if (b.limits.maxTwist > 0.0f) {
+    // Twist about the bone: the tracked back of the finger (+Y) against the rig's dorsal.
+    const glm::vec3 a = glm::normalize(clamped);
+    glm::vec3 p1 = delta * b.dorsal, p2 = back;
+    p1 -= glm::dot(p1, a) * a;
+    p2 -= glm::dot(p2, a) * a;
+    if (glm::length(p1) > 1e-3f && glm::length(p2) > 1e-3f) {
+      const float twist = std::clamp(std::atan2(glm::dot(glm::cross(p1, p2), a), glm::dot(p1, p2)),
+                                     -b.limits.maxTwist, b.limits.maxTwist);
+      delta = glm::angleAxis(twist, a) * delta;
+    }
+  }
+  return delta;
+}
+
+// One hand's state for a frame: tracked joints -> the avatar's model space via the hand frames.
+struct HandFrame {
+  const FingerRigHand& rh;
+  const TrackedHandJoints* tracked;
+  bool ok = false;              // the tracked hand frame is known
+  glm::quat handGlobal{1, 0, 0, 0};  // the avatar's hand joint, model space
+  glm::quat toAvatar{1, 0, 0, 0};    // tracked directions -> avatar model space
+};
+
+// Pass 1 of a finger: the full-weight target rotations, outwards, each relative to its
+// retargeted parent (written into the pose so the next segment sees it). A lost finger holds its
+// last target while it blends out. `input` gets the pose's rotations as they came.
+void writeFingerTargets(const Skeleton& sk, SkeletonPose& p, const HandFrame& hf, size_t first, bool fingerOk,
+                        std::array<glm::quat, kFingerBonesPerHand>& last,
+                        std::array<glm::quat, kFingerSegments>& input) {
+  for (int s = 0; s < kFingerSegments; ++s) {
+    const size_t bi = first + static_cast<size_t>(s);
+    const FingerBone& b = hf.rh.bones[bi];
+    if (b.joint < 0) continue;
+    Transform& local = p.local[static_cast<size_t>(b.joint)];
+    input[static_cast<size_t>(s)] = local.rotation;
+    if (!fingerOk) {
+      local.rotation = finite(last[bi]) && glm::length(last[bi]) > 0.5f ? last[bi] : local.rotation;
+      continue;
+    }
+    const glm::quat restLocal = sk.joints[static_cast<size_t>(b.joint)].rest.rotation;
+    const glm::quat parentGlobal =
+        rotationBelowHand(sk, p, sk.joints[static_cast<size_t>(b.joint)].parent, hf.rh.hand, hf.handGlobal);
+    const glm::quat restGlobal = glm::normalize(parentGlobal * restLocal);
+    const TrackedHandJoints& t = *hf.tracked;
+    const glm::vec3 seg = t.position[static_cast<size_t>(b.trackedTo)] - t.position[static_cast<size_t>(b.trackedFrom)];
+    glm::quat delta(1.0f, 0.0f, 0.0f, 0.0f);  // in the bone's rest frame
+    if (glm::length(seg) > 1e-6f) {
+      const glm::quat toRest = glm::conjugate(restGlobal);
+      const glm::vec3 back = t.orientation[static_cast<size_t>(b.trackedFrom)] * glm::vec3(0.0f, 1.0f, 0.0f);
+      delta = limitedBoneDelta(b, toRest * (hf.toAvatar * glm::normalize(seg)), toRest * (hf.toAvatar * back));
+    }
+    const glm::quat target = glm::normalize(restLocal * delta);
+    if (finite(target)) {
+      local.rotation = target;
+      last[bi] = target;
+    }
+  }
+}
+
+// Pass 2: blend each bone of the finger between its input rotation and the target.
+void blendFinger(SkeletonPose& p, const FingerRigHand& rh, size_t first, float w,
+                 const std::array<glm::quat, kFingerSegments>& input, float* bend) {
+  for (int s = 0; s < kFingerSegments; ++s) {
+    const size_t bi = first + static_cast<size_t>(s);
+    const FingerBone& b = rh.bones[bi];
+    if (b.joint < 0) continue;
+    Transform& local = p.local[static_cast<size_t>(b.joint)];
+    const glm::quat in = input[static_cast<size_t>(s)];
+    glm::quat out = w >= 1.0f ? local.rotation : glm::slerp(in, local.rotation, w);
+    if (!finite(out)) out = in;
+    local.rotation = glm::normalize(out);
+    if (bend) bend[bi] = angleBetween(in * b.axis, local.rotation * b.axis);
+  }
+}
+
+}  // namespace
+
 bool FingerRetargetJob::Run() const {
   const Skeleton& sk = *skeleton;
   SkeletonPose& p = *pose;
   const float step = std::min(1.0f, deltaTime / blendTime);
   for (int h = 0; h < 2; ++h) {
-    const FingerRigHand& rh = rig->hands[static_cast<size_t>(h)];
-    auto& weights = state->weight[static_cast<size_t>(h)];
+    const size_t hi = static_cast<size_t>(h);
+    const FingerRigHand& rh = rig->hands[hi];
     if (output) {
-      output->bend[static_cast<size_t>(h)].fill(0.0f);
-      output->weight[static_cast<size_t>(h)].fill(0.0f);
-      output->handTracked[static_cast<size_t>(h)] = false;
+      output->bend[hi].fill(0.0f);
+      output->weight[hi].fill(0.0f);
+      output->handTracked[hi] = false;
     }
     if (rh.hand < 0) continue;
-    const TrackedHandJoints* t = hands[static_cast<size_t>(h)];
-    auto ok = [&](HandJoint j) {
-      const auto i = static_cast<size_t>(j);
-      return t->valid[i] && finite(t->position[i]) && finite(t->orientation[i]);
-    };
-    // The tracked hand frame, from the same knuckles as the avatar's.
-    bool frameOk = t && t->active && ok(HandJoint::Wrist);
-    glm::quat trackedFrame(1.0f, 0.0f, 0.0f, 0.0f);
-    if (frameOk) {
-      std::array<glm::vec3, 4> knuckles{};
-      std::array<bool, 4> use{};
-      for (int f = 1; f < kFingerCount && frameOk; ++f) {
-        if (!rh.frameFinger[static_cast<size_t>(f)]) continue;
-        const HandJoint k = kKnuckles[static_cast<size_t>(f - 1)];
-        frameOk = ok(k);
-        knuckles[static_cast<size_t>(f - 1)] = t->position[static_cast<size_t>(k)];
-        use[static_cast<size_t>(f - 1)] = true;
-      }
-      frameOk = frameOk && handFrameFromKnuckles(t->position[static_cast<size_t>(HandJoint::Wrist)], knuckles,
-                                                 use, rh.left, trackedFrame);
-    }
-    if (output) output->handTracked[static_cast<size_t>(h)] = frameOk;
+    HandFrame hf{rh, hands[hi]};
+    glm::quat trackedFrame;
+    hf.ok = trackedHandFrame(rh, hf.tracked, trackedFrame);
+    if (output) output->handTracked[hi] = hf.ok;
     // Tracked model-free directions -> the avatar's model space, through the two hand frames.
-    const glm::quat handGlobal = globalRotation(sk, p, rh.hand);
-    const glm::quat avatarFrame = handGlobal * rh.handFrame;
-    const glm::quat toAvatar = glm::normalize(avatarFrame * glm::conjugate(trackedFrame));
-
+    hf.handGlobal = globalRotation(sk, p, rh.hand);
+    hf.toAvatar = glm::normalize(hf.handGlobal * rh.handFrame * glm::conjugate(trackedFrame));
     for (int f = 0; f < kFingerCount; ++f) {
       const size_t first = static_cast<size_t>(f * kFingerSegments);
-      bool any = false, fingerOk = frameOk;
+      bool any = false, fingerOk = hf.ok;
       for (int s = 0; s < kFingerSegments; ++s) {
         const FingerBone& b = rh.bones[first + static_cast<size_t>(s)];
         if (b.joint < 0) continue;
         any = true;
-        fingerOk = fingerOk && ok(b.trackedFrom) && ok(b.trackedTo);
+        fingerOk = fingerOk && jointOk(*hf.tracked, b.trackedFrom) && jointOk(*hf.tracked, b.trackedTo);
       }
       if (!any) continue;
-      float& w = weights[static_cast<size_t>(f)];
+      float& w = state->weight[hi][static_cast<size_t>(f)];
       w = fingerOk ? std::min(1.0f, w + step) : std::max(0.0f, w - step);
-      if (output) output->weight[static_cast<size_t>(h)][static_cast<size_t>(f)] = w;
+      if (output) output->weight[hi][static_cast<size_t>(f)] = w;
       if (w <= 0.0f) continue;  // the input pose as it is
-      // Pass 1: the full-weight target rotations, outwards, each relative to its retargeted
-      // parent (written into the pose so the next segment sees it). A lost finger holds its last
-      // target while it blends out.
       std::array<glm::quat, kFingerSegments> input{};
-      for (int s = 0; s < kFingerSegments; ++s) {
-        const size_t bi = first + static_cast<size_t>(s);
-        const FingerBone& b = rh.bones[bi];
-        if (b.joint < 0) continue;
-        Transform& local = p.local[static_cast<size_t>(b.joint)];
-        input[static_cast<size_t>(s)] = local.rotation;
-        glm::quat& last = state->last[static_cast<size_t>(h)][bi];
-        if (!fingerOk) {
-          local.rotation = finite(last) && glm::length(last) > 0.5f ? last : local.rotation;
-          continue;
-        }
-        const glm::quat restLocal = sk.joints[static_cast<size_t>(b.joint)].rest.rotation;
-        const glm::quat parentGlobal =
-            rotationBelowHand(sk, p, sk.joints[static_cast<size_t>(b.joint)].parent, rh.hand, handGlobal);
-        const glm::quat restGlobal = glm::normalize(parentGlobal * restLocal);
-        const glm::vec3 seg =
-            t->position[static_cast<size_t>(b.trackedTo)] - t->position[static_cast<size_t>(b.trackedFrom)];
-        glm::quat delta(1.0f, 0.0f, 0.0f, 0.0f);  // in the bone's rest frame
-        if (glm::length(seg) > 1e-6f) {
-          const glm::vec3 d = glm::conjugate(restGlobal) * (toAvatar * glm::normalize(seg));
-          const float xa = glm::dot(d, b.axis), xn = glm::dot(d, b.dorsal), xl = glm::dot(d, b.lateral);
-          const float spread =
-              std::clamp(std::asin(std::clamp(xl, -1.0f, 1.0f)), -b.limits.maxSpread, b.limits.maxSpread);
-          const float flexion = std::clamp(std::atan2(-xn, xa), b.limits.minFlexion, b.limits.maxFlexion);
-          const glm::vec3 clamped =
-              std::cos(spread) * (std::cos(flexion) * b.axis - std::sin(flexion) * b.dorsal) +
-              std::sin(spread) * b.lateral;
-          delta = fromTo(b.axis, glm::normalize(clamped));
-          if (b.limits.maxTwist > 0.0f) {
-            // Twist about the bone: the tracked back of the finger (+Y) against the rig's dorsal.
-            const glm::vec3 a = glm::normalize(clamped);
-            const glm::vec3 tracked =
-                glm::conjugate(restGlobal) * (toAvatar * (t->orientation[static_cast<size_t>(b.trackedFrom)] *
-                                                          glm::vec3(0.0f, 1.0f, 0.0f)));
-            glm::vec3 p1 = delta * b.dorsal, p2 = tracked;
-            p1 -= glm::dot(p1, a) * a;
-            p2 -= glm::dot(p2, a) * a;
-            if (glm::length(p1) > 1e-3f && glm::length(p2) > 1e-3f) {
-              const float twist = std::clamp(std::atan2(glm::dot(glm::cross(p1, p2), a), glm::dot(p1, p2)),
-                                             -b.limits.maxTwist, b.limits.maxTwist);
-              delta = glm::angleAxis(twist, a) * delta;
-            }
-          }
-        }
-        const glm::quat target = glm::normalize(restLocal * delta);
-        if (finite(target)) {
-          local.rotation = target;
-          last = target;
-        }
-      }
-      // Pass 2: blend each bone between its input rotation and the target.
-      for (int s = 0; s < kFingerSegments; ++s) {
-        const size_t bi = first + static_cast<size_t>(s);
-        const FingerBone& b = rh.bones[bi];
-        if (b.joint < 0) continue;
-        Transform& local = p.local[static_cast<size_t>(b.joint)];
-        const glm::quat in = input[static_cast<size_t>(s)];
-        glm::quat out = w >= 1.0f ? local.rotation : glm::slerp(in, local.rotation, w);
-        if (!finite(out)) out = in;
-        local.rotation = glm::normalize(out);
-        if (output)
-          output->bend[static_cast<size_t>(h)][bi] = angleBetween(in * b.axis, local.rotation * b.axis);
-      }
+      writeFingerTargets(sk, p, hf, first, fingerOk, state->last[hi], input);
+      blendFinger(p, rh, first, w, input, output ? output->bend[hi].data() : nullptr);
     }
   }
   return true;

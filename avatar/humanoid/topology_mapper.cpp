@@ -2,6 +2,7 @@
 // (CesiumMan's leg_joint_R_1, Skeleton_arm_joint_R__2_). Works on rest-pose joint positions with
 // +Y up; all thresholds are fractions of the skeleton's height so the scale does not matter.
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "avatar/humanoid/humanoid_map.h"
@@ -97,27 +98,19 @@ int limbStart(const Shape& s, const std::vector<int>& chain, float ratio) {
   return 0;
 }
 
-}  // namespace
+void setBone(HumanoidMap& map, HumanBone b, int j) { map.bones[static_cast<int>(b)] = j; }
 
-HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& jointHasWeights) {
-  HumanoidMap map;
-  map.method = MappingMethod::Topology;
-  // Reach queries make this quadratic in the worst case; real rigs have well under 4096 nodes.
-  if (skeleton.joints.size() < 10 || skeleton.joints.size() > 4096) {
-    map.notes.push_back("topology: needs 10 to 4096 joints, the skeleton has " +
-                        std::to_string(skeleton.joints.size()));
-    finishHumanoidMap(skeleton, map);
-    return map;
-  }
-  const Shape s(skeleton);
-  auto set = [&](HumanBone b, int j) { map.bones[static_cast<int>(b)] = j; };
-  const int n = static_cast<int>(skeleton.joints.size());
-
-  // Hips: the first joint (closest to the root) with two branches going down and one going up.
-  // A single down branch that itself splits into two legs (a pelvis bone) also counts.
+// Hips: the first joint (closest to the root) with two branches going down and one going up.
+// A single down branch that itself splits into two legs (a pelvis bone) also counts.
+struct HipsBranch {
   int hips = -1, spineRoot = -1;
-  std::vector<int> legRoots;
-  for (int j = 0; j < n && hips < 0; ++j) {
+  std::array<int, 2> legRoots{-1, -1};  // the lower-reaching first
+};
+
+HipsBranch findHips(const Shape& s) {
+  HipsBranch r;
+  const int n = static_cast<int>(s.skeleton.joints.size());
+  for (int j = 0; j < n; ++j) {
     std::vector<int> down, up;
     for (int c : s.children[j]) {
       if (s.goesDown(c, j))
@@ -133,20 +126,18 @@ HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& joi
     }
     if (down.size() < 2 || up.empty()) continue;
     std::sort(down.begin(), down.end(), [&](int a, int b) { return s.minY[a] < s.minY[b]; });
-    hips = j;
-    legRoots = {down[0], down[1]};
-    spineRoot = *std::max_element(up.begin(), up.end(), [&](int a, int b) { return s.maxY[a] < s.maxY[b]; });
+    r.hips = j;
+    r.legRoots = {down[0], down[1]};
+    r.spineRoot = *std::max_element(up.begin(), up.end(), [&](int a, int b) { return s.maxY[a] < s.maxY[b]; });
+    return r;
   }
-  if (hips < 0) {
-    map.notes.push_back("topology: no joint branches into two legs and a spine");
-    finishHumanoidMap(skeleton, map);
-    return map;
-  }
-  set(HumanBone::hips, hips);
+  return r;
+}
 
-  // Legs and the facing they imply: lateral axis between the hip joints, forward from the toes
-  // (ankle -> toe), else the glTF convention +Z.
-  std::vector<int> legs[2] = {s.followDown(legRoots[0]), s.followDown(legRoots[1])};
+// Legs and the facing they imply: lateral axis between the hip joints, forward from the toes
+// (ankle -> toe), else the glTF convention +Z. Returns the avatar's left direction.
+glm::vec3 mapLegs(const Shape& s, const HipsBranch& h, HumanoidMap& map) {
+  std::vector<int> legs[2] = {s.followDown(h.legRoots[0]), s.followDown(h.legRoots[1])};
   int legStart[2] = {limbStart(s, legs[0], 0.5f), limbStart(s, legs[1], 0.5f)};
   glm::vec3 lateral = s.pos[legs[0][legStart[0]]] - s.pos[legs[1][legStart[1]]];
   lateral.y = 0.0f;
@@ -164,25 +155,30 @@ HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& joi
     forward = cue >= 0.0f ? f : -f;
   }
   const glm::vec3 left = glm::cross(map.up, forward);
-  auto isLeft = [&](int j) { return glm::dot(s.pos[j] - s.pos[hips], left) > 0.0f; };
   for (int k = 0; k < 2; ++k) {
     const auto& leg = legs[k];
     const size_t a = static_cast<size_t>(legStart[k]);
     if (leg.size() < a + 3) continue;
-    const bool l = isLeft(leg[a]);
-    set(l ? HumanBone::leftUpperLeg : HumanBone::rightUpperLeg, leg[a]);
-    set(l ? HumanBone::leftLowerLeg : HumanBone::rightLowerLeg, leg[a + 1]);
-    set(l ? HumanBone::leftFoot : HumanBone::rightFoot, leg[a + 2]);
-    if (leg.size() > a + 3) set(l ? HumanBone::leftToes : HumanBone::rightToes, leg[a + 3]);
+    const bool l = glm::dot(s.pos[leg[a]] - s.pos[h.hips], left) > 0.0f;
+    setBone(map, l ? HumanBone::leftUpperLeg : HumanBone::rightUpperLeg, leg[a]);
+    setBone(map, l ? HumanBone::leftLowerLeg : HumanBone::rightLowerLeg, leg[a + 1]);
+    setBone(map, l ? HumanBone::leftFoot : HumanBone::rightFoot, leg[a + 2]);
+    if (leg.size() > a + 3) setBone(map, l ? HumanBone::leftToes : HumanBone::rightToes, leg[a + 3]);
   }
+  return left;
+}
 
-  // Spine: climb from the hips to the junction where two arms and a neck leave.
-  std::vector<int> torso;
-  int junction = -1;
-  std::vector<int> arms;
-  int neckRoot = -1;
+// Spine: climb from the hips to the junction where two arms and a neck leave.
+struct ShoulderJunction {
+  std::vector<int> torso;  // spine joints from the hips up to the junction
+  int junction = -1, neckRoot = -1;
+  std::array<int, 2> arms{-1, -1};
+};
+
+ShoulderJunction findShoulders(const Shape& s, int spineRoot) {
+  ShoulderJunction r;
   for (int j = spineRoot; j >= 0;) {
-    torso.push_back(j);
+    r.torso.push_back(j);
     // The neck is the child that climbs highest; arms are other children reaching out sideways.
     int upKid = -1;
     for (int c : s.children[j])
@@ -191,47 +187,74 @@ HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& joi
     for (int c : s.children[j])
       if (c != upKid && s.reach(c, s.pos[j]) > 0.12f * s.height) lateralKids.push_back(c);
     if (lateralKids.size() >= 2 && upKid >= 0) {
-      junction = j;
+      r.junction = j;
       std::sort(lateralKids.begin(), lateralKids.end(),
                 [&](int a, int b) { return s.reach(a, s.pos[j]) > s.reach(b, s.pos[j]); });
-      arms = {lateralKids[0], lateralKids[1]};
-      neckRoot = upKid;
-      break;
+      r.arms = {lateralKids[0], lateralKids[1]};
+      r.neckRoot = upKid;
+      return r;
     }
     if (s.children[j].empty()) break;
     j = *std::max_element(s.children[j].begin(), s.children[j].end(),
                           [&](int a, int b) { return s.maxY[a] < s.maxY[b]; });
   }
-  if (junction < 0) {
-    map.notes.push_back("topology: the spine never branches into two arms and a neck");
-    finishHumanoidMap(skeleton, map);
-    return map;
+  return r;
+}
+
+// Spine bones along the torso; neck and head: the chain above the junction, where trailing
+// unweighted end joints are not the head.
+void mapSpineAndHead(const Shape& s, const ShoulderJunction& t, const std::vector<bool>& jointHasWeights,
+                     HumanoidMap& map) {
+  setBone(map, HumanBone::spine, t.torso.front());
+  if (t.torso.size() == 2) setBone(map, HumanBone::chest, t.torso[1]);
+  if (t.torso.size() >= 3) {
+    setBone(map, HumanBone::chest, t.torso[(t.torso.size() - 1) / 2]);
+    setBone(map, HumanBone::upperChest, t.torso.back());
   }
-  set(HumanBone::spine, torso.front());
-  if (torso.size() == 2) set(HumanBone::chest, torso[1]);
-  if (torso.size() >= 3) {
-    set(HumanBone::chest, torso[(torso.size() - 1) / 2]);
-    set(HumanBone::upperChest, torso.back());
-  }
-  // Neck and head: the chain above the junction; trailing unweighted end joints are not the head.
-  std::vector<int> neck = s.followUp(neckRoot);
+  std::vector<int> neck = s.followUp(t.neckRoot);
   auto weighted = [&](int j) {
     return jointHasWeights.empty() || (static_cast<size_t>(j) < jointHasWeights.size() && jointHasWeights[j]);
   };
   while (neck.size() > 1 && !weighted(neck.back())) neck.pop_back();
-  set(HumanBone::head, neck.back());
-  if (neck.size() >= 2) set(HumanBone::neck, neck.front());
+  setBone(map, HumanBone::head, neck.back());
+  if (neck.size() >= 2) setBone(map, HumanBone::neck, neck.front());
+}
 
-  for (int a : arms) {
-    const auto chain = s.followOut(a, s.pos[junction]);
+void mapArms(const Shape& s, const ShoulderJunction& t, int hips, const glm::vec3& left, HumanoidMap& map) {
+  for (int a : t.arms) {
+    const auto chain = s.followOut(a, s.pos[t.junction]);
     const size_t k = static_cast<size_t>(limbStart(s, chain, 0.75f));
     if (chain.size() < k + 3) continue;
-    const bool l = isLeft(chain[k + 2]);
-    if (k == 1) set(l ? HumanBone::leftShoulder : HumanBone::rightShoulder, chain[0]);
-    set(l ? HumanBone::leftUpperArm : HumanBone::rightUpperArm, chain[k]);
-    set(l ? HumanBone::leftLowerArm : HumanBone::rightLowerArm, chain[k + 1]);
-    set(l ? HumanBone::leftHand : HumanBone::rightHand, chain[k + 2]);
+    const bool l = glm::dot(s.pos[chain[k + 2]] - s.pos[hips], left) > 0.0f;
+    if (k == 1) setBone(map, l ? HumanBone::leftShoulder : HumanBone::rightShoulder, chain[0]);
+    setBone(map, l ? HumanBone::leftUpperArm : HumanBone::rightUpperArm, chain[k]);
+    setBone(map, l ? HumanBone::leftLowerArm : HumanBone::rightLowerArm, chain[k + 1]);
+    setBone(map, l ? HumanBone::leftHand : HumanBone::rightHand, chain[k + 2]);
   }
+}
+
+}  // namespace
+
+HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& jointHasWeights) {
+  HumanoidMap map;
+  map.method = MappingMethod::Topology;
+  auto give = [&](const std::string& note) {
+    map.notes.push_back(note);
+    finishHumanoidMap(skeleton, map);
+    return map;
+  };
+  // Reach queries make this quadratic in the worst case; real rigs have well under 4096 nodes.
+  if (skeleton.joints.size() < 10 || skeleton.joints.size() > 4096)
+    return give("topology: needs 10 to 4096 joints, the skeleton has " + std::to_string(skeleton.joints.size()));
+  const Shape s(skeleton);
+  const HipsBranch hips = findHips(s);
+  if (hips.hips < 0) return give("topology: no joint branches into two legs and a spine");
+  setBone(map, HumanBone::hips, hips.hips);
+  const glm::vec3 left = mapLegs(s, hips, map);
+  const ShoulderJunction shoulders = findShoulders(s, hips.spineRoot);
+  if (shoulders.junction < 0) return give("topology: the spine never branches into two arms and a neck");
+  mapSpineAndHead(s, shoulders, jointHasWeights, map);
+  mapArms(s, shoulders, hips.hips, left, map);
   finishHumanoidMap(skeleton, map);
   return map;
 }

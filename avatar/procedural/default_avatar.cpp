@@ -76,21 +76,20 @@ struct Station {
 
 using WeightFn = std::function<Influences(const glm::vec3&, const Influences&)>;
 
-// A closed tube through the stations with domed ends. Rings are spaced `spacing` apart; the ring
-// frame is (u, v, t) with t the path tangent and v as close to `ref` as possible.
-void addTube(MeshSink& sink, const std::vector<Station>& st, int radial, float spacing, const glm::vec3& ref,
-             float domeStart, float domeEnd, const WeightFn& weightFn = nullptr) {
-  struct Ring {
-    glm::vec3 c, t;
-    float ru, rv;
-    Influences w;
-    float s;
-  };
+struct TubeRing {
+  glm::vec3 c, t;
+  float ru, rv;
+  Influences w;
+  float s;
+};
+
+// The rings of a tube through the stations, `spacing` apart along the path (s: arc length).
+std::vector<TubeRing> tubeRings(const std::vector<Station>& st, float spacing) {
   auto tangentAt = [&](size_t i) {
     const glm::vec3 a = st[i == 0 ? 0 : i - 1].centre, b = st[std::min(i + 1, st.size() - 1)].centre;
     return glm::normalize(b - a);
   };
-  std::vector<Ring> rings;
+  std::vector<TubeRing> rings;
   float s = 0.0f;
   for (size_t i = 0; i + 1 < st.size(); ++i) {
     const float len = glm::length(st[i + 1].centre - st[i].centre);
@@ -106,30 +105,38 @@ void addTube(MeshSink& sink, const std::vector<Station>& st, int radial, float s
   }
   rings.push_back(
       {st.back().centre, tangentAt(st.size() - 1), st.back().ru, st.back().rv, st.back().weights, s});
-  // Domes: rings shrinking on a quarter ellipse, then a pole vertex.
+  return rings;
+}
+
+// The rings with domes added at both ends: rings shrinking on a quarter ellipse.
+std::vector<TubeRing> withDomes(const std::vector<TubeRing>& rings, float domeStart, float domeEnd) {
   constexpr int kDome = 4;
-  std::vector<Ring> all;
-  const Ring first = rings.front(), last = rings.back();
-  for (int d = kDome; d >= 1; --d) {
-    const float phi = glm::half_pi<float>() * static_cast<float>(d) / (kDome + 1);
-    Ring r = first;
-    r.c -= first.t * (std::sin(phi) * domeStart);
+  std::vector<TubeRing> all;
+  const TubeRing first = rings.front(), last = rings.back();
+  auto shrunk = [](TubeRing r, float phi, float along) {
+    r.c += r.t * (std::sin(phi) * along);
     r.ru *= std::cos(phi);
     r.rv *= std::cos(phi);
-    all.push_back(r);
-  }
+    return r;
+  };
+  for (int d = kDome; d >= 1; --d)
+    all.push_back(shrunk(first, glm::half_pi<float>() * static_cast<float>(d) / (kDome + 1), -domeStart));
   all.insert(all.end(), rings.begin(), rings.end());
-  for (int d = 1; d <= kDome; ++d) {
-    const float phi = glm::half_pi<float>() * static_cast<float>(d) / (kDome + 1);
-    Ring r = last;
-    r.c += last.t * (std::sin(phi) * domeEnd);
-    r.ru *= std::cos(phi);
-    r.rv *= std::cos(phi);
-    all.push_back(r);
-  }
+  for (int d = 1; d <= kDome; ++d)
+    all.push_back(shrunk(last, glm::half_pi<float>() * static_cast<float>(d) / (kDome + 1), domeEnd));
+  return all;
+}
+
+// A closed tube through the stations with domed ends. Rings are spaced `spacing` apart; the ring
+// frame is (u, v, t) with t the path tangent and v as close to `ref` as possible.
+void addTube(MeshSink& sink, const std::vector<Station>& st, int radial, float spacing, const glm::vec3& ref,
+             float domeStart, float domeEnd, const WeightFn& weightFn = nullptr) {
+  const std::vector<TubeRing> rings = tubeRings(st, spacing);
+  const std::vector<TubeRing> all = withDomes(rings, domeStart, domeEnd);
+  const TubeRing first = rings.front(), last = rings.back();
   auto weightsAt = [&](const glm::vec3& p, const Influences& w) { return weightFn ? weightFn(p, w) : w; };
   std::vector<uint32_t> ringStart;
-  for (const Ring& r : all) {
+  for (const TubeRing& r : all) {
     glm::vec3 u = glm::cross(ref, r.t);
     u = glm::length(u) > 1e-6f ? glm::normalize(u) : glm::vec3(1, 0, 0);
     const glm::vec3 v = glm::cross(r.t, u);
@@ -150,9 +157,10 @@ void addTube(MeshSink& sink, const std::vector<Station>& st, int radial, float s
       sink.triangle(a, b, c);
       sink.triangle(a, c, d);
     }
+  // A pole vertex closes each dome.
   const glm::vec3 p0 = first.c - first.t * domeStart, p1 = last.c + last.t * domeEnd;
   const uint32_t pole0 = sink.vertex(p0, {0.5f, -domeStart}, weightsAt(p0, first.w));
-  const uint32_t pole1 = sink.vertex(p1, {0.5f, s + domeEnd}, weightsAt(p1, last.w));
+  const uint32_t pole1 = sink.vertex(p1, {0.5f, last.s + domeEnd}, weightsAt(p1, last.w));
   const uint32_t lastRing = ringStart.back();
   for (int j = 0; j < radial; ++j) {
     const uint32_t jn = static_cast<uint32_t>((j + 1) % radial);
@@ -363,18 +371,9 @@ void addFingeredHand(MeshSink& sink, const Skeleton& skeleton, const std::vector
   chainTube(thumb, thumbPoints(wr, g)[3], 0.011f, 0.005f);
 }
 
-}  // namespace
-
-AvatarAsset buildDefaultAvatar() {
-  return buildDefaultAvatar(DefaultAvatarOptions{});
-}
-
-AvatarAsset buildDefaultAvatar(const DefaultAvatarOptions& options) {
-  AvatarAsset a;
-  a.format = AvatarFormat::Procedural;
-  auto defs = jointTable();
-  std::vector<std::string> fingerNames;  // owns the names the JointDefs point at
-  if (options.fingers) appendFingerJoints(defs, fingerNames);
+// The skeleton of the joint table (parents first) with each joint's model-space rest position,
+// and the inverse bind matrices (rest rotations are identity).
+std::vector<glm::vec3> addSkeleton(AvatarAsset& a, const std::vector<JointDef>& defs) {
   std::vector<glm::vec3> pos;
   for (const auto& d : defs) {
     Joint j;
@@ -384,35 +383,45 @@ AvatarAsset buildDefaultAvatar(const DefaultAvatarOptions& options) {
     a.skeleton.joints.push_back(j);
     pos.push_back(d.pos);
   }
-  auto J = [&](const char* n) { return a.skeleton.find(n); };
-  auto P = [&](const char* n) { return pos[static_cast<size_t>(a.skeleton.find(n))]; };
   a.mesh.inverseBind.resize(pos.size());
   for (size_t i = 0; i < pos.size(); ++i) {
     a.mesh.inverseBind[i] = glm::mat4(1.0f);
     a.mesh.inverseBind[i][3] = glm::vec4(-pos[i], 1.0f);
   }
   a.skinJointCount = static_cast<int>(pos.size());
-  MeshSink sink(a.mesh);
+  return pos;
+}
 
-  // Hat functions over stations (height, joint): a vertex at height y blends the two stations
-  // around it, so weights change linearly from one bone to the next.
-  auto hat = [](const std::vector<std::pair<float, int>>& stations, float y) -> Influences {
-    if (y <= stations.front().first) return {{stations.front().second, 1.0f}};
-    for (size_t i = 1; i < stations.size(); ++i)
-      if (y <= stations[i].first) {
-        const float t = (y - stations[i - 1].first) / (stations[i].first - stations[i - 1].first);
-        return {{stations[i - 1].second, 1.0f - t}, {stations[i].second, t}};
-      }
-    return {{stations.back().second, 1.0f}};
-  };
+// The mannequin's joints by name: index and model-space rest position.
+struct JointLookup {
+  const Skeleton& skeleton;
+  const std::vector<glm::vec3>& pos;
+  int J(const std::string& n) const { return skeleton.find(n); }
+  glm::vec3 P(const std::string& n) const { return pos[static_cast<size_t>(skeleton.find(n))]; }
+};
+
+// Hat functions over stations (height, joint): a vertex at height y blends the two stations
+// around it, so weights change linearly from one bone to the next.
+Influences hat(const std::vector<std::pair<float, int>>& stations, float y) {
+  if (y <= stations.front().first) return {{stations.front().second, 1.0f}};
+  for (size_t i = 1; i < stations.size(); ++i)
+    if (y <= stations[i].first) {
+      const float t = (y - stations[i - 1].first) / (stations[i].first - stations[i - 1].first);
+      return {{stations[i - 1].second, 1.0f - t}, {stations[i].second, t}};
+    }
+  return {{stations.back().second, 1.0f}};
+}
+
+// Torso, neck and head, skinned along the vertebrae.
+void addTrunkAndHead(MeshSink& sink, const JointLookup& k) {
   // Each vertebra bone's station is the middle of the bone (its joint to the next one up).
   const char* spineNames[] = {"vl5", "vl4", "vl3", "vl2", "vl1", "vt12", "vt11",     "vt10", "vt9",
                               "vt8", "vt7", "vt6", "vt5", "vt4", "vt3",  "vt2",      "vt1",  "vc7",
                               "vc6", "vc5", "vc4", "vc3", "vc2", "vc1",  "skullbase"};
-  std::vector<std::pair<float, int>> spineStations = {{0.97f, J("sacroiliac")}};
+  std::vector<std::pair<float, int>> spineStations = {{0.97f, k.J("sacroiliac")}};
   for (int i = 0; i + 1 < 25; ++i)
-    spineStations.push_back({0.5f * (P(spineNames[i]).y + P(spineNames[i + 1]).y), J(spineNames[i])});
-  spineStations.push_back({1.64f, J("skullbase")});
+    spineStations.push_back({0.5f * (k.P(spineNames[i]).y + k.P(spineNames[i + 1]).y), k.J(spineNames[i])});
+  spineStations.push_back({1.64f, k.J("skullbase")});
 
   // Torso: elliptical sections by height; upper outer vertices follow the clavicles.
   const std::vector<glm::vec2> halfWidth = {{0.80f, 0.150f}, {0.88f, 0.170f}, {0.98f, 0.160f},
@@ -426,7 +435,7 @@ AvatarAsset buildDefaultAvatar(const DefaultAvatarOptions& options) {
   std::vector<Station> torso;
   for (float y = 0.80f; y <= 1.5101f; y += 0.015f)
     torso.push_back({{0.0f, y, profile(centreZ, y)}, profile(halfWidth, y), profile(halfDepth, y), {}});
-  const int lClav = J("l_sternoclavicular"), rClav = J("r_sternoclavicular");
+  const int lClav = k.J("l_sternoclavicular"), rClav = k.J("r_sternoclavicular");
   addTube(sink, torso, 36, 0.015f, glm::vec3(0, 0, 1), 0.04f, 0.02f,
           [&](const glm::vec3& p, const Influences&) {
             Influences w = hat(spineStations, p.y);
@@ -444,82 +453,109 @@ AvatarAsset buildDefaultAvatar(const DefaultAvatarOptions& options) {
           [&](const glm::vec3& p, const Influences&) { return hat(spineStations, p.y); });
 
   // Head and nose (facing +Z).
-  const int skull = J("skullbase");
+  const int skull = k.J("skullbase");
   auto headOnly = [&](const glm::vec3&) { return Influences{{skull, 1.0f}}; };
   addEllipsoid(sink, {0.0f, 1.645f, 0.030f}, {0.078f, 0.110f, 0.100f}, 28, 36, headOnly);
   addEllipsoid(sink, {0.0f, 1.632f, 0.122f}, {0.015f, 0.024f, 0.022f}, 8, 12, headOnly);
+}
 
-  for (int side = 0; side < 2; ++side) {
-    const std::string p = side == 0 ? "l_" : "r_";
-    const float sx = side == 0 ? 1.0f : -1.0f;
-    auto jn = [&](const char* n) { return J((p + n).c_str()); };
-    auto ps = [&](const char* n) { return P((p + n).c_str()); };
-    auto along = [](const glm::vec3& a, const glm::vec3& b, float d) {
-      return a + glm::normalize(b - a) * d;
-    };
-    const int hipJ = jn("hip"), kneeJ = jn("knee"), ankleJ = jn("ankle"), toeJ = jn("metatarsal");
-    const glm::vec3 hip = ps("hip"), knee = ps("knee"), ankle = ps("ankle");
-    const int pelvis = J("sacroiliac");
-    std::vector<Station> leg = {
-        {hip + glm::vec3(0, 0.03f, 0), 0.080f, 0.080f, {{pelvis, 0.5f}, {hipJ, 0.5f}}},
-        {along(hip, knee, 0.06f), 0.086f, 0.086f, {{hipJ, 1.0f}}},
-        {glm::mix(hip, knee, 0.45f), 0.072f, 0.074f, {{hipJ, 1.0f}}},
-        {along(knee, hip, 0.05f), 0.055f, 0.056f, {{hipJ, 1.0f}}},
-        {knee, 0.050f, 0.053f, {{hipJ, 0.5f}, {kneeJ, 0.5f}}},
-        {along(knee, ankle, 0.05f), 0.050f, 0.052f, {{kneeJ, 1.0f}}},
-        {along(knee, ankle, 0.13f), 0.054f, 0.060f, {{kneeJ, 1.0f}}},
-        {along(ankle, knee, 0.07f), 0.032f, 0.034f, {{kneeJ, 1.0f}}},
-        {ankle, 0.030f, 0.032f, {{kneeJ, 0.5f}, {ankleJ, 0.5f}}},
-        {ankle - glm::vec3(0, 0.03f, 0), 0.030f, 0.032f, {{ankleJ, 1.0f}}},
-    };
-    addTube(sink, leg, 24, 0.02f, glm::vec3(0, 0, 1), 0.03f, 0.02f);
-    // Foot: heel to toe along +Z; the front third bends with the toes.
-    addEllipsoid(sink, {ankle.x + sx * 0.004f, 0.045f, 0.060f}, {0.045f, 0.045f, 0.130f}, 16, 24,
-                 [&](const glm::vec3& v) {
-                   const float t = smoothstep(0.09f, 0.14f, v.z);
-                   return Influences{{ankleJ, 1.0f - t}, {toeJ, t}};
-                 });
+glm::vec3 along(const glm::vec3& a, const glm::vec3& b, float d) { return a + glm::normalize(b - a) * d; }
 
-    const int clavJ = jn("sternoclavicular"), shJ = jn("shoulder"), elJ = jn("elbow"), wrJ = jn("wrist");
-    const glm::vec3 sh = ps("shoulder"), el = ps("elbow"), wr = ps("wrist");
-    std::vector<Station> arm = {
-        {sh, 0.052f, 0.050f, {{clavJ, 0.5f}, {shJ, 0.5f}}},
-        {along(sh, el, 0.06f), 0.050f, 0.049f, {{shJ, 1.0f}}},
-        {glm::mix(sh, el, 0.5f), 0.045f, 0.044f, {{shJ, 1.0f}}},
-        {along(el, sh, 0.04f), 0.037f, 0.037f, {{shJ, 1.0f}}},
-        {el, 0.036f, 0.037f, {{shJ, 0.5f}, {elJ, 0.5f}}},
-        {along(el, wr, 0.04f), 0.038f, 0.039f, {{elJ, 1.0f}}},
-        {glm::mix(el, wr, 0.4f), 0.034f, 0.037f, {{elJ, 1.0f}}},
-        {along(wr, el, 0.03f), 0.024f, 0.028f, {{elJ, 1.0f}}},
-        {wr, 0.022f, 0.027f, {{elJ, 0.5f}, {wrJ, 0.5f}}},
-    };
-    addTube(sink, arm, 20, 0.02f, glm::vec3(0, 0, 1), 0.045f, 0.015f);
-    // Hand (palm towards the thigh) and thumb pointing forward.
-    auto handOnly = [&](const glm::vec3&) { return Influences{{wrJ, 1.0f}}; };
-    const glm::vec3 down = glm::normalize(wr - el);
-    if (options.fingers) {
-      addFingeredHand(sink, a.skeleton, pos, p, wrJ, wr, el);
-      continue;
-    }
-    addEllipsoid(sink, wr + down * 0.085f, {0.020f, 0.092f, 0.045f}, 16, 20, handOnly);
-    addEllipsoid(sink, wr + down * 0.055f + glm::vec3(-sx * 0.004f, 0.0f, 0.042f), {0.012f, 0.036f, 0.013f},
-                 8, 12, handOnly);
+// One leg (thigh to ankle) and its foot; `p` is the side's prefix ("l_" / "r_").
+void addLeg(MeshSink& sink, const JointLookup& k, const std::string& p) {
+  const float sx = p == "l_" ? 1.0f : -1.0f;
+  const int hipJ = k.J(p + "hip"), kneeJ = k.J(p + "knee"), ankleJ = k.J(p + "ankle"), toeJ = k.J(p + "metatarsal");
+  const glm::vec3 hip = k.P(p + "hip"), knee = k.P(p + "knee"), ankle = k.P(p + "ankle");
+  const int pelvis = k.J("sacroiliac");
+  std::vector<Station> leg = {
+      {hip + glm::vec3(0, 0.03f, 0), 0.080f, 0.080f, {{pelvis, 0.5f}, {hipJ, 0.5f}}},
+      {along(hip, knee, 0.06f), 0.086f, 0.086f, {{hipJ, 1.0f}}},
+      {glm::mix(hip, knee, 0.45f), 0.072f, 0.074f, {{hipJ, 1.0f}}},
+      {along(knee, hip, 0.05f), 0.055f, 0.056f, {{hipJ, 1.0f}}},
+      {knee, 0.050f, 0.053f, {{hipJ, 0.5f}, {kneeJ, 0.5f}}},
+      {along(knee, ankle, 0.05f), 0.050f, 0.052f, {{kneeJ, 1.0f}}},
+      {along(knee, ankle, 0.13f), 0.054f, 0.060f, {{kneeJ, 1.0f}}},
+      {along(ankle, knee, 0.07f), 0.032f, 0.034f, {{kneeJ, 1.0f}}},
+      {ankle, 0.030f, 0.032f, {{kneeJ, 0.5f}, {ankleJ, 0.5f}}},
+      {ankle - glm::vec3(0, 0.03f, 0), 0.030f, 0.032f, {{ankleJ, 1.0f}}},
+  };
+  addTube(sink, leg, 24, 0.02f, glm::vec3(0, 0, 1), 0.03f, 0.02f);
+  // Foot: heel to toe along +Z; the front third bends with the toes.
+  addEllipsoid(sink, {ankle.x + sx * 0.004f, 0.045f, 0.060f}, {0.045f, 0.045f, 0.130f}, 16, 24,
+               [&](const glm::vec3& v) {
+                 const float t = smoothstep(0.09f, 0.14f, v.z);
+                 return Influences{{ankleJ, 1.0f - t}, {toeJ, t}};
+               });
+}
+
+// One arm (shoulder to wrist) and its hand: a mitten with a thumb, or five skinned fingers.
+void addArm(MeshSink& sink, const JointLookup& k, const std::string& p, bool fingers) {
+  const float sx = p == "l_" ? 1.0f : -1.0f;
+  const int clavJ = k.J(p + "sternoclavicular"), shJ = k.J(p + "shoulder"), elJ = k.J(p + "elbow"),
+            wrJ = k.J(p + "wrist");
+  const glm::vec3 sh = k.P(p + "shoulder"), el = k.P(p + "elbow"), wr = k.P(p + "wrist");
+  std::vector<Station> arm = {
+      {sh, 0.052f, 0.050f, {{clavJ, 0.5f}, {shJ, 0.5f}}},
+      {along(sh, el, 0.06f), 0.050f, 0.049f, {{shJ, 1.0f}}},
+      {glm::mix(sh, el, 0.5f), 0.045f, 0.044f, {{shJ, 1.0f}}},
+      {along(el, sh, 0.04f), 0.037f, 0.037f, {{shJ, 1.0f}}},
+      {el, 0.036f, 0.037f, {{shJ, 0.5f}, {elJ, 0.5f}}},
+      {along(el, wr, 0.04f), 0.038f, 0.039f, {{elJ, 1.0f}}},
+      {glm::mix(el, wr, 0.4f), 0.034f, 0.037f, {{elJ, 1.0f}}},
+      {along(wr, el, 0.03f), 0.024f, 0.028f, {{elJ, 1.0f}}},
+      {wr, 0.022f, 0.027f, {{elJ, 0.5f}, {wrJ, 0.5f}}},
+  };
+  addTube(sink, arm, 20, 0.02f, glm::vec3(0, 0, 1), 0.045f, 0.015f);
+  if (fingers) {
+    addFingeredHand(sink, k.skeleton, k.pos, p, wrJ, wr, el);
+    return;
   }
+  // Hand (palm towards the thigh) and thumb pointing forward.
+  auto handOnly = [&](const glm::vec3&) { return Influences{{wrJ, 1.0f}}; };
+  const glm::vec3 down = glm::normalize(wr - el);
+  addEllipsoid(sink, wr + down * 0.085f, {0.020f, 0.092f, 0.045f}, 16, 20, handOnly);
+  addEllipsoid(sink, wr + down * 0.055f + glm::vec3(-sx * 0.004f, 0.0f, 0.042f), {0.012f, 0.036f, 0.013f},
+               8, 12, handOnly);
+}
 
-  // Normals from the generated surfaces (area-weighted; every part is a closed shell).
-  std::vector<glm::vec3> acc(a.mesh.vertices.size(), glm::vec3(0.0f));
-  for (size_t t = 0; t + 2 < a.mesh.indices.size(); t += 3) {
-    const uint32_t i0 = a.mesh.indices[t], i1 = a.mesh.indices[t + 1], i2 = a.mesh.indices[t + 2];
-    const glm::vec3 n = glm::cross(a.mesh.vertices[i1].position - a.mesh.vertices[i0].position,
-                                   a.mesh.vertices[i2].position - a.mesh.vertices[i0].position);
+// Normals from the generated surfaces (area-weighted; every part is a closed shell).
+void computeNormals(SkinnedMesh& mesh) {
+  std::vector<glm::vec3> acc(mesh.vertices.size(), glm::vec3(0.0f));
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    const uint32_t i0 = mesh.indices[t], i1 = mesh.indices[t + 1], i2 = mesh.indices[t + 2];
+    const glm::vec3 n = glm::cross(mesh.vertices[i1].position - mesh.vertices[i0].position,
+                                   mesh.vertices[i2].position - mesh.vertices[i0].position);
     acc[i0] += n;
     acc[i1] += n;
     acc[i2] += n;
   }
   for (size_t i = 0; i < acc.size(); ++i) {
     const float len = glm::length(acc[i]);
-    a.mesh.vertices[i].normal = len > 1e-20f ? acc[i] / len : glm::vec3(0.0f, 1.0f, 0.0f);
+    mesh.vertices[i].normal = len > 1e-20f ? acc[i] / len : glm::vec3(0.0f, 1.0f, 0.0f);
   }
+}
+
+}  // namespace
+
+AvatarAsset buildDefaultAvatar() {
+  return buildDefaultAvatar(DefaultAvatarOptions{});
+}
+
+AvatarAsset buildDefaultAvatar(const DefaultAvatarOptions& options) {
+  AvatarAsset a;
+  a.format = AvatarFormat::Procedural;
+  auto defs = jointTable();
+  std::vector<std::string> fingerNames;  // owns the names the JointDefs point at
+  if (options.fingers) appendFingerJoints(defs, fingerNames);
+  const std::vector<glm::vec3> pos = addSkeleton(a, defs);
+  const JointLookup joints{a.skeleton, pos};
+  MeshSink sink(a.mesh);
+  addTrunkAndHead(sink, joints);
+  for (const std::string side : {"l_", "r_"}) {
+    addLeg(sink, joints, side);
+    addArm(sink, joints, side, options.fingers);
+  }
+  computeNormals(a.mesh);
   Material m;
   m.name = "mannequin";
   m.baseColorFactor = glm::vec4(0.72f, 0.72f, 0.74f, 1.0f);

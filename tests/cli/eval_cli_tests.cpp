@@ -11,10 +11,7 @@
 #include "cli/cli_support.h"
 #include "test_paths.h"
 
-using embody::test::outDir;
-using embody::test::pngSize;
-using embody::test::readJson;
-using embody::test::runEmbody;
+using namespace embody::test;  // outDir, readJson, pngSize, runEmbody (cli_support.h)
 namespace fs = std::filesystem;
 
 namespace {

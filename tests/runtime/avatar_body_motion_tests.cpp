@@ -24,6 +24,7 @@ const avatar::AvatarAsset& defaultAvatar() {
 struct Figures {
   StatsSummary summary;
   size_t nonFinite = 0;
+  int refusedCalls = 0;  // ik::Data setter calls the solver made that were refused
   double p95(TrackerId id) const { return summary.residualP95[size_t(tracking::index(id))]; }
 };
 
@@ -55,6 +56,7 @@ Figures drive(const std::string& spec, AvatarBodyOptions o = {}, double seconds 
         ++f.nonFinite;
   }
   f.summary = rec.summary();
+  f.refusedCalls = (*solver)->refusedCalls();
   return f;
 }
 
@@ -69,6 +71,7 @@ TEST_CASE("synthetic motions drive the default avatar: head and hands on target,
                 << f.p95(TrackerId::LeftHand) * 1e3 << " / " << f.p95(TrackerId::RightHand) * 1e3 << " mm, feet "
                 << f.p95(TrackerId::LeftFoot) * 1e3 << " / " << f.p95(TrackerId::RightFoot) * 1e3 << " mm");
     CHECK(f.nonFinite == 0);
+    CHECK(f.refusedCalls == 0);
     CHECK(f.p95(TrackerId::Head) >= 0.0);
     CHECK(f.p95(TrackerId::Head) < 0.01);
     CHECK(f.p95(TrackerId::LeftHand) < 0.03);

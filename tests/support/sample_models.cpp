@@ -22,13 +22,7 @@ void limits(ModelBuilder& b, JointId j, std::initializer_list<std::pair<double, 
 }
 
 TaskDesc poseTask(const std::string& name, JointId joint, int level, const Eigen::Vector3d& offset) {
-  TaskDesc t;
-  t.name = name;
-  t.type = TaskType::Pose;
-  t.joint = joint;
-  t.offset = offset;
-  t.level = level;
-  return t;
+  return {.name = name, .type = TaskType::Pose, .joint = joint, .offset = offset, .level = level};
 }
 
 }  // namespace
@@ -162,21 +156,9 @@ Result<Model> sampleSpine(bool coupled) {
   }
   const JointId head = b.addJoint("head", parent, JointType::Fixed, at(0, 0.10, 0.02));
   b.setSegment(head, 5.0, {0, 0.05, 0});
-  TaskDesc t;
-  t.name = "head_orientation";
-  t.type = TaskType::Orientation;
-  t.joint = head;
-  t.level = 0;
-  b.addTask(t);
-  t.name = "head_position";
-  t.type = TaskType::Position;
-  t.level = 1;
-  b.addTask(t);
-  t.name = "chest_orientation";
-  t.type = TaskType::Orientation;
-  t.joint = chest;
-  t.level = 2;
-  b.addTask(t);
+  b.addTask({.name = "head_orientation", .type = TaskType::Orientation, .joint = head, .level = 0});
+  b.addTask({.name = "head_position", .type = TaskType::Position, .joint = head, .level = 1});
+  b.addTask({.name = "chest_orientation", .type = TaskType::Orientation, .joint = chest, .level = 2});
   return b.build();
 }
 

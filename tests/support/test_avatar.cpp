@@ -65,12 +65,9 @@ avatar::Image checker(int size, int cells, glm::u8vec4 a, glm::u8vec4 b) {
   return img;
 }
 
-}  // namespace
-
-avatar::AvatarAsset makeTestAvatar(const TestAvatarOptions& o) {
-  avatar::AvatarAsset a;
-  a.format = avatar::AvatarFormat::Procedural;
-  auto& joints = a.skeleton.joints;
+// root, spine0..4 (up +Y), head on the top, hands on spine3. Returns {head, leftHand, rightHand}.
+std::array<int, 3> addTestSkeleton(avatar::Skeleton& skeleton) {
+  auto& joints = skeleton.joints;
   joints.push_back({"root", -1, {}});
   for (int i = 0; i < kSpineJoints; ++i) {
     avatar::Transform t;
@@ -87,8 +84,11 @@ avatar::AvatarAsset makeTestAvatar(const TestAvatarOptions& o) {
   rh.translation = glm::vec3(-0.35f, -0.1f, 0.0f);
   joints.push_back({"leftHand", spineTop - 1, lh});
   joints.push_back({"rightHand", spineTop - 1, rh});
-  const int leftHand = int(joints.size()) - 2, rightHand = int(joints.size()) - 1;
+  return {head, int(joints.size()) - 2, int(joints.size()) - 1};
+}
 
+// Checker textures and the five materials: body, head, fin (BLEND), flag (MASK), hands.
+void addTestMaterials(avatar::AvatarAsset& a) {
   a.images.push_back(checker(64, 8, {220, 120, 60, 255}, {240, 220, 190, 255}));  // body
   a.images.push_back(checker(32, 4, {60, 170, 90, 255}, {0, 0, 0, 0}));           // flag: holes
   a.materials.push_back({.name = "body", .baseColorFactor = glm::vec4(1.0f), .baseColorImage = 0});
@@ -103,11 +103,15 @@ avatar::AvatarAsset makeTestAvatar(const TestAvatarOptions& o) {
                          .alphaMode = avatar::AlphaMode::Mask,
                          .doubleSided = true});
   a.materials.push_back({.name = "hands", .baseColorFactor = glm::vec4(0.3f, 0.3f, 0.35f, 1.0f)});
+}
 
-  Builder b{a};
-  // Tube: rings along y, each vertex weighted by a Gaussian of its distance to the spine joints.
-  const float radius = 0.12f, y0 = kSpineBase, y1 = kSpineBase + kSpineStep * (kSpineJoints - 1) + 0.25f;
-  uint32_t first = b.begin();
+constexpr float kTubeTop = kSpineBase + kSpineStep * (kSpineJoints - 1) + 0.25f;
+
+// Tube: rings along y, each vertex weighted by a Gaussian of its distance to the spine joints.
+void addTestTube(Builder& b, const TestAvatarOptions& o) {
+  avatar::AvatarAsset& a = b.a;
+  const float radius = 0.12f, y0 = kSpineBase, y1 = kTubeTop;
+  const uint32_t first = b.begin();
   const uint32_t tubeBase = static_cast<uint32_t>(a.mesh.vertices.size());
   for (int r = 0; r <= o.rings; ++r) {
     const float t = float(r) / float(o.rings), y = y0 + (y1 - y0) * t;
@@ -140,13 +144,16 @@ avatar::AvatarAsset makeTestAvatar(const TestAvatarOptions& o) {
       b.tri(i0, i3, i2);
     }
   b.primitive(first, 0);
+}
 
-  // Head: a UV sphere rigidly on the head joint.
-  first = b.begin();
-  const glm::vec3 headCenter(0.0f, y1 + 0.16f, 0.0f);
+// Head: a UV sphere rigidly on the head joint, with a nose so that the facing direction (+Z, the
+// glTF front) is visible.
+void addTestHead(Builder& b, int head) {
+  const uint32_t first = b.begin();
+  const glm::vec3 headCenter(0.0f, kTubeTop + 0.16f, 0.0f);
   const float headRadius = 0.17f;
   const int lat = 12, lon = 18;
-  const uint32_t headBase = static_cast<uint32_t>(a.mesh.vertices.size());
+  const uint32_t headBase = static_cast<uint32_t>(b.a.mesh.vertices.size());
   for (int i = 0; i <= lat; ++i) {
     const float theta = kPi * float(i) / float(lat);
     for (int j = 0; j <= lon; ++j) {
@@ -161,44 +168,57 @@ avatar::AvatarAsset makeTestAvatar(const TestAvatarOptions& o) {
       b.tri(i0, i2, i3);
       b.tri(i0, i3, i1);
     }
-  // A nose so that the facing direction (+Z, the glTF front) is visible.
   b.box(headCenter + glm::vec3(0.0f, 0.0f, headRadius), glm::vec3(0.03f, 0.03f, 0.05f), head);
   b.primitive(first, kHeadMaterial);
+}
 
+// A quad of one material on one joint (both faces drawn by the material).
+void addQuad(Builder& b, glm::vec3 c, glm::vec3 u, glm::vec3 v, int joint, int material) {
+  const uint32_t f = b.begin();
+  const glm::vec3 n = glm::normalize(glm::cross(u, v));
+  const uint32_t q0 = b.vertex(c - u - v, n, {0, 0}, joint), q1 = b.vertex(c + u - v, n, {1, 0}, joint);
+  const uint32_t q2 = b.vertex(c + u + v, n, {1, 1}, joint), q3 = b.vertex(c - u + v, n, {0, 1}, joint);
+  b.tri(q0, q1, q2);
+  b.tri(q0, q2, q3);
+  b.primitive(f, material);
+}
+
+// First person: every primitive but the head's.
+void addFirstPersonList(avatar::SkinnedMesh& mesh) {
+  for (const auto& p : mesh.primitives) {
+    if (p.material == kHeadMaterial) continue;
+    avatar::Primitive fp = p;
+    fp.firstIndex = static_cast<uint32_t>(mesh.firstPersonIndices.size());
+    mesh.firstPersonIndices.insert(mesh.firstPersonIndices.end(), mesh.indices.begin() + p.firstIndex,
+                                   mesh.indices.begin() + p.firstIndex + p.indexCount);
+    mesh.firstPersonPrimitives.push_back(fp);
+  }
+}
+
+}  // namespace
+
+avatar::AvatarAsset makeTestAvatar(const TestAvatarOptions& o) {
+  avatar::AvatarAsset a;
+  a.format = avatar::AvatarFormat::Procedural;
+  const auto [head, leftHand, rightHand] = addTestSkeleton(a.skeleton);
+  addTestMaterials(a);
+  Builder b{a};
+  addTestTube(b, o);
+  addTestHead(b, head);
   // Hands: small blocks.
-  first = b.begin();
+  const uint32_t first = b.begin();
   b.box(glm::vec3(0.35f, kSpineBase + kSpineStep * 3 - 0.1f, 0.0f), glm::vec3(0.05f, 0.08f, 0.03f), leftHand);
   b.box(glm::vec3(-0.35f, kSpineBase + kSpineStep * 3 - 0.1f, 0.0f), glm::vec3(0.05f, 0.08f, 0.03f), rightHand);
   b.primitive(first, 4);
-
   // Fin (BLEND) on the back and flag (MASK) on the side, both skinned to a mid-spine joint.
-  auto quad = [&](glm::vec3 c, glm::vec3 u, glm::vec3 v, int joint, int material) {
-    const uint32_t f = b.begin();
-    const glm::vec3 n = glm::normalize(glm::cross(u, v));
-    const uint32_t q0 = b.vertex(c - u - v, n, {0, 0}, joint), q1 = b.vertex(c + u - v, n, {1, 0}, joint);
-    const uint32_t q2 = b.vertex(c + u + v, n, {1, 1}, joint), q3 = b.vertex(c - u + v, n, {0, 1}, joint);
-    b.tri(q0, q1, q2);
-    b.tri(q0, q2, q3);
-    b.primitive(f, material);
-  };
-  quad(glm::vec3(0.0f, 0.8f, -0.25f), glm::vec3(0.0f, 0.0f, 0.13f), glm::vec3(0.0f, 0.3f, 0.0f), 3, 2);
-  quad(glm::vec3(0.0f, 1.25f, 0.14f), glm::vec3(0.2f, 0.0f, 0.0f), glm::vec3(0.0f, 0.12f, 0.0f), 4, 3);
-
-  // First person: every primitive but the head's.
-  for (const auto& p : a.mesh.primitives) {
-    if (p.material == kHeadMaterial) continue;
-    avatar::Primitive fp = p;
-    fp.firstIndex = static_cast<uint32_t>(a.mesh.firstPersonIndices.size());
-    a.mesh.firstPersonIndices.insert(a.mesh.firstPersonIndices.end(), a.mesh.indices.begin() + p.firstIndex,
-                                     a.mesh.indices.begin() + p.firstIndex + p.indexCount);
-    a.mesh.firstPersonPrimitives.push_back(fp);
-  }
-
+  addQuad(b, glm::vec3(0.0f, 0.8f, -0.25f), glm::vec3(0.0f, 0.0f, 0.13f), glm::vec3(0.0f, 0.3f, 0.0f), 3, 2);
+  addQuad(b, glm::vec3(0.0f, 1.25f, 0.14f), glm::vec3(0.2f, 0.0f, 0.0f), glm::vec3(0.0f, 0.12f, 0.0f), 4, 3);
+  addFirstPersonList(a.mesh);
   // Inverse bind matrices from the rest pose.
   std::vector<glm::mat4> globals;
   avatar::computeGlobals(a.skeleton, avatar::SkeletonPose::rest(a.skeleton), globals);
   for (const auto& g : globals) a.mesh.inverseBind.push_back(glm::inverse(g));
-  a.skinJointCount = static_cast<int>(joints.size());
+  a.skinJointCount = static_cast<int>(a.skeleton.joints.size());
   return a;
 }
 

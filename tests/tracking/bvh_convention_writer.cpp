@@ -203,156 +203,170 @@ std::array<std::string, kRoleCount> sided(const std::array<std::string, 6>& cent
   return a;
 }
 
+const glm::dquat kZUp = glm::angleAxis(kPi / 2, glm::dvec3(1, 0, 0));  // Y -> Z, facing +Z -> -Y
+
+// The canonical names, CMU and its conversions, and the DCC tools' rigs.
+void addToolConventions(std::vector<BvhConvention>& v) {
+  BvhConvention c;
+  c.name = "canonical";
+  c.names = sided({"Hips", "Spine", "Spine1", "Spine2", "Neck", "Head"}, "Left%", "Right%",
+                  {"Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "ToeBase"});
+  v.push_back(c);
+
+  c = {};
+  c.name = "cmu";  // CMU's own BVH: CMU units (1/0.45 inch), T-pose first frame
+  c.names = sided({"Hips", "LowerBack", "Spine", "Spine1", "Neck1", "Head"}, "Left%", "Right%",
+                  {"Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "ToeBase"});
+  c.helpers = {{"LeftFingerBase", kLHand, {6, 0, 0}}, {"LThumb", kLHand, {3, 0, 3}},
+               {"RightFingerBase", kRHand, {-6, 0, 0}}, {"RThumb", kRHand, {-3, 0, 3}}};
+  c.unitsPerCm = 0.45 / 2.54;
+  c.tposeFirst = true;
+  v.push_back(c);
+
+  c = {};
+  c.name = "cgspeed";  // CMU converted for 3ds Max/MotionBuilder by cgspeed: joint-named limbs
+  c.names = sided({"Hips", "lowerback", "Chest", "Chest2", "Neck", "Head"}, "Left%", "Right%",
+                  {"Collar", "Shoulder", "Elbow", "Wrist", "Hip", "Knee", "Ankle", "Toe"});
+  c.helpers = {{"lhand", kLHand, {4, 0, 0}}, {"LThumb", kLHand, {2, 0, 3}}, {"rhand", kRHand, {-4, 0, 0}},
+               {"RThumb", kRHand, {-2, 0, 3}}};
+  c.unitsPerCm = 0.45 / 2.54;
+  c.frameTime = 1.0 / 120.0;
+  v.push_back(c);
+
+  c = {};
+  c.name = "humanik";  // MotionBuilder / HumanIK: character namespace, roll bones
+  c.names = sided({"Character1_Hips", "Character1_Spine", "Character1_Spine1", "Character1_Spine2",
+                   "Character1_Neck", "Character1_Head"},
+                  "Character1_Left%", "Character1_Right%",
+                  {"Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "ToeBase"});
+  c.helpers = {{"Character1_LeftArmRoll", kLUpperArm, {14, 0, 0}}, {"Character1_LeftForeArmRoll", kLLowerArm, {13, 0, 0}},
+               {"Character1_LeftHandThumb1", kLHand, {3, 0, 3}}, {"Character1_RightArmRoll", kRUpperArm, {-14, 0, 0}},
+               {"Character1_RightForeArmRoll", kRLowerArm, {-13, 0, 0}}, {"Character1_LeftUpLegRoll", kLUpperLeg, {0, -20, 0}}};
+  c.rotationOrder = "ZXY";
+  c.frameTime = 1.0 / 30.0;
+  v.push_back(c);
+
+  c = {};
+  c.name = "biped";  // 3ds Max Biped: Z up, bones along +X, inches
+  c.names = sided({"Bip01 Pelvis", "Bip01 Spine", "Bip01 Spine1", "Bip01 Spine2", "Bip01 Neck", "Bip01 Head"},
+                  "Bip01 L %", "Bip01 R %", {"Clavicle", "UpperArm", "Forearm", "Hand", "Thigh", "Calf", "Foot", "Toe0"});
+  c.helpers = {{"Bip01 L ForeTwist", kLLowerArm, {13, 0, 0}}, {"Bip01 L Finger0", kLHand, {3, 0, 3}},
+               {"Bip01 R ForeTwist", kRLowerArm, {-13, 0, 0}}, {"Bip01 R Finger0", kRHand, {-3, 0, 3}}};
+  c.world = kZUp;
+  c.boneAxis = {1, 0, 0};
+  c.unitsPerCm = 1 / 2.54;
+  c.rotationOrder = "ZXY";
+  c.frameTime = 1.0 / 30.0;
+  v.push_back(c);
+
+  c = {};
+  c.name = "mixamo";
+  c.names = sided({"mixamorig:Hips", "mixamorig:Spine", "mixamorig:Spine1", "mixamorig:Spine2", "mixamorig:Neck",
+                   "mixamorig:Head"},
+                  "mixamorig:Left%", "mixamorig:Right%",
+                  {"Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "ToeBase"});
+  c.helpers = {{"mixamorig:LeftHandIndex1", kLHand, {8, 0, 1}}, {"mixamorig:RightHandIndex1", kRHand, {-8, 0, 1}}};
+  c.rotationOrder = "XYZ";
+  c.frameTime = 1.0 / 30.0;
+  v.push_back(c);
+}
+
+// Character-creator and capture-suit rigs.
+void addCaptureConventions(std::vector<BvhConvention>& v) {
+  BvhConvention c;
+  c.name = "ccbase";  // Reallusion CC_Base / CC3: bones along +Y, twist and share bones
+  c.names = sided({"CC_Base_Hip", "CC_Base_Waist", "CC_Base_Spine01", "CC_Base_Spine02", "CC_Base_NeckTwist01",
+                   "CC_Base_Head"},
+                  "CC_Base_L_%", "CC_Base_R_%", {"Clavicle", "Upperarm", "Forearm", "Hand", "Thigh", "Calf", "Foot", "ToeBase"});
+  c.helpers = {{"CC_Base_L_UpperarmTwist01", kLUpperArm, {10, 0, 0}}, {"CC_Base_L_ForearmTwist01", kLLowerArm, {10, 0, 0}},
+               {"CC_Base_L_ElbowShareBone", kLLowerArm, {0, 0, 0}}, {"CC_Base_R_UpperarmTwist01", kRUpperArm, {-10, 0, 0}},
+               {"CC_Base_R_ForearmTwist01", kRLowerArm, {-10, 0, 0}}, {"CC_Base_L_Mid1", kLHand, {9, 0, 0}},
+               {"CC_Base_L_ThighTwist01", kLUpperLeg, {0, -15, 0}}, {"CC_Base_R_RibsTwist", kUpperChest, {-5, 5, 5}}};
+  c.boneAxis = {0, 1, 0};
+  c.frameTime = 1.0 / 60.0;
+  v.push_back(c);
+
+  c = {};
+  c.name = "bandai";  // Bandai-Namco Research motion dataset: Hand_L, bones along +X
+  c.names = sided({"Hips", "Spine", "Chest", "Chest2", "Neck", "Head"}, "%_L", "%_R",
+                  {"Shoulder", "UpperArm", "LowerArm", "Hand", "UpperLeg", "LowerLeg", "Foot", "Toes"});
+  c.boneAxis = {1, 0, 0};
+  c.rotationOrder = "XZY";
+  c.frameTime = 1.0 / 30.0;
+  v.push_back(c);
+
+  c = {};
+  c.name = "rokoko";
+  c.names = sided({"Hips", "Spine", "Spine1", "Spine2", "Neck", "Head"}, "Left%", "Right%",
+                  {"Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "Toe"});
+  c.helpers = {{"LeftFinger1Metacarpal", kLHand, {3, 0, 2}}, {"RightFinger1Metacarpal", kRHand, {-3, 0, 2}}};
+  c.unitsPerCm = 0.01;  // metres
+  c.rotationOrder = "YZX";
+  c.frameTime = 1.0 / 100.0;
+  v.push_back(c);
+
+  c = {};
+  c.name = "neuron";  // Perception Neuron: YXZ, in-hand helper bones
+  c.names = sided({"Hips", "Spine", "Spine1", "Spine2", "Neck", "Head"}, "Left%", "Right%",
+                  {"Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "ToeBase"});
+  c.helpers = {{"LeftInHandIndex", kLHand, {4, 0, 1}}, {"LeftHandThumb1", kLHand, {3, 0, 3}},
+               {"RightInHandIndex", kRHand, {-4, 0, 1}}, {"RightHandThumb1", kRHand, {-3, 0, 3}}};
+  c.rotationOrder = "YXZ";
+  c.frameTime = 1.0 / 60.0;
+  v.push_back(c);
+}
+
+// Motion-capture systems, the Unreal mannequin and VRM.
+void addSystemConventions(std::vector<BvhConvention>& v) {
+  BvhConvention c;
+  c.name = "xsens";  // Xsens MVN: Pelvis, L5, L3, T12, T8; 240 Hz
+  c.names = sided({"Pelvis", "L5", "L3", "T8", "Neck", "Head"}, "Left%", "Right%",
+                  {"Shoulder", "UpperArm", "ForeArm", "Hand", "UpperLeg", "LowerLeg", "Foot", "Toe"});
+  c.rotationOrder = "ZXY";
+  c.frameTime = 1.0 / 240.0;
+  v.push_back(c);
+
+  c = {};
+  c.name = "optitrack";  // OptiTrack Motive: asset-name prefix, LUArm/LFArm, metres
+  c.names = sided({"Skeleton1_Hip", "Skeleton1_Ab", "Skeleton1_Chest", "Skeleton1_UpperChest", "Skeleton1_Neck",
+                   "Skeleton1_Head"},
+                  "Skeleton1_L%", "Skeleton1_R%", {"Shoulder", "UArm", "FArm", "Hand", "Thigh", "Shin", "Foot", "Toe"});
+  c.unitsPerCm = 0.01;
+  c.rotationOrder = "ZXY";
+  c.frameTime = 1.0 / 120.0;
+  v.push_back(c);
+
+  c = {};
+  c.name = "unreal";  // Unreal mannequin: Z up, facing +X, twist and IK bones, 1/24 s
+  c.names = sided({"pelvis", "spine_01", "spine_02", "spine_03", "neck_01", "head"}, "%_l", "%_r",
+                  {"clavicle", "upperarm", "lowerarm", "hand", "thigh", "calf", "foot", "ball"});
+  c.helpers = {{"upperarm_twist_01_l", kLUpperArm, {10, 0, 0}}, {"lowerarm_twist_01_l", kLLowerArm, {10, 0, 0}},
+               {"upperarm_twist_01_r", kRUpperArm, {-10, 0, 0}}, {"calf_twist_01_l", kLLowerLeg, {0, -20, 0}},
+               {"ik_hand_root", kHips, {0, 5, 0}}, {"ik_foot_l", kHips, {5, -5, 0}}};
+  c.world = glm::angleAxis(kPi / 2, glm::dvec3(0, 0, 1)) * kZUp;
+  c.frameTime = 1.0 / 24.0;
+  v.push_back(c);
+
+  c = {};
+  c.name = "vrm";  // VRM humanoid bone names, metres, facing -Z
+  c.names = sided({"hips", "spine", "chest", "upperChest", "neck", "head"}, "left%", "right%",
+                  {"Shoulder", "UpperArm", "LowerArm", "Hand", "UpperLeg", "LowerLeg", "Foot", "Toes"});
+  c.world = glm::angleAxis(kPi, glm::dvec3(0, 1, 0));
+  c.unitsPerCm = 0.01;
+  c.rotationOrder = "YXZ";
+  c.frameTime = 1.0 / 60.0;
+  c.tposeFirst = true;
+  v.push_back(c);
+}
+
 }  // namespace
 
 const std::vector<BvhConvention>& bvhConventions() {
   static const std::vector<BvhConvention> all = [] {
-    const glm::dquat zUp = glm::angleAxis(kPi / 2, glm::dvec3(1, 0, 0));  // Y -> Z, facing +Z -> -Y
     std::vector<BvhConvention> v;
-    BvhConvention c;
-    c.name = "canonical";
-    c.names = sided({"Hips", "Spine", "Spine1", "Spine2", "Neck", "Head"}, "Left%", "Right%",
-                    {"Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "ToeBase"});
-    v.push_back(c);
-
-    c = {};
-    c.name = "cmu";  // CMU's own BVH: CMU units (1/0.45 inch), T-pose first frame
-    c.names = sided({"Hips", "LowerBack", "Spine", "Spine1", "Neck1", "Head"}, "Left%", "Right%",
-                    {"Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "ToeBase"});
-    c.helpers = {{"LeftFingerBase", kLHand, {6, 0, 0}}, {"LThumb", kLHand, {3, 0, 3}},
-                 {"RightFingerBase", kRHand, {-6, 0, 0}}, {"RThumb", kRHand, {-3, 0, 3}}};
-    c.unitsPerCm = 0.45 / 2.54;
-    c.tposeFirst = true;
-    v.push_back(c);
-
-    c = {};
-    c.name = "cgspeed";  // CMU converted for 3ds Max/MotionBuilder by cgspeed: joint-named limbs
-    c.names = sided({"Hips", "lowerback", "Chest", "Chest2", "Neck", "Head"}, "Left%", "Right%",
-                    {"Collar", "Shoulder", "Elbow", "Wrist", "Hip", "Knee", "Ankle", "Toe"});
-    c.helpers = {{"lhand", kLHand, {4, 0, 0}}, {"LThumb", kLHand, {2, 0, 3}}, {"rhand", kRHand, {-4, 0, 0}},
-                 {"RThumb", kRHand, {-2, 0, 3}}};
-    c.unitsPerCm = 0.45 / 2.54;
-    c.frameTime = 1.0 / 120.0;
-    v.push_back(c);
-
-    c = {};
-    c.name = "humanik";  // MotionBuilder / HumanIK: character namespace, roll bones
-    c.names = sided({"Character1_Hips", "Character1_Spine", "Character1_Spine1", "Character1_Spine2",
-                     "Character1_Neck", "Character1_Head"},
-                    "Character1_Left%", "Character1_Right%",
-                    {"Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "ToeBase"});
-    c.helpers = {{"Character1_LeftArmRoll", kLUpperArm, {14, 0, 0}}, {"Character1_LeftForeArmRoll", kLLowerArm, {13, 0, 0}},
-                 {"Character1_LeftHandThumb1", kLHand, {3, 0, 3}}, {"Character1_RightArmRoll", kRUpperArm, {-14, 0, 0}},
-                 {"Character1_RightForeArmRoll", kRLowerArm, {-13, 0, 0}}, {"Character1_LeftUpLegRoll", kLUpperLeg, {0, -20, 0}}};
-    c.rotationOrder = "ZXY";
-    c.frameTime = 1.0 / 30.0;
-    v.push_back(c);
-
-    c = {};
-    c.name = "biped";  // 3ds Max Biped: Z up, bones along +X, inches
-    c.names = sided({"Bip01 Pelvis", "Bip01 Spine", "Bip01 Spine1", "Bip01 Spine2", "Bip01 Neck", "Bip01 Head"},
-                    "Bip01 L %", "Bip01 R %", {"Clavicle", "UpperArm", "Forearm", "Hand", "Thigh", "Calf", "Foot", "Toe0"});
-    c.helpers = {{"Bip01 L ForeTwist", kLLowerArm, {13, 0, 0}}, {"Bip01 L Finger0", kLHand, {3, 0, 3}},
-                 {"Bip01 R ForeTwist", kRLowerArm, {-13, 0, 0}}, {"Bip01 R Finger0", kRHand, {-3, 0, 3}}};
-    c.world = zUp;
-    c.boneAxis = {1, 0, 0};
-    c.unitsPerCm = 1 / 2.54;
-    c.rotationOrder = "ZXY";
-    c.frameTime = 1.0 / 30.0;
-    v.push_back(c);
-
-    c = {};
-    c.name = "mixamo";
-    c.names = sided({"mixamorig:Hips", "mixamorig:Spine", "mixamorig:Spine1", "mixamorig:Spine2", "mixamorig:Neck",
-                     "mixamorig:Head"},
-                    "mixamorig:Left%", "mixamorig:Right%",
-                    {"Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "ToeBase"});
-    c.helpers = {{"mixamorig:LeftHandIndex1", kLHand, {8, 0, 1}}, {"mixamorig:RightHandIndex1", kRHand, {-8, 0, 1}}};
-    c.rotationOrder = "XYZ";
-    c.frameTime = 1.0 / 30.0;
-    v.push_back(c);
-
-    c = {};
-    c.name = "ccbase";  // Reallusion CC_Base / CC3: bones along +Y, twist and share bones
-    c.names = sided({"CC_Base_Hip", "CC_Base_Waist", "CC_Base_Spine01", "CC_Base_Spine02", "CC_Base_NeckTwist01",
-                     "CC_Base_Head"},
-                    "CC_Base_L_%", "CC_Base_R_%", {"Clavicle", "Upperarm", "Forearm", "Hand", "Thigh", "Calf", "Foot", "ToeBase"});
-    c.helpers = {{"CC_Base_L_UpperarmTwist01", kLUpperArm, {10, 0, 0}}, {"CC_Base_L_ForearmTwist01", kLLowerArm, {10, 0, 0}},
-                 {"CC_Base_L_ElbowShareBone", kLLowerArm, {0, 0, 0}}, {"CC_Base_R_UpperarmTwist01", kRUpperArm, {-10, 0, 0}},
-                 {"CC_Base_R_ForearmTwist01", kRLowerArm, {-10, 0, 0}}, {"CC_Base_L_Mid1", kLHand, {9, 0, 0}},
-                 {"CC_Base_L_ThighTwist01", kLUpperLeg, {0, -15, 0}}, {"CC_Base_R_RibsTwist", kUpperChest, {-5, 5, 5}}};
-    c.boneAxis = {0, 1, 0};
-    c.frameTime = 1.0 / 60.0;
-    v.push_back(c);
-
-    c = {};
-    c.name = "bandai";  // Bandai-Namco Research motion dataset: Hand_L, bones along +X
-    c.names = sided({"Hips", "Spine", "Chest", "Chest2", "Neck", "Head"}, "%_L", "%_R",
-                    {"Shoulder", "UpperArm", "LowerArm", "Hand", "UpperLeg", "LowerLeg", "Foot", "Toes"});
-    c.boneAxis = {1, 0, 0};
-    c.rotationOrder = "XZY";
-    c.frameTime = 1.0 / 30.0;
-    v.push_back(c);
-
-    c = {};
-    c.name = "rokoko";
-    c.names = sided({"Hips", "Spine", "Spine1", "Spine2", "Neck", "Head"}, "Left%", "Right%",
-                    {"Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "Toe"});
-    c.helpers = {{"LeftFinger1Metacarpal", kLHand, {3, 0, 2}}, {"RightFinger1Metacarpal", kRHand, {-3, 0, 2}}};
-    c.unitsPerCm = 0.01;  // metres
-    c.rotationOrder = "YZX";
-    c.frameTime = 1.0 / 100.0;
-    v.push_back(c);
-
-    c = {};
-    c.name = "neuron";  // Perception Neuron: YXZ, in-hand helper bones
-    c.names = sided({"Hips", "Spine", "Spine1", "Spine2", "Neck", "Head"}, "Left%", "Right%",
-                    {"Shoulder", "Arm", "ForeArm", "Hand", "UpLeg", "Leg", "Foot", "ToeBase"});
-    c.helpers = {{"LeftInHandIndex", kLHand, {4, 0, 1}}, {"LeftHandThumb1", kLHand, {3, 0, 3}},
-                 {"RightInHandIndex", kRHand, {-4, 0, 1}}, {"RightHandThumb1", kRHand, {-3, 0, 3}}};
-    c.rotationOrder = "YXZ";
-    c.frameTime = 1.0 / 60.0;
-    v.push_back(c);
-
-    c = {};
-    c.name = "xsens";  // Xsens MVN: Pelvis, L5, L3, T12, T8; 240 Hz
-    c.names = sided({"Pelvis", "L5", "L3", "T8", "Neck", "Head"}, "Left%", "Right%",
-                    {"Shoulder", "UpperArm", "ForeArm", "Hand", "UpperLeg", "LowerLeg", "Foot", "Toe"});
-    c.rotationOrder = "ZXY";
-    c.frameTime = 1.0 / 240.0;
-    v.push_back(c);
-
-    c = {};
-    c.name = "optitrack";  // OptiTrack Motive: asset-name prefix, LUArm/LFArm, metres
-    c.names = sided({"Skeleton1_Hip", "Skeleton1_Ab", "Skeleton1_Chest", "Skeleton1_UpperChest", "Skeleton1_Neck",
-                     "Skeleton1_Head"},
-                    "Skeleton1_L%", "Skeleton1_R%", {"Shoulder", "UArm", "FArm", "Hand", "Thigh", "Shin", "Foot", "Toe"});
-    c.unitsPerCm = 0.01;
-    c.rotationOrder = "ZXY";
-    c.frameTime = 1.0 / 120.0;
-    v.push_back(c);
-
-    c = {};
-    c.name = "unreal";  // Unreal mannequin: Z up, facing +X, twist and IK bones, 1/24 s
-    c.names = sided({"pelvis", "spine_01", "spine_02", "spine_03", "neck_01", "head"}, "%_l", "%_r",
-                    {"clavicle", "upperarm", "lowerarm", "hand", "thigh", "calf", "foot", "ball"});
-    c.helpers = {{"upperarm_twist_01_l", kLUpperArm, {10, 0, 0}}, {"lowerarm_twist_01_l", kLLowerArm, {10, 0, 0}},
-                 {"upperarm_twist_01_r", kRUpperArm, {-10, 0, 0}}, {"calf_twist_01_l", kLLowerLeg, {0, -20, 0}},
-                 {"ik_hand_root", kHips, {0, 5, 0}}, {"ik_foot_l", kHips, {5, -5, 0}}};
-    c.world = glm::angleAxis(kPi / 2, glm::dvec3(0, 0, 1)) * zUp;
-    c.frameTime = 1.0 / 24.0;
-    v.push_back(c);
-
-    c = {};
-    c.name = "vrm";  // VRM humanoid bone names, metres, facing -Z
-    c.names = sided({"hips", "spine", "chest", "upperChest", "neck", "head"}, "left%", "right%",
-                    {"Shoulder", "UpperArm", "LowerArm", "Hand", "UpperLeg", "LowerLeg", "Foot", "Toes"});
-    c.world = glm::angleAxis(kPi, glm::dvec3(0, 1, 0));
-    c.unitsPerCm = 0.01;
-    c.rotationOrder = "YXZ";
-    c.frameTime = 1.0 / 60.0;
-    c.tposeFirst = true;
-    v.push_back(c);
+    addToolConventions(v);
+    addCaptureConventions(v);
+    addSystemConventions(v);
     return v;
   }();
   return all;

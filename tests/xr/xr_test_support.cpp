@@ -9,6 +9,7 @@
 #include <chrono>
 #include <filesystem>
 
+#include "cli/cli_support.h"  // embodyBinary()
 #include "test_paths.h"
 
 namespace embody::test {
@@ -21,14 +22,7 @@ std::string runtimeManifest() {
 #endif
 }
 
-std::string embodyBin() {
-  if (const char* b = std::getenv("EMBODY_BIN")) return b;
-#ifdef EMBODY_BIN
-  return EMBODY_BIN;
-#else
-  return "embody";
-#endif
-}
+std::string embodyBin() { return embodyBinary(); }
 
 std::string helloXr() {
 #ifdef EMBODY_HELLO_XR

@@ -221,12 +221,7 @@ XrResult XRAPI_CALL CreateAction(XrActionSet actionSet, const XrActionCreateInfo
   a->type = ci->actionType;
   a->subactionPaths = std::move(subs);
   set->actions.push_back(std::move(owned));
-  {
-    std::lock_guard rlock(registry().mutex);
-    inst->actions.insert(a);
-  }
-  *out = reinterpret_cast<XrAction>(a);
-  return XR_SUCCESS;
+  return publishHandle(inst->actions, a, out);
 }
 EMBODY_XR_ENTRY(CreateAction)
 
@@ -237,8 +232,7 @@ XrResult XRAPI_CALL DestroyAction(XrAction action) {
   std::lock_guard lock(inst->mutex);
   // Only the handle goes (spec: the action's resources still make its action spaces locatable and
   // take part in xrSyncActions); its set frees it.
-  std::lock_guard rlock(registry().mutex);
-  inst->actions.erase(a);
+  unregisterHandle(inst->actions, a);
   return XR_SUCCESS;
 }
 EMBODY_XR_ENTRY(DestroyAction)
@@ -416,15 +410,21 @@ XrResult actionState(XrSession session, const XrActionStateGetInfo* info, XrActi
   return XR_SUCCESS;
 }
 
+// The fields every action state has, from the merged per-source data.
+template <class State>
+void fillActionState(const ActionStateData& d, State* state) {
+  state->changedSinceLastSync = d.changed ? XR_TRUE : XR_FALSE;
+  state->lastChangeTime = d.lastChange;
+  state->isActive = d.active ? XR_TRUE : XR_FALSE;
+}
+
 XrResult XRAPI_CALL GetActionStateBoolean(XrSession session, const XrActionStateGetInfo* info,
                                           XrActionStateBoolean* state) {
   if (!state || state->type != XR_TYPE_ACTION_STATE_BOOLEAN) return XR_ERROR_VALIDATION_FAILURE;
   ActionStateData d;
   if (XrResult r = actionState(session, info, XR_ACTION_TYPE_BOOLEAN_INPUT, d); XR_FAILED(r)) return r;
   state->currentState = d.value > 0.5f ? XR_TRUE : XR_FALSE;
-  state->changedSinceLastSync = d.changed ? XR_TRUE : XR_FALSE;
-  state->lastChangeTime = d.lastChange;
-  state->isActive = d.active ? XR_TRUE : XR_FALSE;
+  fillActionState(d, state);
   return XR_SUCCESS;
 }
 EMBODY_XR_ENTRY(GetActionStateBoolean)
@@ -435,9 +435,7 @@ XrResult XRAPI_CALL GetActionStateFloat(XrSession session, const XrActionStateGe
   ActionStateData d;
   if (XrResult r = actionState(session, info, XR_ACTION_TYPE_FLOAT_INPUT, d); XR_FAILED(r)) return r;
   state->currentState = d.value;
-  state->changedSinceLastSync = d.changed ? XR_TRUE : XR_FALSE;
-  state->lastChangeTime = d.lastChange;
-  state->isActive = d.active ? XR_TRUE : XR_FALSE;
+  fillActionState(d, state);
   return XR_SUCCESS;
 }
 EMBODY_XR_ENTRY(GetActionStateFloat)
@@ -447,10 +445,9 @@ XrResult XRAPI_CALL GetActionStateVector2f(XrSession session, const XrActionStat
   if (!state || state->type != XR_TYPE_ACTION_STATE_VECTOR2F) return XR_ERROR_VALIDATION_FAILURE;
   ActionStateData d;
   if (XrResult r = actionState(session, info, XR_ACTION_TYPE_VECTOR2F_INPUT, d); XR_FAILED(r)) return r;
+  fillActionState(d, state);
   state->currentState = {0.0f, 0.0f};  // the emulated sticks rest at the centre
   state->changedSinceLastSync = XR_FALSE;
-  state->lastChangeTime = d.lastChange;
-  state->isActive = d.active ? XR_TRUE : XR_FALSE;
   return XR_SUCCESS;
 }
 EMBODY_XR_ENTRY(GetActionStateVector2f)
@@ -513,12 +510,7 @@ XrResult XRAPI_CALL CreateActionSpace(XrSession session, const XrActionSpaceCrea
   sp->action = actionRef(a);
   sp->subaction = ci->subactionPath;
   sp->offset = offset;
-  {
-    std::lock_guard rlock(registry().mutex);
-    s->spaces.insert(sp);
-  }
-  *out = reinterpret_cast<XrSpace>(sp);
-  return XR_SUCCESS;
+  return publishHandle(s->spaces, sp, out);
 }
 EMBODY_XR_ENTRY(CreateActionSpace)
 
@@ -600,12 +592,7 @@ XrResult XRAPI_CALL CreateHandTrackerEXT(XrSession session, const XrHandTrackerC
   auto* h = new HandTracker;
   h->session = s;
   h->hand = ci->hand;
-  {
-    std::lock_guard rlock(registry().mutex);
-    s->handTrackers.insert(h);
-  }
-  *out = reinterpret_cast<XrHandTrackerEXT>(h);
-  return XR_SUCCESS;
+  return publishHandle(s->handTrackers, h, out);
 }
 EMBODY_XR_ENTRY(CreateHandTrackerEXT)
 
@@ -614,10 +601,7 @@ XrResult XRAPI_CALL DestroyHandTrackerEXT(XrHandTrackerEXT tracker) {
   HandTracker* h = findHandTracker(tracker, &inst);
   if (!h) return XR_ERROR_HANDLE_INVALID;
   std::lock_guard lock(inst->mutex);
-  {
-    std::lock_guard rlock(registry().mutex);
-    h->session->handTrackers.erase(h);
-  }
+  unregisterHandle(h->session->handTrackers, h);
   delete h;
   return XR_SUCCESS;
 }
@@ -627,12 +611,12 @@ EMBODY_XR_ENTRY(DestroyHandTrackerEXT)
 bool handJointsRelative(Session& s, const Space& base, XrTime t, bool left,
                         std::array<HandJoint, 26>& joints) {
   const BodySample body = s.instance->poses.sample(traceSeconds(s, t));
-  const TrackedPose& hand = left ? body.left : body.right;
+  const TrackerPose& hand = left ? body.left : body.right;
   const Located b = locateInStage(s, base, t);
   if (!hand.valid || !b.valid) return false;
-  handJointsFromGrip(hand.pose, left, left ? body.leftTrigger : body.rightTrigger, joints);
-  const Pose inv = inverse(b.pose);
-  for (auto& j : joints) j.pose = compose(inv, j.pose);
+  handJointsFromGrip(hand, left, left ? body.leftTrigger : body.rightTrigger, joints);
+  const Pose inv = b.pose.inverse();
+  for (auto& j : joints) j.pose = inv * j.pose;
   return true;
 }
 
@@ -675,7 +659,7 @@ XrResult XRAPI_CALL LocateHandJointsEXT(XrHandTrackerEXT tracker, const XrHandJo
     for (uint32_t i = 0; i < XR_HAND_JOINT_COUNT_EXT; ++i) {
       auto& jv = v->jointVelocities[i];
       jv.velocityFlags = okv ? XR_SPACE_VELOCITY_LINEAR_VALID_BIT : 0;  // angular: not estimated
-      const glm::vec3 lin = okv ? (b[i].pose.p - a[i].pose.p) / (2.0f * kDt * 1e-9f) : glm::vec3(0.0f);
+      const glm::vec3 lin = okv ? (b[i].pose.position - a[i].pose.position) / (2.0f * kDt * 1e-9f) : glm::vec3(0.0f);
       jv.linearVelocity = {lin.x, lin.y, lin.z};
       jv.angularVelocity = {0, 0, 0};
     }
@@ -701,11 +685,11 @@ Located actionPoseInStage(Session& s, const Space& space, const BodySample& body
   if (space.subaction == XR_NULL_PATH)  // no subaction path: the first hand the action is bound to
     hand = it->second[0].active ? 0 : (it->second[1].active ? 1 : -1);
   if (hand < 0 || !it->second[hand].active) return {};
-  const TrackedPose& tp = hand == 0 ? body.left : body.right;
+  const TrackerPose& tp = hand == 0 ? body.left : body.right;
   if (!tp.valid) return {};  // tracking lost: no location flags
   const auto comps = boundComponents(inst, s, space.action.get(), hand);
   const bool aim = !comps.empty() && comps.front().rfind("input/aim", 0) == 0;
-  return {aim ? aimFromGrip(tp.pose) : tp.pose, true, true};
+  return {aim ? aimFromGrip(tp) : Pose(tp), true, true};
 }
 
 void forgetSessionActions(Session& s) {

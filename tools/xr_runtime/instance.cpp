@@ -101,12 +101,7 @@ XrResult XRAPI_CALL DestroyInstance(XrInstance instance) {
   // Child objects go with their parent (spec); sessions release what they own on the app device.
   std::vector<Session*> sessions(inst->sessions.begin(), inst->sessions.end());
   for (Session* s : sessions) {
-    for (Swapchain* sc : s->swapchains) {
-      destroySwapchainImages(*sc);
-      delete sc;
-    }
-    for (Space* sp : s->spaces) delete sp;
-    for (HandTracker* h : s->handTrackers) delete h;
+    destroySessionChildren(*s);
     releaseSessionVulkan(*s);
     delete s;
   }

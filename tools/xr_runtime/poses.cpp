@@ -1,79 +1,51 @@
-// Pose math, the JSON Lines trace reader, the synthetic motion and the derived hand skeleton.
+// EMBODY_XR_POSES through the project's own readers, the looped replay, the synthetic motion and
+// the derived hand skeleton.
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <istream>
-#include <nlohmann/json.hpp>
+#include <iterator>
 
+#include "avatar/bvh/bvh.h"
 #include "tools/xr_runtime/runtime.h"
+#include "tracking/bvh_source.h"
+#include "tracking/trace.h"
 
 namespace embody::xr_runtime {
 
-Pose compose(const Pose& a, const Pose& b) {
-  return {a.p + a.q * b.p, glm::normalize(a.q * b.q)};
-}
-
-Pose inverse(const Pose& a) {
-  const glm::quat qi = glm::conjugate(a.q);
-  return {qi * -a.p, qi};
-}
-
-Pose fromXr(const XrPosef& p) {
-  Pose r{{p.position.x, p.position.y, p.position.z},
-         glm::quat(p.orientation.w, p.orientation.x, p.orientation.y, p.orientation.z)};
-  const float n = glm::length(r.q);
-  r.q = n > 1e-6f && std::isfinite(n) ? r.q / n : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
-  return r;
-}
-
-XrPosef toXr(const Pose& p) {
-  XrPosef r;
-  r.position = {p.p.x, p.p.y, p.p.z};
-  r.orientation = {p.q.x, p.q.y, p.q.z, p.q.w};
-  return r;
-}
-
 namespace {
 
-bool finite(const glm::vec3& v) {
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+// The head and hands of a trace, as the runtime replays them; "" or why not. Times stay within a
+// day of the first, so sample() can subtract and divide them.
+std::string toBodySamples(const tracking::Trace& trace, const std::string& name, std::vector<BodySample>& out) {
+  out.clear();
+  if (trace.samples.empty()) return name + ": no samples";
+  if (!(trace.samples.back().time - trace.samples.front().time <= 86400.0))
+    return name + ": the samples' times span more than a day";
+  out.reserve(trace.samples.size());
+  for (const tracking::PoseSample& p : trace.samples) {
+    // Lost tracking is an identity pose marked invalid, never NaN (a BVH chain that overflows).
+    auto clean = [&](tracking::TrackerId id) {
+      const TrackerPose& t = p[id];
+      return t.valid && tracking::isUsable(t) ? t : TrackerPose{};
+    };
+    BodySample s;
+    s.t = p.time;
+    s.head = clean(tracking::TrackerId::Head);
+    s.left = clean(tracking::TrackerId::LeftHand);
+    s.right = clean(tracking::TrackerId::RightHand);
+    s.leftTrigger = p.triggers[0];
+    s.rightTrigger = p.triggers[1];
+    out.push_back(s);
+  }
+  return "";
 }
 
-// {"p": [x,y,z], "q": [x,y,z,w], "valid": bool}; anything malformed or non-finite is invalid.
-TrackedPose readTracked(const nlohmann::json& j) {
-  TrackedPose t;
-  if (!j.is_object()) return t;
-  const auto p = j.find("p"), q = j.find("q");
-  if (p == j.end() || q == j.end() || !p->is_array() || !q->is_array() || p->size() != 3 || q->size() != 4)
-    return t;
-  for (const auto& v : *p)
-    if (!v.is_number()) return t;
-  for (const auto& v : *q)
-    if (!v.is_number()) return t;
-  t.pose.p = {(*p)[0].get<float>(), (*p)[1].get<float>(), (*p)[2].get<float>()};
-  glm::quat quat((*q)[3].get<float>(), (*q)[0].get<float>(), (*q)[1].get<float>(), (*q)[2].get<float>());
-  const float n = glm::length(quat);
-  if (!finite(t.pose.p) || !std::isfinite(n) || n < 1e-6f) return t;
-  t.pose.q = quat / n;
-  const auto valid = j.find("valid");
-  t.valid = valid == j.end() || (valid->is_boolean() && valid->get<bool>());
-  return t;
-}
-
-// The hand's "trigger" (0..1); anything else (missing, not a number, out of range) clamps.
-float readTrigger(const nlohmann::json& sample, const char* hand) {
-  const auto h = sample.find(hand);
-  if (h == sample.end() || !h->is_object()) return 0.0f;
-  const auto t = h->find("trigger");
-  if (t == h->end() || !t->is_number()) return 0.0f;
-  const double v = t->get<double>();
-  return std::isfinite(v) ? static_cast<float>(std::clamp(v, 0.0, 1.0)) : 0.0f;
-}
-
-TrackedPose interpolate(const TrackedPose& a, const TrackedPose& b, float u) {
+// Between two samples: interpolated while both are valid, else the nearer one.
+TrackerPose between(const TrackerPose& a, const TrackerPose& b, float u) {
   if (!a.valid || !b.valid) return u < 0.5f ? a : b;
-  return {{glm::mix(a.pose.p, b.pose.p, u), glm::slerp(a.pose.q, b.pose.q, u)}, true};
+  return tracking::interpolate(a, b, u);
 }
 
 glm::quat yawPitch(float yaw, float pitch) {
@@ -84,29 +56,25 @@ glm::quat yawPitch(float yaw, float pitch) {
 
 std::string parseTraceSamples(std::istream& in, const std::string& name, std::vector<BodySample>& out) {
   out.clear();
-  std::string line;
-  int lineNo = 0;
-  while (std::getline(in, line)) {
-    ++lineNo;
-    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    const auto where = name + ":" + std::to_string(lineNo) + ": ";
-    const auto j = nlohmann::json::parse(line, nullptr, false);
-    if (j.is_discarded() || !j.is_object() || !j.contains("t") || !j["t"].is_number())
-      return where + "not a trace sample ({\"t\": seconds, ...})";
-    BodySample s;
-    s.t = j["t"].get<double>();
-    // Times stay within a day of each other, so sample() can subtract and divide them.
-    if (!std::isfinite(s.t) || (!out.empty() && (s.t < out.back().t || s.t - out.front().t > 86400.0)))
-      return where + "time goes backwards, jumps past a day or is not finite";
-    if (j.contains("head")) s.head = readTracked(j["head"]);
-    if (j.contains("left")) s.left = readTracked(j["left"]);
-    if (j.contains("right")) s.right = readTracked(j["right"]);
-    s.leftTrigger = readTrigger(j, "left");
-    s.rightTrigger = readTrigger(j, "right");
-    out.push_back(s);
+  auto trace = tracking::parseTrace(in, name);
+  if (!trace) return trace.error();
+  return toBodySamples(*trace, name, out);
+}
+
+std::string parseBvhSamples(std::istream& in, const std::string& name, std::vector<BodySample>& out) {
+  out.clear();
+  // Read at most what the BVH reader would accept from a file (avatar::loadBvh's bound).
+  const size_t maxBytes = avatar::BvhLimits{}.maxValues * 16;
+  std::string text;
+  for (std::istreambuf_iterator<char> it(in), end; it != end; ++it) {
+    if (text.size() >= maxBytes) return name + ": file too large for a BVH clip";
+    text += *it;
   }
-  if (out.empty()) return name + ": no samples";
-  return "";
+  auto clip = avatar::parseBvh(text, name);
+  if (!clip) return clip.error();
+  auto trace = tracking::bvhToTrace(*clip, tracking::BvhTrackerOptions{});
+  if (!trace) return name + ": " + trace.error();
+  return toBodySamples(*trace, name, out);
 }
 
 void PoseProvider::use(std::vector<BodySample> samples, std::string source) {
@@ -157,9 +125,9 @@ BodySample PoseProvider::sample(double seconds) const {
   const float u = hi->t > lo->t ? static_cast<float>((t - lo->t) / (hi->t - lo->t)) : 1.0f;
   BodySample s;
   s.t = seconds;
-  s.head = interpolate(lo->head, hi->head, u);
-  s.left = interpolate(lo->left, hi->left, u);
-  s.right = interpolate(lo->right, hi->right, u);
+  s.head = between(lo->head, hi->head, u);
+  s.left = between(lo->left, hi->left, u);
+  s.right = between(lo->right, hi->right, u);
   s.leftTrigger = glm::mix(lo->leftTrigger, hi->leftTrigger, u);
   s.rightTrigger = glm::mix(lo->rightTrigger, hi->rightTrigger, u);
   return s;
@@ -169,7 +137,7 @@ Pose aimFromGrip(const Pose& grip) {
   // The aim ray starts a little ahead of the grip and points 30 degrees further down than the
   // handle's forward axis, like most tracked controllers.
   const Pose local{{0.0f, 0.0f, -0.05f}, glm::angleAxis(glm::radians(-30.0f), glm::vec3(1, 0, 0))};
-  return compose(grip, local);
+  return grip * local;
 }
 
 void handJointsFromGrip(const Pose& grip, bool leftHand, float curl, std::array<HandJoint, 26>& out) {
@@ -177,11 +145,10 @@ void handJointsFromGrip(const Pose& grip, bool leftHand, float curl, std::array<
   // Grip frame: -Z along the straightened index finger, +X normal to the palm (into the palm for
   // the right hand, away from it for the left). So palm = grip * Rz(-90 deg) (right), Rz(+90)
   // (left); with this the right thumb lies at palm -X.
-  const Pose palm = compose(
-      grip,
-      {{0.0f, 0.0f, 0.0f}, glm::angleAxis(glm::radians(leftHand ? 90.0f : -90.0f), glm::vec3(0, 0, 1))});
+  const Pose palm =
+      grip * Pose{{0.0f, 0.0f, 0.0f}, glm::angleAxis(glm::radians(leftHand ? 90.0f : -90.0f), glm::vec3(0, 0, 1))};
   auto local = [&](int index, const glm::vec3& p, float radius) {
-    out[index].pose.p = p;
+    out[index].pose.position = p;
     out[index].radius = radius;
   };
   // Positions in palm frame for a right hand (thumb side is -X), then mirrored.
@@ -215,28 +182,28 @@ void handJointsFromGrip(const Pose& grip, bool leftHand, float curl, std::array<
   local(XR_HAND_JOINT_THUMB_DISTAL_EXT, {-0.056f, -0.022f, -0.028f}, 0.009f);
   local(XR_HAND_JOINT_THUMB_TIP_EXT, {-0.064f, -0.024f, -0.05f}, 0.008f);
   if (leftHand)  // the left hand is the mirror image: thumb at palm +X
-    for (auto& j : out) j.pose.p.x = -j.pose.p.x;
+    for (auto& j : out) j.pose.position.x = -j.pose.position.x;
   // Orientation: -Z along the bone towards the next joint (tips copy their parent), +Y the back of
   // the finger. The back is carried down each finger from the previous joint's +Y (starting at the
   // back of the hand), so it stays on the nail side when a curled phalanx points back up.
   auto orient = [&](int joint, int next, const glm::vec3& back) {
-    const glm::vec3 forward = out[next].pose.p - out[joint].pose.p;
+    const glm::vec3 forward = out[next].pose.position - out[joint].pose.position;
     const glm::vec3 z = -glm::normalize(forward);
     glm::vec3 x = glm::cross(back, z);
     x = glm::length(x) < 1e-4f ? glm::vec3(1, 0, 0) : glm::normalize(x);
     const glm::vec3 y = glm::cross(z, x);
-    out[joint].pose.q = glm::quat_cast(glm::mat3(x, y, z));
+    out[joint].pose.orientation = glm::quat_cast(glm::mat3(x, y, z));
     return y;
   };
-  out[XR_HAND_JOINT_PALM_EXT].pose.q = glm::quat(1, 0, 0, 0);
-  out[XR_HAND_JOINT_WRIST_EXT].pose.q = glm::quat(1, 0, 0, 0);
+  out[XR_HAND_JOINT_PALM_EXT].pose.orientation = glm::quat(1, 0, 0, 0);
+  out[XR_HAND_JOINT_WRIST_EXT].pose.orientation = glm::quat(1, 0, 0, 0);
   for (int chainStart : {2, 6, 11, 16, 21}) {
     const int last = chainStart == 2 ? 5 : chainStart + 4;
     glm::vec3 back(0, 1, 0);
     for (int j = chainStart; j < last; ++j) back = orient(j, j + 1, back);
-    out[last].pose.q = out[last - 1].pose.q;
+    out[last].pose.orientation = out[last - 1].pose.orientation;
   }
-  for (auto& j : out) j.pose = compose(palm, j.pose);
+  for (auto& j : out) j.pose = palm * j.pose;
 }
 
 }  // namespace embody::xr_runtime

@@ -4,10 +4,10 @@
 // A complete-enough OpenXR 1.0 runtime for CI: no display, no compositor. The real OpenXR loader
 // loads it through its manifest (XR_RUNTIME_JSON); the application renders into swapchain images
 // that this runtime creates on the application's own VkDevice (XR_KHR_vulkan_enable2), and
-// xrEndFrame can read the left eye back to PNG (EMBODY_XR_CAPTURE). Poses come from a JSON Lines
-// trace (EMBODY_XR_POSES) or a gentle synthetic motion. Self-contained on purpose: a shared
-// library cannot link the project's static (non-PIC) libraries, and the runtime must not share
-// code paths with the application it is testing.
+// xrEndFrame can read the left eye back to PNG (EMBODY_XR_CAPTURE). Poses come from a pose file
+// (EMBODY_XR_POSES: a JSON Lines trace or a BVH clip, read by the project's own readers in
+// embody_tracking, linked in position-independent) or a gentle synthetic motion. Only the loader
+// entry point is exported, so the linked-in libraries never clash with the host's copies.
 //
 // Threading: one mutex per instance guards all runtime state; xrWaitFrame sleeps without it.
 #include <vulkan/vulkan.h>
@@ -33,32 +33,27 @@
 #include <type_traits>
 #include <vector>
 
+#include "tracking/tracker.h"
+#include "xr/xr_pose.h"
+
 namespace embody::xr_runtime {
 
 // ---- poses ---------------------------------------------------------------------------------
 
-struct Pose {
-  glm::vec3 p{0.0f};
-  glm::quat q{1.0f, 0.0f, 0.0f, 0.0f};
-};
-Pose compose(const Pose& a, const Pose& b);  // a * b
-Pose inverse(const Pose& a);
-Pose fromXr(const XrPosef& p);
-XrPosef toXr(const Pose& p);
-
-struct TrackedPose {
-  Pose pose;
-  bool valid = false;
-};
+// The project's one pose type (tracking/tracker.h) and the conversions from and to OpenXR's.
+using tracking::Pose;
+using tracking::TrackerPose;
+using xr::fromXr;  // xr/xr_pose.h: a non-finite pose becomes identity
+using xr::toXr;
 
 // One sample of the tracked body, in STAGE space (floor origin), OpenXR conventions.
 struct BodySample {
   double t = 0.0;  // seconds from the start of the trace
-  TrackedPose head, left, right;
+  TrackerPose head, left, right;
   float leftTrigger = 0.0f, rightTrigger = 0.0f;
 };
 
-// Where poses come from: a JSON Lines trace (looped) or the synthetic default motion.
+// Where poses come from: a pose file (looped) or the synthetic default motion.
 class PoseProvider {
  public:
   // Reads EMBODY_XR_POSES (a .bvh, else a JSON Lines trace); on a broken file, error() says why
@@ -74,11 +69,12 @@ class PoseProvider {
   std::string error_, source_ = "synthetic";
 };
 
-// The EMBODY_XR_POSES readers: text in, samples out (non-decreasing finite times; a valid pose is
-// finite with a unit quaternion). "" or why it failed, prefixed with `name`. Hostile sizes are
-// errors, not allocations. Fuzzed by fuzz/fuzz_xr_poses.cpp.
-//   JSON Lines: {"t": s, "head"|"left"|"right": {"p": [x,y,z], "q": [x,y,z,w], "valid": b,
-//   "trigger": 0..1}}, the format tracking/trace.h writes.
+// The EMBODY_XR_POSES readers: text in, samples out, "" or why it failed (naming `name`). They
+// are the project's own readers (tracking::parseTrace; avatar::parseBvh + tracking::bvhToTrace,
+// the performer scaled to 1.75 m), whose hostile-input limits and errors apply; accepted samples
+// have non-decreasing finite times within a day of the first, and a valid pose is finite with a
+// unit quaternion. Fuzzed by fuzz/fuzz_xr_poses.cpp.
+//   JSON Lines: tracking/trace.h's format; the hands' optional "trigger" (0..1) curls the fingers.
 std::string parseTraceSamples(std::istream& in, const std::string& name, std::vector<BodySample>& out);
 // BVH motion capture (head, hands) as samples in OpenXR conventions.
 std::string parseBvhSamples(std::istream& in, const std::string& name, std::vector<BodySample>& out);
@@ -208,7 +204,7 @@ struct Session {
   bool headUntracked = false;
   uint32_t capturedFrames = 0;
   Pose localOrigin;      // LOCAL space in STAGE: the head at session start, yaw only
-  TrackedPose lastHead;  // last valid head pose, reported (untracked) while tracking is lost
+  TrackerPose lastHead;  // last valid head pose, reported (untracked) while tracking is lost
 };
 
 struct Event {
@@ -247,6 +243,24 @@ struct Registry {
   std::set<Instance*> instances;
 };
 Registry& registry();
+// Handle sets are read by the find* functions under the registry's lock: objects enter and leave
+// them under it. publishHandle also hands the new object to the application as its handle.
+template <class T>
+void registerHandle(std::set<T*>& handles, T* object) {
+  std::lock_guard rlock(registry().mutex);
+  handles.insert(object);
+}
+template <class T>
+void unregisterHandle(std::set<T*>& handles, T* object) {
+  std::lock_guard rlock(registry().mutex);
+  handles.erase(object);
+}
+template <class Handle, class T>
+XrResult publishHandle(std::set<T*>& handles, T* object, Handle* out) {
+  registerHandle(handles, object);
+  *out = reinterpret_cast<Handle>(object);
+  return XR_SUCCESS;
+}
 Instance* findInstance(XrInstance h);  // nullptr when not live
 Session* findSession(XrSession h, Instance** inst = nullptr);
 Space* findSpace(XrSpace h, Instance** inst = nullptr);
@@ -277,6 +291,8 @@ void destroySwapchainImages(Swapchain& sc);
 void captureLeftEye(Session& s, Swapchain& sc, uint32_t imageIndex, const XrRect2Di& rect,
                     uint32_t arrayIndex);
 void releaseSessionVulkan(Session& s);
+// Deletes a session's swapchains (and their images), spaces and hand trackers (session.cpp).
+void destroySessionChildren(Session& s);
 bool initSessionVulkan(Session& s);  // queue + command pool on the application's device
 
 // Action poses (actions.cpp): the pose of an action space's action in STAGE from a body sample.

@@ -97,15 +97,12 @@ XrResult XRAPI_CALL CreateSession(XrInstance instance, const XrSessionCreateInfo
   s->spaceChangeAt = envCount("EMBODY_XR_SPACE_CHANGE_FRAMES");
   s->headUntracked = envCount("EMBODY_XR_HEAD_UNTRACKED") != 0;
   const BodySample first = inst->poses.sample(0.0);
-  const Pose head = first.head.valid ? first.head.pose : Pose{{0.0f, 1.6f, 0.0f}, {1, 0, 0, 0}};
-  const glm::vec3 fwd = head.q * glm::vec3(0, 0, -1);
-  s->localOrigin = {head.p, glm::angleAxis(std::atan2(-fwd.x, -fwd.z), glm::vec3(0, 1, 0))};
+  const Pose head = first.head.valid ? Pose(first.head) : Pose{{0.0f, 1.6f, 0.0f}, {1, 0, 0, 0}};
+  const glm::vec3 fwd = head.orientation * glm::vec3(0, 0, -1);
+  s->localOrigin = {head.position, glm::angleAxis(std::atan2(-fwd.x, -fwd.z), glm::vec3(0, 1, 0))};
   s->lastHead = {head, true};
   Session* raw = s.release();
-  {
-    std::lock_guard rlock(registry().mutex);
-    inst->sessions.insert(raw);
-  }
+  registerHandle(inst->sessions, raw);
   const XrTime t = nowNs();
   inst->setState(*raw, XR_SESSION_STATE_IDLE, t);
   inst->setState(*raw, XR_SESSION_STATE_READY, t);
@@ -119,16 +116,8 @@ XrResult XRAPI_CALL DestroySession(XrSession session) {
   Session* s = findSession(session, &inst);
   if (!s) return XR_ERROR_HANDLE_INVALID;
   std::lock_guard lock(inst->mutex);
-  {
-    std::lock_guard rlock(registry().mutex);
-    inst->sessions.erase(s);
-  }
-  for (Swapchain* sc : s->swapchains) {
-    destroySwapchainImages(*sc);
-    delete sc;
-  }
-  for (Space* sp : s->spaces) delete sp;
-  for (HandTracker* h : s->handTrackers) delete h;
+  unregisterHandle(inst->sessions, s);
+  destroySessionChildren(*s);
   forgetSessionActions(*s);
   releaseSessionVulkan(*s);
   // Events of a destroyed session must not reach the application.
@@ -370,12 +359,7 @@ XrResult XRAPI_CALL CreateReferenceSpace(XrSession session, const XrReferenceSpa
   sp->kind = SpaceKind::Reference;
   sp->refType = ci->referenceSpaceType;
   sp->offset = fromXr(ci->poseInReferenceSpace);
-  {
-    std::lock_guard rlock(registry().mutex);
-    s->spaces.insert(sp);
-  }
-  *out = reinterpret_cast<XrSpace>(sp);
-  return XR_SUCCESS;
+  return publishHandle(s->spaces, sp, out);
 }
 EMBODY_XR_ENTRY(CreateReferenceSpace)
 
@@ -399,10 +383,7 @@ XrResult XRAPI_CALL DestroySpace(XrSpace space) {
   Space* sp = findSpace(space, &inst);
   if (!sp) return XR_ERROR_HANDLE_INVALID;
   std::lock_guard lock(inst->mutex);
-  {
-    std::lock_guard rlock(registry().mutex);
-    sp->session->spaces.erase(sp);
-  }
+  unregisterHandle(sp->session->spaces, sp);
   delete sp;
   return XR_SUCCESS;
 }
@@ -418,7 +399,7 @@ Relative locateRelative(Session& s, const Space& space, const Space& base, XrTim
   Relative r;
   r.valid = a.valid && b.valid;
   r.tracked = r.valid && a.tracked && b.tracked;
-  if (r.valid) r.pose = compose(inverse(b.pose), a.pose);
+  if (r.valid) r.pose = b.pose.inverse() * a.pose;
   return r;
 }
 
@@ -455,8 +436,8 @@ XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace baseSpace, XrTime time, X
                    b = locateRelative(s, *sp, *base, time + kDt);
     if (a.valid && b.valid) {
       const float dt = 2.0f * kDt * 1e-9f;
-      const glm::vec3 lin = (b.pose.p - a.pose.p) / dt;
-      glm::quat dq = b.pose.q * glm::conjugate(a.pose.q);
+      const glm::vec3 lin = (b.pose.position - a.pose.position) / dt;
+      glm::quat dq = b.pose.orientation * glm::conjugate(a.pose.orientation);
       if (dq.w < 0) dq = -dq;
       const glm::vec3 ang = glm::axis(dq) * (glm::angle(dq) / dt);
       vel->linearVelocity = {lin.x, lin.y, lin.z};
@@ -499,13 +480,22 @@ XrResult XRAPI_CALL LocateViews(XrSession session, const XrViewLocateInfo* info,
   const float halfIpd = 0.5f * ipdMetres();
   return twoCall(capacity, count, views, 2, [&](XrView* v, size_t eye) {
     const Pose eyeInHead{{eye == 0 ? -halfIpd : halfIpd, 0.0f, 0.0f}, {1, 0, 0, 0}};
-    v->pose = toXr(compose(r.pose, eyeInHead));
+    v->pose = toXr(r.pose * eyeInHead);
     v->fov = eyeFov(static_cast<int>(eye));
   });
 }
 EMBODY_XR_ENTRY(LocateViews)
 
 }  // namespace
+
+void destroySessionChildren(Session& s) {
+  for (Swapchain* sc : s.swapchains) {
+    destroySwapchainImages(*sc);
+    delete sc;
+  }
+  for (Space* sp : s.spaces) delete sp;
+  for (HandTracker* h : s.handTrackers) delete h;
+}
 
 double traceSeconds(const Session& s, XrTime t) {
   return static_cast<double>(t - s.startTime) * 1e-9;
@@ -527,14 +517,14 @@ Located locateInStage(Session& s, const Space& space, XrTime t) {
       default:  // VIEW: the head; while tracking is lost, the last known pose, valid but untracked
         if (body.head.valid) {
           s.lastHead = body.head;
-          base = {body.head.pose, true, !s.headUntracked};
+          base = {body.head, true, !s.headUntracked};
         } else {
-          base = {s.lastHead.pose, true, false};
+          base = {s.lastHead, true, false};
         }
         break;
     }
   }
-  if (base.valid) base.pose = compose(base.pose, space.offset);
+  if (base.valid) base.pose = base.pose * space.offset;
   return base;
 }
 

@@ -251,6 +251,78 @@ XrResult XRAPI_CALL EnumerateSwapchainFormats(XrSession session, uint32_t capaci
 }
 EMBODY_XR_ENTRY(EnumerateSwapchainFormats)
 
+// XR_SUCCESS when the runtime can make a swapchain of this description, else the error.
+XrResult swapchainSupported(const Session& s, const XrSwapchainCreateInfo& ci) {
+  const auto formats = supportedFormats(s.vkPhysicalDevice);
+  const auto format = static_cast<VkFormat>(ci.format);
+  if (std::find(formats.begin(), formats.end(), format) == formats.end())
+    return XR_ERROR_SWAPCHAIN_FORMAT_UNSUPPORTED;
+  if (ci.width == 0 || ci.height == 0 || ci.width > 4096 || ci.height > 4096 || ci.arraySize == 0 ||
+      ci.mipCount == 0 || (ci.faceCount != 1 && ci.faceCount != 6) || ci.sampleCount != 1)
+    return XR_ERROR_VALIDATION_FAILURE;
+  const bool depth = isDepthFormat(format);
+  if (depth && (ci.usageFlags & XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT)) return XR_ERROR_FEATURE_UNSUPPORTED;
+  if (!depth && (ci.usageFlags & XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT)) return XR_ERROR_FEATURE_UNSUPPORTED;
+  return XR_SUCCESS;
+}
+
+// The images' create info: OpenXR's usage flags in Vulkan's, plus what the runtime needs (the
+// capture reads images back) and the attachment the format implies.
+VkImageCreateInfo swapchainImageInfo(const XrSwapchainCreateInfo& ci, bool depth) {
+  VkImageUsageFlags usage = VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  if (ci.usageFlags & XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT) usage |= VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+  if (ci.usageFlags & XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT)
+    usage |= VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
+  if (ci.usageFlags & XR_SWAPCHAIN_USAGE_UNORDERED_ACCESS_BIT) usage |= VK_IMAGE_USAGE_STORAGE_BIT;
+  if (ci.usageFlags & XR_SWAPCHAIN_USAGE_TRANSFER_SRC_BIT) usage |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  if (ci.usageFlags & XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT) usage |= VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  if (ci.usageFlags & XR_SWAPCHAIN_USAGE_SAMPLED_BIT) usage |= VK_IMAGE_USAGE_SAMPLED_BIT;
+  if (ci.usageFlags & XR_SWAPCHAIN_USAGE_INPUT_ATTACHMENT_BIT_KHR) usage |= VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT;
+  if (depth && !(usage & VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT))
+    usage |= VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
+  if (!depth && !(usage & VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT)) usage |= VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+  VkImageCreateInfo ii{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+  if (ci.usageFlags & XR_SWAPCHAIN_USAGE_MUTABLE_FORMAT_BIT) ii.flags |= VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT;
+  if (ci.faceCount == 6) ii.flags |= VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT;
+  ii.imageType = VK_IMAGE_TYPE_2D;
+  ii.format = static_cast<VkFormat>(ci.format);
+  ii.extent = {ci.width, ci.height, 1};
+  ii.mipLevels = ci.mipCount;
+  ii.arrayLayers = ci.arraySize * ci.faceCount;
+  ii.samples = VK_SAMPLE_COUNT_1_BIT;
+  ii.tiling = VK_IMAGE_TILING_OPTIMAL;
+  ii.usage = usage;
+  ii.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  ii.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  return ii;
+}
+
+// kSwapchainLength images with their memory; false (and nothing left) when one fails.
+bool createSwapchainImages(const Session& s, const VkImageCreateInfo& ii, Swapchain& sc) {
+  for (uint32_t i = 0; i < kSwapchainLength; ++i) {
+    VkImage image = VK_NULL_HANDLE;
+    if (vkCreateImage(s.vkDevice, &ii, nullptr, &image) != VK_SUCCESS) {
+      destroySwapchainImages(sc);
+      return false;
+    }
+    sc.images.push_back(image);
+    VkMemoryRequirements mr{};
+    vkGetImageMemoryRequirements(s.vkDevice, image, &mr);
+    VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    ai.allocationSize = mr.size;
+    ai.memoryTypeIndex = findMemoryType(s.vkPhysicalDevice, mr.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    if (ai.memoryTypeIndex == UINT32_MAX) ai.memoryTypeIndex = findMemoryType(s.vkPhysicalDevice, mr.memoryTypeBits, 0);
+    VkDeviceMemory mem = VK_NULL_HANDLE;
+    if (vkAllocateMemory(s.vkDevice, &ai, nullptr, &mem) != VK_SUCCESS) {
+      destroySwapchainImages(sc);
+      return false;
+    }
+    sc.memory.push_back(mem);
+    vkBindImageMemory(s.vkDevice, image, mem, 0);
+  }
+  return true;
+}
+
 XrResult XRAPI_CALL CreateSwapchain(XrSession session, const XrSwapchainCreateInfo* ci, XrSwapchain* out) {
   Instance* inst = nullptr;
   Session* s = findSession(session, &inst);
@@ -258,83 +330,17 @@ XrResult XRAPI_CALL CreateSwapchain(XrSession session, const XrSwapchainCreateIn
   if (!ci || !out || ci->type != XR_TYPE_SWAPCHAIN_CREATE_INFO) return XR_ERROR_VALIDATION_FAILURE;
   std::lock_guard lock(inst->mutex);
   if (s->lost) return XR_ERROR_SESSION_LOST;
-  const auto formats = supportedFormats(s->vkPhysicalDevice);
-  const auto format = static_cast<VkFormat>(ci->format);
-  if (std::find(formats.begin(), formats.end(), format) == formats.end())
-    return XR_ERROR_SWAPCHAIN_FORMAT_UNSUPPORTED;
-  if (ci->width == 0 || ci->height == 0 || ci->width > 4096 || ci->height > 4096 || ci->arraySize == 0 ||
-      ci->mipCount == 0 || (ci->faceCount != 1 && ci->faceCount != 6) || ci->sampleCount != 1)
-    return XR_ERROR_VALIDATION_FAILURE;
-  const bool depth = isDepthFormat(format);
-  if (depth && (ci->usageFlags & XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT))
-    return XR_ERROR_FEATURE_UNSUPPORTED;
-  if (!depth && (ci->usageFlags & XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT))
-    return XR_ERROR_FEATURE_UNSUPPORTED;
-
+  if (XrResult r = swapchainSupported(*s, *ci); XR_FAILED(r)) return r;
   auto sc = std::make_unique<Swapchain>();
   sc->session = s;
   sc->info = *ci;
   sc->info.next = nullptr;
-  sc->format = format;
-  sc->depth = depth;
-  VkImageUsageFlags usage = VK_IMAGE_USAGE_TRANSFER_SRC_BIT;  // the capture reads images back
-  if (ci->usageFlags & XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT) usage |= VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
-  if (ci->usageFlags & XR_SWAPCHAIN_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT)
-    usage |= VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
-  if (ci->usageFlags & XR_SWAPCHAIN_USAGE_UNORDERED_ACCESS_BIT) usage |= VK_IMAGE_USAGE_STORAGE_BIT;
-  if (ci->usageFlags & XR_SWAPCHAIN_USAGE_TRANSFER_SRC_BIT) usage |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-  if (ci->usageFlags & XR_SWAPCHAIN_USAGE_TRANSFER_DST_BIT) usage |= VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  if (ci->usageFlags & XR_SWAPCHAIN_USAGE_SAMPLED_BIT) usage |= VK_IMAGE_USAGE_SAMPLED_BIT;
-  if (ci->usageFlags & XR_SWAPCHAIN_USAGE_INPUT_ATTACHMENT_BIT_KHR)
-    usage |= VK_IMAGE_USAGE_INPUT_ATTACHMENT_BIT;
-  if (depth && !(usage & VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT))
-    usage |= VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT;
-  if (!depth && !(usage & VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT)) usage |= VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
-
-  VkImageCreateInfo ii{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
-  if (ci->usageFlags & XR_SWAPCHAIN_USAGE_MUTABLE_FORMAT_BIT) ii.flags |= VK_IMAGE_CREATE_MUTABLE_FORMAT_BIT;
-  if (ci->faceCount == 6) ii.flags |= VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT;
-  ii.imageType = VK_IMAGE_TYPE_2D;
-  ii.format = format;
-  ii.extent = {ci->width, ci->height, 1};
-  ii.mipLevels = ci->mipCount;
-  ii.arrayLayers = ci->arraySize * ci->faceCount;
-  ii.samples = VK_SAMPLE_COUNT_1_BIT;
-  ii.tiling = VK_IMAGE_TILING_OPTIMAL;
-  ii.usage = usage;
-  ii.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-  ii.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-  for (uint32_t i = 0; i < kSwapchainLength; ++i) {
-    VkImage image = VK_NULL_HANDLE;
-    if (vkCreateImage(s->vkDevice, &ii, nullptr, &image) != VK_SUCCESS) {
-      destroySwapchainImages(*sc);
-      return XR_ERROR_RUNTIME_FAILURE;
-    }
-    sc->images.push_back(image);
-    VkMemoryRequirements mr{};
-    vkGetImageMemoryRequirements(s->vkDevice, image, &mr);
-    VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-    ai.allocationSize = mr.size;
-    ai.memoryTypeIndex =
-        findMemoryType(s->vkPhysicalDevice, mr.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    if (ai.memoryTypeIndex == UINT32_MAX)
-      ai.memoryTypeIndex = findMemoryType(s->vkPhysicalDevice, mr.memoryTypeBits, 0);
-    VkDeviceMemory mem = VK_NULL_HANDLE;
-    if (vkAllocateMemory(s->vkDevice, &ai, nullptr, &mem) != VK_SUCCESS) {
-      destroySwapchainImages(*sc);
-      return XR_ERROR_RUNTIME_FAILURE;
-    }
-    sc->memory.push_back(mem);
-    vkBindImageMemory(s->vkDevice, image, mem, 0);
-  }
+  sc->format = static_cast<VkFormat>(ci->format);
+  sc->depth = isDepthFormat(sc->format);
+  if (!createSwapchainImages(*s, swapchainImageInfo(*ci, sc->depth), *sc)) return XR_ERROR_RUNTIME_FAILURE;
   sc->initialized.assign(kSwapchainLength, false);
   Swapchain* raw = sc.release();
-  {
-    std::lock_guard rlock(registry().mutex);
-    s->swapchains.insert(raw);
-  }
-  *out = reinterpret_cast<XrSwapchain>(raw);
-  return XR_SUCCESS;
+  return publishHandle(s->swapchains, raw, out);
 }
 EMBODY_XR_ENTRY(CreateSwapchain)
 
@@ -343,10 +349,7 @@ XrResult XRAPI_CALL DestroySwapchain(XrSwapchain swapchain) {
   Swapchain* sc = findSwapchain(swapchain, &inst);
   if (!sc) return XR_ERROR_HANDLE_INVALID;
   std::lock_guard lock(inst->mutex);
-  {
-    std::lock_guard rlock(registry().mutex);
-    sc->session->swapchains.erase(sc);
-  }
+  unregisterHandle(sc->session->swapchains, sc);
   destroySwapchainImages(*sc);
   delete sc;
   return XR_SUCCESS;
@@ -462,6 +465,65 @@ bool initSessionVulkan(Session& s) {
   return s.queue && vkCreateCommandPool(s.vkDevice, &pi, nullptr, &s.cmdPool) == VK_SUCCESS;
 }
 
+namespace {
+
+// Records the copy of the left eye's rect into `buffer`, with the layout changes around it.
+void recordCapture(VkCommandBuffer cmd, Swapchain& sc, uint32_t imageIndex, const XrRect2Di& rect,
+                   uint32_t arrayIndex, VkBuffer buffer) {
+  // The application released the image in COLOR_ATTACHMENT_OPTIMAL after its rendering was
+  // submitted to this same queue: queue order plus this barrier make the copy see it.
+  VkImageMemoryBarrier b{.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER,
+                         .srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT,
+                         .dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT,
+                         .oldLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+                         .newLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                         .srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+                         .dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+                         .image = sc.images[imageIndex],
+                         .subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, arrayIndex, 1}};
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0,
+                       nullptr, 0, nullptr, 1, &b);
+  VkBufferImageCopy region{};
+  region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, arrayIndex, 1};
+  region.imageOffset = {rect.offset.x, rect.offset.y, 0};
+  region.imageExtent = {static_cast<uint32_t>(rect.extent.width), static_cast<uint32_t>(rect.extent.height), 1};
+  vkCmdCopyImageToBuffer(cmd, sc.images[imageIndex], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer, 1, &region);
+  b.srcAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
+  b.dstAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_COLOR_ATTACHMENT_READ_BIT;
+  b.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+  b.newLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  const VkBufferMemoryBarrier hb{.sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER,
+                                 .srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT,
+                                 .dstAccessMask = VK_ACCESS_HOST_READ_BIT,
+                                 .srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+                                 .dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+                                 .buffer = buffer,
+                                 .size = VK_WHOLE_SIZE};
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, nullptr, 1, &hb, 0,
+                       nullptr);
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, 0, 0,
+                       nullptr, 0, nullptr, 1, &b);
+}
+
+// Writes the read-back pixels (RGBA or BGRA) as captureDir/left_NNNNN.png, opaque.
+void writeCapture(Session& s, VkFormat f, const uint8_t* data, uint32_t w, uint32_t h) {
+  std::vector<uint8_t> rgba(data, data + size_t(w) * h * 4);
+  if (f == VK_FORMAT_B8G8R8A8_SRGB || f == VK_FORMAT_B8G8R8A8_UNORM)
+    for (size_t i = 0; i < rgba.size(); i += 4) std::swap(rgba[i], rgba[i + 2]);
+  for (size_t i = 3; i < rgba.size(); i += 4) rgba[i] = 255;  // the display ignores alpha
+  std::error_code ec;
+  std::filesystem::create_directories(s.captureDir, ec);
+  char name[64];
+  std::snprintf(name, sizeof(name), "left_%05u.png", s.capturedFrames);
+  const std::string path = (std::filesystem::path(s.captureDir) / name).string();
+  if (stbi_write_png(path.c_str(), static_cast<int>(w), static_cast<int>(h), 4, rgba.data(), static_cast<int>(w * 4)))
+    ++s.capturedFrames;
+  else
+    std::fprintf(stderr, "embody headless runtime: cannot write %s\n", path.c_str());
+}
+
+}  // namespace
+
 void captureLeftEye(Session& s, Swapchain& sc, uint32_t imageIndex, const XrRect2Di& rect,
                     uint32_t arrayIndex) {
   if (s.captureDir.empty() || sc.depth || imageIndex >= sc.images.size()) return;
@@ -481,68 +543,22 @@ void captureLeftEye(Session& s, Swapchain& sc, uint32_t imageIndex, const XrRect
   vkGetBufferMemoryRequirements(s.vkDevice, buffer, &mr);
   VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   ai.allocationSize = mr.size;
-  ai.memoryTypeIndex =
-      findMemoryType(s.vkPhysicalDevice, mr.memoryTypeBits,
-                     VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
-  bool ok = ai.memoryTypeIndex != UINT32_MAX &&
-            vkAllocateMemory(s.vkDevice, &ai, nullptr, &mem) == VK_SUCCESS &&
+  ai.memoryTypeIndex = findMemoryType(s.vkPhysicalDevice, mr.memoryTypeBits,
+                                      VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+  bool ok = ai.memoryTypeIndex != UINT32_MAX && vkAllocateMemory(s.vkDevice, &ai, nullptr, &mem) == VK_SUCCESS &&
             vkBindBufferMemory(s.vkDevice, buffer, mem, 0) == VK_SUCCESS;
   if (ok) {
     OneShot os(s);
     ok = os.ok();
     if (ok) {
-      // The application released the image in COLOR_ATTACHMENT_OPTIMAL after its rendering was
-      // submitted to this same queue: queue order plus this barrier make the copy see it.
-      VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
-      b.srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
-      b.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
-      b.oldLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-      b.newLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-      b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-      b.image = sc.images[imageIndex];
-      b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, arrayIndex, 1};
-      vkCmdPipelineBarrier(os.cmd(), VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
-                           VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 0, nullptr, 1, &b);
-      VkBufferImageCopy region{};
-      region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, arrayIndex, 1};
-      region.imageOffset = {rect.offset.x, rect.offset.y, 0};
-      region.imageExtent = {w, h, 1};
-      vkCmdCopyImageToBuffer(os.cmd(), sc.images[imageIndex], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, buffer, 1,
-                             &region);
-      b.srcAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
-      b.dstAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_COLOR_ATTACHMENT_READ_BIT;
-      b.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-      b.newLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-      VkBufferMemoryBarrier hb{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER};
-      hb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-      hb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-      hb.srcQueueFamilyIndex = hb.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-      hb.buffer = buffer;
-      hb.size = VK_WHOLE_SIZE;
-      vkCmdPipelineBarrier(os.cmd(), VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0,
-                           nullptr, 1, &hb, 0, nullptr);
-      vkCmdPipelineBarrier(os.cmd(), VK_PIPELINE_STAGE_TRANSFER_BIT,
-                           VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, 0, 0, nullptr, 0, nullptr, 1, &b);
+      recordCapture(os.cmd(), sc, imageIndex, rect, arrayIndex, buffer);
       ok = os.submitAndWait();
     }
   }
   void* data = nullptr;
   if (ok && vkMapMemory(s.vkDevice, mem, 0, size, 0, &data) == VK_SUCCESS) {
-    std::vector<uint8_t> rgba(static_cast<const uint8_t*>(data), static_cast<const uint8_t*>(data) + size);
+    writeCapture(s, f, static_cast<const uint8_t*>(data), w, h);
     vkUnmapMemory(s.vkDevice, mem);
-    if (f == VK_FORMAT_B8G8R8A8_SRGB || f == VK_FORMAT_B8G8R8A8_UNORM)
-      for (size_t i = 0; i < rgba.size(); i += 4) std::swap(rgba[i], rgba[i + 2]);
-    for (size_t i = 3; i < rgba.size(); i += 4) rgba[i] = 255;  // the display ignores alpha
-    std::error_code ec;
-    std::filesystem::create_directories(s.captureDir, ec);
-    char name[64];
-    std::snprintf(name, sizeof(name), "left_%05u.png", s.capturedFrames);
-    const std::string path = (std::filesystem::path(s.captureDir) / name).string();
-    if (stbi_write_png(path.c_str(), static_cast<int>(w), static_cast<int>(h), 4, rgba.data(),
-                       static_cast<int>(w * 4)))
-      ++s.capturedFrames;
-    else
-      std::fprintf(stderr, "embody headless runtime: cannot write %s\n", path.c_str());
   }
   if (buffer) vkDestroyBuffer(s.vkDevice, buffer, nullptr);
   if (mem) vkFreeMemory(s.vkDevice, mem, nullptr);
