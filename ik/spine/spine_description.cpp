@@ -320,9 +320,27 @@ const SpineDescription& defaultSimplifiedSpine() {
   return simplified;
 }
 
+// The paper's §5.1 count: 32 equality rows = 17 swing + 7 revolute joints (a region with s swing
+// and t revolute joints has 2(s - 1) + (t - 1) rows). The paper names the first revolute of each
+// region (L2, T8, C6) but not every joint; the seventh revolute is put at vc4 (C4-C5), so the
+// neck alternates swing and revolute from C7 up (docs/spine.md, "The paper's layout").
+const SpineDescription& paperSpine() {
+  static const SpineDescription paper = [] {
+    json j = json::parse(detail::kFullSpineJson);
+    j["name"] = "paper";
+    for (json& site : j["sites"])
+      if (site["first"] == "vc4") site["joints"] = "revolute";
+    auto r = parseSpineDescription(j);
+    if (!r) throw std::logic_error("embedded paper spine: " + r.error());
+    return std::move(*r);
+  }();
+  return paper;
+}
+
 Result<SpineDescription> loadSpineModel(const std::string& nameOrPath) {
   if (nameOrPath == "full") return defaultFullSpine();
   if (nameOrPath == "simplified") return defaultSimplifiedSpine();
+  if (nameOrPath == "paper") return paperSpine();
   return loadSpineDescription(nameOrPath);
 }
 

@@ -89,7 +89,10 @@ nlohmann::json toJson(const SpineDescription& description);
 // elsewhere) and "simplified" (8 sites: 3 lumbar, 3 thoracic, 2 cervical; 8 swing + 5 revolute).
 const SpineDescription& defaultFullSpine();
 const SpineDescription& defaultSimplifiedSpine();
-// "full", "simplified", or a path to a JSON file.
+// "paper": the full model with the revolute count of the paper's §5.1 (17 swing + 7 revolute,
+// 32 equality rows: a fourth cervical revolute at vc4); the default has 18 + 6 and 33 rows.
+const SpineDescription& paperSpine();
+// "full", "simplified", "paper", or a path to a JSON file.
 Result<SpineDescription> loadSpineModel(const std::string& nameOrPath);
 
 // One entry of a custom grouping: vertebrae `first` … `last` (H-Anim names, caudal first).
