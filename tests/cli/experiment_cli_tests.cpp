@@ -168,8 +168,9 @@ TEST_CASE("embody experiment all: every experiment and report.md with the claims
   CHECK(md.find("5.2.3") != std::string::npos);
   CHECK(md.find("balance/fig10_torsion.png") != std::string::npos);
   // The equalities row is measured, not asserted: it must agree.
-  CHECK(md.find("the coupling equalities hold exactly (infinite priority) | largest |Cq - b|") !=
+  CHECK(md.find("the coupling equalities hold exactly (infinite priority) | largest abs(Cq - b)") !=
         std::string::npos);
+  CHECK(md.find("rad | agree | the equalities are folded") != std::string::npos);
 }
 
 TEST_CASE("embody experiment: bad options and files fail with one clear line", "[cli][experiment]") {
