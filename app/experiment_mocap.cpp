@@ -296,7 +296,11 @@ int runMocap(const MocapOptions& o, nlohmann::json& summary) {
   tracking::BvhTrackerOptions bo;
   bo.userHeight = 1.75f;  // the mannequin's height
   auto clip = tracking::loadBvhAvatar(o.motion, bo);
-  if (!clip) return fail("mocap: " + clip.error());
+  if (!clip) {
+    const bool relative = fs::path(o.motion).is_relative() && !fs::exists(o.motion);
+    return fail("mocap: " + clip.error() +
+                (relative ? " (the path is relative: run from the repository root or pass --motion FILE.bvh)" : ""));
+  }
   const int available = static_cast<int>(clip->clip.frameCount - clip->mapping.firstFrame);
   const int frames = o.maxFrames > 0 ? std::min(o.maxFrames, available) : available;
   if (frames < 1) return fail("mocap: " + o.motion + " has no frames");
