@@ -141,23 +141,30 @@ Result<BalanceRun> solveBalance(const avatar::AvatarAsset& asset, avatar::SpineM
 const char* const kBalancePlots =
     R"gp(# Plots of `embody experiment balance` (run: gnuplot plots.gp in this folder).
 set datafile separator ','
-set terminal pngcairo noenhanced size 1100,520 font 'Sans,11'
+set terminal pngcairo noenhanced size 1100,820 font 'Sans,11'
 set output 'fig10_torsion.png'
-set title 'Balance: torsion per spine site (the paper''s fig. 10); coupled sites without a revolute joint show 0'
+set multiplot layout 2,1 title 'Balance: torsion along the spine (the paper''s fig. 10), + = front turning to the left'
 set style fill solid 0.8 border -1
 set boxwidth 0.38
 set grid y
-set xtics rotate by 30 right
-set ylabel 'torsion (deg, + front turning to the left)'
 set key top left
+set ylabel 'torsion (deg)'
+set title 'per vertebra (each carrier joint''s torsion shared by axial range)'
+set xtics rotate by 90 right font ',9'
+plot 'coupled_vertebrae.csv' skip 1 using ($1-0.2):5:xtic(3) with boxes lc rgb '#1f77b4' title 'coupled', \
+     'uncoupled_vertebrae.csv' skip 1 using ($1+0.2):5 with boxes lc rgb '#d62728' title 'uncoupled', \
+     0 with lines lc rgb 'gray' notitle
+set title 'per spine site (a coupled site without a revolute joint shows 0)'
+set xtics rotate by 20 right font ',10'
 plot 'coupled_spine.csv' skip 1 using ($1-0.2):6:xtic(2) with boxes lc rgb '#1f77b4' title 'coupled', \
      'uncoupled_spine.csv' skip 1 using ($1+0.2):6 with boxes lc rgb '#d62728' title 'uncoupled', \
      0 with lines lc rgb 'gray' notitle
+unset multiplot
 
 set output 'fig_balance_convergence.png'
 set terminal pngcairo noenhanced size 1100,420 font 'Sans,11'
 set multiplot layout 1,2 title 'Balance: task errors per iteration'
-set xtics norotate
+set xtics norotate font ",11"
 set style fill empty
 set logscale y
 set xlabel 'iteration'
@@ -203,6 +210,7 @@ int runBalance(const BalanceOptions& o, nlohmann::json& summary) {
     const std::string v = r->body.coupled ? "coupled" : "uncoupled";
     const SpineShape shape = spineShape(r->body, r->q);
     if (!writeFile(o.common.out / (v + "_spine.csv"), spineCsv(r->body, shape)) ||
+        !writeFile(o.common.out / (v + "_vertebrae.csv"), vertebraCsv(r->body, shape)) ||
         !writeFile(o.common.out / (v + "_iterations.csv"), r->iterationsCsv))
       return fail("cannot write in " + o.common.out.string());
     summary[v] = r->summary;

@@ -138,6 +138,19 @@ std::string spineCsv(const ExperimentBody& body, const SpineShape& shape) {
   return csv;
 }
 
+std::string vertebraCsv(const ExperimentBody& body, const SpineShape& shape) {
+  const ik::spine::SpineDescription& d = body.spine;
+  const std::vector<double> torsion = ik::spine::vertebraTorsion(d, body.spineJoints, shape.motion);
+  std::string csv = "index,vertebra,level,region,torsion_deg\n";
+  char line[160];
+  for (size_t v = 0; v < d.vertebrae.size(); ++v) {
+    std::snprintf(line, sizeof line, "%zu,%s,%s,%s,%.6f\n", v, d.vertebrae[v].name.c_str(), d.vertebrae[v].level.c_str(),
+                  ik::spine::toString(d.vertebrae[v].region), torsion[v] / kDeg);
+    csv += line;
+  }
+  return csv;
+}
+
 nlohmann::json bodySummary(const ExperimentBody& body, const SpineShape& shape, const Eigen::VectorXd& q) {
   nlohmann::json j;
   j["spine_model"] = body.spine.name;

@@ -81,6 +81,9 @@ SpineShape spineShape(const ExperimentBody& body, const Eigen::VectorXd& q);
 // Per-site CSV: index, site, region, s_x, s_y, torsion (degrees), s_x and s_y over their limits.
 std::string spineCsv(const ExperimentBody& body, const SpineShape& shape);
 
+// Per-vertebra CSV: index, vertebra, level, region, torsion (degrees; ik::spine::vertebraTorsion).
+std::string vertebraCsv(const ExperimentBody& body, const SpineShape& shape);
+
 // The JSON every experiment reports per variant about the body and its spine.
 nlohmann::json bodySummary(const ExperimentBody& body, const SpineShape& shape, const Eigen::VectorXd& q);
 

@@ -117,3 +117,20 @@ double maxNormalisedSwing(const SpineDescription& d, const SpineJoints& joints, 
 }
 
 }  // namespace embody::ik::spine
+
+namespace embody::ik::spine {
+
+std::vector<double> vertebraTorsion(const SpineDescription& d, const SpineJoints& joints,
+                                    const std::vector<SiteMotion>& motion) {
+  constexpr int kTorsion = static_cast<int>(Component::Torsion);
+  std::vector<double> out(d.vertebrae.size(), 0.0);
+  for (size_t v = 0; v < d.vertebrae.size(); ++v) {
+    const int s = carrierSite(d, static_cast<int>(v), Component::Torsion, joints.coupled);
+    if (s < 0 || joints.ranges[static_cast<size_t>(s)][kTorsion] <= 0) continue;
+    out[v] = motion[static_cast<size_t>(s)].torsion * d.vertebrae[v].range[kTorsion] /
+             joints.ranges[static_cast<size_t>(s)][kTorsion];
+  }
+  return out;
+}
+
+}  // namespace embody::ik::spine

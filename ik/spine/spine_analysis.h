@@ -41,4 +41,9 @@ int torsionSignChangesBetweenRegions(const SpineDescription& description, const 
 double maxNormalisedSwing(const SpineDescription& description, const SpineJoints& joints,
                           const std::vector<SiteMotion>& motion);
 
+// Per vertebra: the torsion of the site whose joint carries it (carrierSite), shared in
+// proportion to the vertebra's axial range, so the vertebrae of a site add up to its torsion.
+std::vector<double> vertebraTorsion(const SpineDescription& description, const SpineJoints& joints,
+                                    const std::vector<SiteMotion>& motion);
+
 }  // namespace embody::ik::spine

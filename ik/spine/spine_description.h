@@ -113,6 +113,9 @@ Result<SpineDescription> withSites(const SpineDescription& base, const std::vect
 // range is kept however the joints are placed; components a site does not carry are 0.
 // distribute = false (ball joints): each site carries the sum of its own vertebrae's ranges.
 std::vector<Eigen::Vector3d> siteRanges(const SpineDescription& description, bool distribute);
+// The site whose joint carries a vertebra's component under the same rule (distribute = false:
+// the site the vertebra belongs to); -1 when none does (a description validate() refuses).
+int carrierSite(const SpineDescription& description, int vertebra, Component component, bool distribute);
 
 // Lower / upper joint limit of a component for a range (flexion split by flexion_share).
 double lowerLimit(const SpineDescription& description, Component component, double range);

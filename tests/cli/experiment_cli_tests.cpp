@@ -75,6 +75,7 @@ TEST_CASE("embody experiment balance: CoM over the left foot, coupled torsion on
   CHECK(u["torsion_sign_changes_within_regions"].get<int>() > 0);
   CHECK(csvRows(dir / "coupled_iterations.csv") == 150);
   CHECK(csvRows(dir / "uncoupled_spine.csv") == 8);
+  CHECK(csvRows(dir / "coupled_vertebrae.csv") == 24);  // fig. 10 per vertebra
   for (const char* png : {"fig10_torsion.png", "fig_balance_convergence.png", "fig9_coupled_view0.png",
                           "fig9_uncoupled_view1.png"})
     CHECK(pngSize(dir / png).first > 0);

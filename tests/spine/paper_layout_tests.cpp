@@ -81,3 +81,28 @@ TEST_CASE("the largest swing over its limit reads each direction's own limit") {
   m[0].s_x = 0.5 * lowerLimit(d, Component::Flexion, r[0]);  // extension: half of its (smaller) limit
   CHECK(maxNormalisedSwing(d, s.joints, m) == Approx(0.5));
 }
+
+TEST_CASE("per-vertebra torsion: each carrier's torsion shared by axial range, summing back to it") {
+  for (bool coupled : {true, false}) {
+    const SpineDescription& d = defaultSimplifiedSpine();
+    SpineOptions o;
+    o.coupled = coupled;
+    auto s = buildIsolatedSpine(d, o);
+    REQUIRE(s.ok());
+    std::vector<SiteMotion> m(d.sites.size());
+    for (size_t k = 0; k < m.size(); ++k) m[k].torsion = (0.01 + 0.002 * double(k)) * (k % 2 ? 1.0 : -1.0);
+    const std::vector<double> t = vertebraTorsion(d, s->joints, m);
+    REQUIRE(t.size() == 24);
+    std::vector<double> sum(d.sites.size(), 0.0);
+    for (size_t v = 0; v < t.size(); ++v) {
+      const int site = carrierSite(d, static_cast<int>(v), Component::Torsion, coupled);
+      REQUIRE(site >= 0);
+      CHECK(((t[v] > 0) == (m[static_cast<size_t>(site)].torsion > 0)));  // the carrier's direction
+      sum[static_cast<size_t>(site)] += t[v];
+    }
+    for (size_t k = 0; k < d.sites.size(); ++k) {
+      const bool carries = coupled ? s->joints.sites[k].revolute >= 0 : true;
+      CHECK(sum[k] == Approx(carries ? m[k].torsion : 0.0).margin(1e-15));
+    }
+  }
+}
