@@ -1,287 +1,155 @@
 // embody experiment NAME --out DIR: reproducible experiments that write CSV, summary.json and
 // PNG plots (rendered by gnuplot from the CSV with a script written next to them, so a person can
-// re-plot or restyle them). Experiments:
-//   isolated-spine  Raunhardt & Boulic 2008 §5.1: the 24-vertebra spine alone, coupled vs uncoupled
-#include <cmath>
+// re-plot or restyle them) and, where the paper shows postures, rendered frames. Experiments
+// (Raunhardt & Boulic 2008; app/experiments.h):
+//   isolated-spine  §5.1: the 24-vertebra spine alone, coupled vs uncoupled
+//   balance         §5.2.1: standing on one foot, right leg back, hands forward
+//   periodic        §5.2.2: a figure-eight with both hands for many cycles
+//   mocap           §5.2.3: BVH markers drive the mannequin
+//   all             all four (§5.1 on the default and the paper's layout) and report.md
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <numbers>
 #include <stdexcept>
 #include <string>
-#include <vector>
 
 #include "app/args.h"
-#include "ik/spine/isolated_experiment.h"
+#include "app/cli.h"
+#include "app/experiments.h"
 
 namespace {
 
 using namespace embody;
+using namespace embody::app::experiment;
 namespace fs = std::filesystem;
-constexpr double kDeg = std::numbers::pi / 180.0;
 
-// Figures 6, 7 and 8 of the paper, from the CSV files written beside the script.
-const char* const kIsolatedSpinePlots = R"gp(# Plots of `embody experiment isolated-spine` (run: gnuplot plots.gp in this folder).
-set datafile separator ','
-set terminal pngcairo size 1500,520 font 'Sans,11'
-clip(x) = (x > 1e-12 ? x : 1e-12)
+// The clip `mocap` uses without --motion: a 4-frame walk written for the BVH tests (no third-party data).
+constexpr const char* kDefaultMotion = "tests/tracking/fixtures/cmu.bvh";
 
-# Figure 7: task errors and joint variation per iteration.
-set output 'fig7_convergence.png'
-set multiplot layout 1,3 title 'Isolated spine: convergence, coupled (9 free dofs) vs uncoupled (72 dofs)'
-set grid
-set key top right
-set logscale y
-set format y '10^{%L}'
-set xlabel 'iteration'
-set ylabel 'neck position error (m)'
-set title 'position task (priority 1)'
-plot 'coupled_iterations.csv' skip 1 using 1:(clip($3)) with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_iterations.csv' skip 1 using 1:(clip($3)) with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-set ylabel 'head orientation error (deg)'
-set title 'orientation task (priority 0)'
-plot 'coupled_iterations.csv' skip 1 using 1:(clip($4)) with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_iterations.csv' skip 1 using 1:(clip($4)) with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-set ylabel '|{/Symbol D}q| (rad)'
-set title 'joint variation norm'
-plot 'coupled_iterations.csv' skip 1 using 1:(clip($5)) with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_iterations.csv' skip 1 using 1:(clip($5)) with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-unset multiplot
-unset logscale y
-set format y '%g'
-
-# Figure 8: how the swing is distributed over the vertebrae.
-set output 'fig8_swing.png'
-set multiplot layout 1,3 title 'Isolated spine: swing and torsion per vertebra (swing: s_x flexion, s_y lateral bending)'
-set title 'swing components (deg)'
-set xlabel 's_x (flexion +forward)'
-set ylabel 's_y (lateral bending +left)'
-set key top left
-plot 'coupled_vertebrae.csv' skip 1 using 4:5 with linespoints pt 7 ps 1.2 lw 1.5 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_vertebrae.csv' skip 1 using 4:5 with linespoints pt 5 ps 1.0 lw 1.5 lc rgb '#d62728' title 'uncoupled'
-set title 'swing / joint limit (0 = swing-less revolute site)'
-set xlabel 'vertebra (caudal to cranial)'
-set ylabel 'normalised swing'
-set yrange [-1.1:1.1]
-set key top right
-set xtics rotate by 90 right font ',8'
-plot 'coupled_vertebrae.csv' skip 1 using 1:8:xtic(2) with linespoints pt 7 lw 2 lc rgb '#1f77b4' title 'coupled s_y', \
-     'uncoupled_vertebrae.csv' skip 1 using 1:8 with linespoints pt 5 lw 2 lc rgb '#d62728' title 'uncoupled s_y', \
-     'coupled_vertebrae.csv' skip 1 using 1:7 with linespoints pt 6 dt 2 lc rgb '#1f77b4' title 'coupled s_x', \
-     'uncoupled_vertebrae.csv' skip 1 using 1:7 with linespoints pt 4 dt 2 lc rgb '#d62728' title 'uncoupled s_x'
-set autoscale y
-set title 'torsion (deg)'
-set ylabel 'torsion (+ front to the left)'
-set key top left
-plot 'coupled_vertebrae.csv' skip 1 using 1:6:xtic(2) with linespoints pt 7 lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_vertebrae.csv' skip 1 using 1:6 with linespoints pt 5 lw 2 lc rgb '#d62728' title 'uncoupled', \
-     0 with lines lc rgb 'gray' notitle
-unset multiplot
-set xtics norotate font ''
-
-# Figure 6: the final spine shapes, front and side views (same scale on both axes).
-set terminal pngcairo size 1200,820 font 'Sans,11'
-set output 'fig6_shapes.png'
-set multiplot layout 1,2 title 'Isolated spine: final shapes (neck pulled to the left, head orientation kept)'
-set size ratio -1
-set key bottom right box opaque
-set xtics 0.05
-set ytics 0.05
-set yrange [0.2:0.85]
-set title 'front view'
-set xlabel 'x (m, + character left)'
-set ylabel 'y (m, up)'
-set xrange [-0.1:0.2]
-plot 'coupled_shape.csv' skip 1 using 3:4 with linespoints dt 2 pt 1 ps 0.6 lw 1.5 lc rgb 'gray40' title 'rest', \
-     'coupled_shape.csv' skip 1 using 6:7 with linespoints pt 7 ps 0.8 lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_shape.csv' skip 1 using 6:7 with linespoints pt 5 ps 0.7 lw 2 lc rgb '#d62728' title 'uncoupled', \
-     'target.csv' skip 1 using 1:2 with points pt 3 ps 2.5 lw 2 lc rgb 'black' title 'neck target'
-set title 'side view'
-set xlabel 'z (m, + forward)'
-set xrange [-0.25:0.05]
-plot 'coupled_shape.csv' skip 1 using 5:4 with linespoints dt 2 pt 1 ps 0.6 lw 1.5 lc rgb 'gray40' title 'rest', \
-     'coupled_shape.csv' skip 1 using 8:7 with linespoints pt 7 ps 0.8 lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_shape.csv' skip 1 using 8:7 with linespoints pt 5 ps 0.7 lw 2 lc rgb '#d62728' title 'uncoupled', \
-     'target.csv' skip 1 using 3:2 with points pt 3 ps 2.5 lw 2 lc rgb 'black' title 'neck target'
-unset multiplot
-
-# The inter-region band slack (a value the paper does not give): the coupled run per slack.
-set terminal pngcairo size 900,520 font 'Sans,11'
-set output 'fig_band_slack.png'
-set size noratio
-set size 1,1
-unset key
-set key top right box
-set autoscale
-set xtics autofreq
-set ytics autofreq
-set title 'Coupled spine: neck position error after the run vs inter-region band slack'
-set xlabel 'band slack s (deg): |q_j - r q_i| <= s between regions'
-set ylabel 'neck position error (m)'
-set key top right
-plot 'band_slack_sweep.csv' skip 1 using 1:2 with linespoints pt 7 lw 2 lc rgb '#1f77b4' title 'coupled'
-)gp";
-
-std::string shellQuote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
+int intOption(const app::Args& args, const char* name, int fallback, int lo, int hi) {
+  if (!args.has(name)) return fallback;
+  const int v = args.integer(name);
+  if (v < lo || v > hi)
+    throw std::invalid_argument("--" + std::string(name) + " must be in " + std::to_string(lo) + " .. " +
+                                std::to_string(hi));
+  return v;
 }
 
-bool writeFile(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  return static_cast<bool>(out);
+std::string spineOption(const app::Args& args, const char* fallback) {
+  if (!args.has("spine")) return fallback;
+  const std::string s = args.get("spine");
+  avatar::SpineMode mode;
+  if (!spineModeOf(s, mode)) throw std::invalid_argument("--spine must be full or simplified");
+  return s;
 }
 
-void writeRun(const fs::path& dir, const ik::spine::ExperimentRun& run, std::string& error) {
-  std::string it = "iteration,time_us,position_error_m,orientation_error_deg,dq_norm_rad\n";
-  char line[256];
-  for (const ik::spine::IterationSample& s : run.samples) {
-    std::snprintf(line, sizeof line, "%d,%.3f,%.9g,%.9g,%.9g\n", s.iteration, s.time_us, s.position_error,
-                  s.orientation_error / kDeg, s.step_norm);
-    it += line;
-  }
-  const ik::spine::SpineDescription& d = run.description;
-  std::string vs = "index,site,region,s_x_deg,s_y_deg,torsion_deg,s_x_norm,s_y_norm\n";
-  std::string shape = "index,joint,rest_x,rest_y,rest_z,final_x,final_y,final_z\n";
-  for (size_t k = 0; k < d.sites.size(); ++k) {
-    const ik::spine::SiteMotion& m = run.motion[k];
-    const Eigen::Vector3d& r = run.joints.ranges[k];
-    auto norm = [&](ik::spine::Component c, double v) {
-      const double range = r[static_cast<int>(c)];
-      if (range <= 0) return 0.0;
-      return v / (v >= 0 ? ik::spine::upperLimit(d, c, range) : -ik::spine::lowerLimit(d, c, range));
-    };
-    std::snprintf(line, sizeof line, "%zu,%s,%s,%.6f,%.6f,%.6f,%.6f,%.6f\n", k, d.sites[k].name.c_str(),
-                  ik::spine::toString(d.sites[k].region), m.s_x / kDeg, m.s_y / kDeg, m.torsion / kDeg,
-                  norm(ik::spine::Component::Flexion, m.s_x), norm(ik::spine::Component::Bending, m.s_y));
-    vs += line;
-  }
-  for (size_t k = 0; k < run.final_centres.size(); ++k) {
-    const Eigen::Vector3d& a = run.rest_centres[k];
-    const Eigen::Vector3d& b = run.final_centres[k];
-    const std::string name = k < d.sites.size() ? d.sites[k].name : "skullbase";
-    std::snprintf(line, sizeof line, "%zu,%s,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f\n", k, name.c_str(), a.x(), a.y(), a.z(),
-                  b.x(), b.y(), b.z());
-    shape += line;
-  }
-  if (!writeFile(dir / (run.variant + "_iterations.csv"), it) || !writeFile(dir / (run.variant + "_vertebrae.csv"), vs) ||
-      !writeFile(dir / (run.variant + "_shape.csv"), shape))
-    error = "cannot write the " + run.variant + " CSV files in " + dir.string();
+// Every experiment's options from the command line; throws std::invalid_argument on bad values.
+struct AllOptions {
+  IsolatedOptions isolated;
+  BalanceOptions balance;
+  PeriodicOptions periodic;
+  MocapOptions mocap;
+};
+
+AllOptions readOptions(const app::Args& args, std::string& modelError) {
+  AllOptions a;
+  const CommonOptions common = readCommonOptions(args);
+  a.isolated.common = a.balance.common = a.periodic.common = a.mocap.common = common;
+  a.isolated.experiment.iterations = intOption(args, "iterations", 100, 1, 100000);
+  a.isolated.experiment.pull = args.number("pull");
+  a.isolated.experiment.axis_coupling = args.has("axis-coupling");
+  a.balance.iterations = intOption(args, "iterations", 300, 1, 100000);
+  a.balance.spine = spineOption(args, "simplified");
+  a.periodic.cycles = intOption(args, "cycles", 2000, 1, 1000000);
+  a.periodic.stepsPerCycle = intOption(args, "steps", 32, 4, 10000);
+  a.periodic.iterationsPerStep = intOption(args, "iterations-per-step", 3, 1, 1000);
+  a.periodic.spine = spineOption(args, "simplified");
+  a.mocap.motion = args.has("motion") ? args.get("motion") : kDefaultMotion;
+  a.mocap.iterationsPerFrame = intOption(args, "iterations-per-frame", 20, 1, 10000);
+  a.mocap.maxFrames = intOption(args, "frames", 0, 0, 1000000);
+  a.mocap.spine = spineOption(args, "full");
+  auto model = ik::spine::loadSpineModel(args.get("model"));
+  if (!model)
+    modelError = model.error();
+  else
+    a.isolated.model = std::move(*model);
+  return a;
 }
 
-int runIsolatedSpine(const app::Args& args) {
-  const fs::path out = args.get("out");
-  ik::spine::ExperimentOptions o;
-  try {
-    o.iterations = args.integer("iterations");
-    o.pull = args.number("pull");
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 2;
-  }
-  o.axis_coupling = args.has("axis-coupling");
-  auto desc = ik::spine::loadSpineModel(args.get("model"));
-  if (!desc) {
-    std::fprintf(stderr, "error: %s\n", desc.error().c_str());
-    return 1;
-  }
-  auto result = ik::spine::runIsolatedSpineExperiment(*desc, o);
-  if (!result) {
-    std::fprintf(stderr, "error: %s\n", result.error().c_str());
-    return 1;
-  }
-  std::vector<double> slacks;
-  for (int i = 0; i <= 10; ++i) slacks.push_back(0.5 * i);  // 0..5 degrees
-  auto sweep = ik::spine::sweepBandSlack(*desc, o, slacks);
-  if (!sweep) {
-    std::fprintf(stderr, "embody experiment: error: %s\n", sweep.error().c_str());
-    return 1;
-  }
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) {
-    std::fprintf(stderr, "error: cannot create %s: %s\n", out.string().c_str(), ec.message().c_str());
-    return 1;
-  }
-  std::string error;
-  writeRun(out, result->coupled, error);
-  writeRun(out, result->uncoupled, error);
-  nlohmann::json summary = ik::spine::experimentSummary(*result, o);
-  summary["band_slack_sweep"] = ik::spine::sweepSummary(*sweep);
-  summary["setup"]["band_slack_deg"] = desc->band_slack / kDeg;
-  std::string sweepCsv = "band_slack_deg,position_error_m,orientation_error_deg,swing_spread,torsion_sign_changes\n";
-  for (const ik::spine::SlackSweepPoint& p : *sweep) {
-    char row[160];
-    std::snprintf(row, sizeof row, "%.2f,%.9g,%.9g,%.9g,%d\n", p.slack_deg, p.position_error, p.orientation_error / kDeg,
-                  p.swing_spread, p.torsion_sign_changes);
-    sweepCsv += row;
-  }
-  char target[128];
-  std::snprintf(target, sizeof target, "x,y,z\n%.6f,%.6f,%.6f\n", result->neck_target.x(), result->neck_target.y(),
-                result->neck_target.z());
-  if (error.empty() && (!writeFile(out / "summary.json", summary.dump(2) + "\n") || !writeFile(out / "target.csv", target) ||
-                        !writeFile(out / "band_slack_sweep.csv", sweepCsv) ||
-                        !writeFile(out / "plots.gp", kIsolatedSpinePlots)))
-    error = "cannot write in " + out.string();
-  if (!error.empty()) {
-    std::fprintf(stderr, "error: %s\n", error.c_str());
-    return 1;
-  }
-  for (const char* v : {"coupled", "uncoupled"}) {
-    const auto& s = summary[v];
-    std::printf("%-9s position error %.4f m, orientation error %.2g deg, %.1f us/iteration, swing spread %.3g, "
-                "torsion sign changes %d\n",
-                v, s["final_position_error_m"].get<double>(), s["final_orientation_error_deg"].get<double>(),
-                s["mean_iteration_us"].get<double>(), s["swing_spread"].get<double>(),
-                s["torsion_sign_changes_within_regions"].get<int>());
-  }
-  if (args.has("no-plots")) {
-    std::printf("wrote CSV and summary.json to %s (plots skipped)\n", out.string().c_str());
-    return 0;
-  }
-  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
-    std::fprintf(stderr, "error: gnuplot not found (install gnuplot-nox); CSV, summary.json and "
-                         "plots.gp are in %s\n", out.string().c_str());
-    return 1;
-  }
-  const std::string cmd = "cd " + shellQuote(out.string()) + " && gnuplot plots.gp";
-  if (std::system(cmd.c_str()) != 0) {
-    std::fprintf(stderr, "error: gnuplot failed on %s/plots.gp\n", out.string().c_str());
-    return 1;
-  }
-  for (const ik::spine::SlackSweepPoint& p : *sweep)
-    std::printf("band slack %.1f deg: coupled neck error %.4f m\n", p.slack_deg, p.position_error);
-  std::printf("wrote CSV, summary.json and fig6_shapes.png, fig7_convergence.png, fig8_swing.png, fig_band_slack.png to %s\n",
-              out.string().c_str());
+// `all`: every experiment into its own folder under --out, then report.md.
+int runAll(AllOptions a) {
+  const fs::path out = a.isolated.common.out;
+  nlohmann::json isolated, paper, balance, periodic, mocap;
+  a.isolated.common.out = out / "isolated-spine";
+  if (int rc = runIsolatedSpine(a.isolated, isolated); rc != 0) return rc;
+  a.isolated.common.out = out / "isolated-spine-paper";
+  a.isolated.model = ik::spine::paperSpine();
+  if (int rc = runIsolatedSpine(a.isolated, paper); rc != 0) return rc;
+  a.balance.common.out = out / "balance";
+  if (int rc = runBalance(a.balance, balance); rc != 0) return rc;
+  a.periodic.common.out = out / "periodic";
+  if (int rc = runPeriodic(a.periodic, periodic); rc != 0) return rc;
+  a.mocap.common.out = out / "mocap";
+  if (int rc = runMocap(a.mocap, mocap); rc != 0) return rc;
+  if (!writeFile(out / "report.md", reportMarkdown(isolated, paper, balance, periodic, mocap)))
+    return fail("cannot write " + (out / "report.md").string());
+  std::printf("wrote %s\n", (out / "report.md").string().c_str());
   return 0;
 }
 
 int runExperiment(app::Argv argv) {
-  app::Args args("embody experiment",
-                 "Runs a reproducible experiment and writes CSV, summary.json and PNG plots (gnuplot).\n"
-                 "  isolated-spine: Raunhardt & Boulic 2008 §5.1 on the 24-vertebra spine, coupled and uncoupled: "
-                 "the head's orientation is kept (priority 0) while the neck is pulled sideways (priority 1).");
-  args.positional("name", "the experiment: isolated-spine");
-  args.option("out", "DIR", "folder for the results (created)");
-  args.option("model", "full|simplified|FILE", "spine model", "full");
-  args.option("iterations", "N", "solver iterations per run", "100");
-  args.option("pull", "METRES", "how far the neck target is moved to the character's left", "0.12");
-  args.flag("axis-coupling", "add the cross-axis rows to the coupled model");
-  args.flag("no-plots", "write CSV and summary.json only");
+  app::Args args(
+      "embody experiment",
+      "Runs a reproducible experiment of Raunhardt & Boulic 2008, coupled vs uncoupled spine, and writes "
+      "CSV, summary.json, gnuplot figures and rendered postures.\n"
+      "  isolated-spine (§5.1): the spine alone; the head's orientation kept while the neck is pulled "
+      "sideways.\n"
+      "  balance (§5.2.1): the mannequin on its left foot, right toes back, hands forward, head level.\n"
+      "  periodic (§5.2.2): both hands on a figure-eight, feet and centre of mass held, for --cycles "
+      "cycles.\n"
+      "  mocap (§5.2.3): marker positions from a BVH clip drive the mannequin.\n"
+      "  all: the four (§5.1 on the default and the paper's layout) and report.md.");
+  args.positional("name", "isolated-spine | balance | periodic | mocap | all");
+  addCommonOptions(args);
+  args.option("model", "full|simplified|paper|FILE", "isolated-spine: spine model", "full");
+  args.option("iterations", "N", "isolated-spine (100) and balance (300): solver iterations per run");
+  args.option("pull", "METRES", "isolated-spine: how far the neck target moves to the character's left",
+              "0.12");
+  args.flag("axis-coupling", "isolated-spine: add the cross-axis rows to the coupled model");
+  args.option("spine", "full|simplified",
+              "balance, periodic (simplified) and mocap (full): the mannequin's spine");
+  args.option("cycles", "N", "periodic: figure-eight cycles (2000)");
+  args.option("steps", "N", "periodic: targets per cycle (32)");
+  args.option("iterations-per-step", "N", "periodic: solver iterations per target (3)");
+  args.option("motion", "FILE.bvh",
+              std::string("mocap: the clip (") + kDefaultMotion + ", run from the source tree)");
+  args.option("iterations-per-frame", "N", "mocap: solver iterations per clip frame (20)");
+  args.option("frames", "N", "mocap: at most this many clip frames (0 = all)");
   if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
-  if (args.get("name") != "isolated-spine") {
-    return app::usageError("unknown experiment '" + args.get("name") + "' (expected: isolated-spine)");
+  const std::string name = args.get("name");
+  if (name != "isolated-spine" && name != "balance" && name != "periodic" && name != "mocap" && name != "all")
+    return app::usageError("unknown experiment '" + name +
+                           "' (expected: isolated-spine, balance, periodic, mocap, all)");
+  if (args.get("out").empty()) return app::usageError("--out DIR is required");
+  AllOptions a;
+  std::string modelError;
+  try {
+    a = readOptions(args, modelError);
+  } catch (const std::invalid_argument& e) {
+    return app::usageError(e.what());
   }
-  if (args.get("out").empty()) {
-    return app::usageError("--out DIR is required");
-  }
-  return runIsolatedSpine(args);
+  if (!modelError.empty()) return fail(modelError);
+  nlohmann::json summary;
+  if (name == "isolated-spine") return runIsolatedSpine(a.isolated, summary);
+  if (name == "balance") return runBalance(a.balance, summary);
+  if (name == "periodic") return runPeriodic(a.periodic, summary);
+  if (name == "mocap") return runMocap(a.mocap, summary);
+  return runAll(std::move(a));
 }
 
 }  // namespace
 
-EMBODY_COMMAND("experiment", "run a paper experiment (isolated-spine) and write CSV, summary.json and plots", runExperiment);
+EMBODY_COMMAND(
+    "experiment",
+    "run a paper experiment (isolated-spine, balance, periodic, mocap, all): CSV, summary.json, figures",
+    runExperiment);

@@ -98,7 +98,8 @@ int runSpine(app::Argv argv) {
                  "Describes a spine model: its vertebrae and joint sites, joints by type, dofs before and after "
                  "coupling, and the equality and inequality rows (Raunhardt & Boulic 2008).");
   args.positional("action", "describe");
-  args.option("model", "full|simplified|FILE", "the built-in full (24 sites) or simplified (8 sites) model, or a JSON file",
+  args.option("model", "full|simplified|paper|FILE",
+              "the built-in full (24 sites), simplified (8 sites) or paper (§5.1: 7 revolutes) model, or a JSON file",
               "full");
   args.flag("uncoupled", "every site a ball joint with its own limits, no coupling rows");
   args.flag("axis-coupling", "add the cross-axis rows (torsion follows lateral bending)");

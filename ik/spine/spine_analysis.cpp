@@ -79,3 +79,58 @@ int torsionSignChangesWithinRegions(const SpineDescription& d, const SpineJoints
 }
 
 }  // namespace embody::ik::spine
+
+namespace embody::ik::spine {
+
+int torsionSignChangesBetweenRegions(const SpineDescription& d, const SpineJoints& joints,
+                                     const std::vector<SiteMotion>& motion, double epsilon) {
+  // Per region the torsion sign of its last and its first torsion-carrying site (0: none / below epsilon).
+  int first[kRegionCount] = {}, last[kRegionCount] = {};
+  for (size_t s = 0; s < d.sites.size(); ++s) {
+    const bool carries = joints.sites[s].ball >= 0 || joints.sites[s].revolute >= 0;
+    if (!carries) continue;
+    const double t = motion[s].torsion;
+    const int sign = t > epsilon ? 1 : t < -epsilon ? -1 : 0;
+    const int region = static_cast<int>(d.sites[s].region);
+    if (first[region] == 0) first[region] = sign;
+    if (sign != 0) last[region] = sign;
+  }
+  int changes = 0;
+  for (int region = 0; region + 1 < kRegionCount; ++region)
+    if (last[region] != 0 && first[region + 1] != 0 && last[region] != first[region + 1]) ++changes;
+  return changes;
+}
+
+double maxNormalisedSwing(const SpineDescription& d, const SpineJoints& joints, const std::vector<SiteMotion>& motion) {
+  double worst = 0.0;
+  for (size_t s = 0; s < d.sites.size(); ++s) {
+    if (joints.sites[s].ball < 0 && joints.sites[s].swing < 0) continue;
+    for (Component c : {Component::Flexion, Component::Bending}) {
+      const double value = c == Component::Flexion ? motion[s].s_x : motion[s].s_y;
+      const double range = joints.ranges[s][static_cast<int>(c)];
+      if (range <= 0) continue;
+      const double bound = value >= 0 ? upperLimit(d, c, range) : -lowerLimit(d, c, range);
+      worst = std::max(worst, std::abs(value) / bound);
+    }
+  }
+  return worst;
+}
+
+}  // namespace embody::ik::spine
+
+namespace embody::ik::spine {
+
+std::vector<double> vertebraTorsion(const SpineDescription& d, const SpineJoints& joints,
+                                    const std::vector<SiteMotion>& motion) {
+  constexpr int kTorsion = static_cast<int>(Component::Torsion);
+  std::vector<double> out(d.vertebrae.size(), 0.0);
+  for (size_t v = 0; v < d.vertebrae.size(); ++v) {
+    const int s = carrierSite(d, static_cast<int>(v), Component::Torsion, joints.coupled);
+    if (s < 0 || joints.ranges[static_cast<size_t>(s)][kTorsion] <= 0) continue;
+    out[v] = motion[static_cast<size_t>(s)].torsion * d.vertebrae[v].range[kTorsion] /
+             joints.ranges[static_cast<size_t>(s)][kTorsion];
+  }
+  return out;
+}
+
+}  // namespace embody::ik::spine

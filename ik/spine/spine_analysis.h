@@ -32,4 +32,18 @@ double swingSpread(const SpineDescription& description, const SpineJoints& joint
 int torsionSignChangesWithinRegions(const SpineDescription& description, const SpineJoints& joints,
                                     const std::vector<SiteMotion>& motion, double epsilon = 1e-4);
 
+// Sign changes of torsion across the region boundaries: the last torsion-carrying site of a
+// region against the first of the next (the first counts only when above `epsilon`).
+int torsionSignChangesBetweenRegions(const SpineDescription& description, const SpineJoints& joints,
+                                     const std::vector<SiteMotion>& motion, double epsilon = 1e-4);
+
+// The largest |swing component / its limit in that direction| over the sites (1 = at a limit).
+double maxNormalisedSwing(const SpineDescription& description, const SpineJoints& joints,
+                          const std::vector<SiteMotion>& motion);
+
+// Per vertebra: the torsion of the site whose joint carries it (carrierSite), shared in
+// proportion to the vertebra's axial range, so the vertebrae of a site add up to its torsion.
+std::vector<double> vertebraTorsion(const SpineDescription& description, const SpineJoints& joints,
+                                    const std::vector<SiteMotion>& motion);
+
 }  // namespace embody::ik::spine

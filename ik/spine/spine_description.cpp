@@ -320,9 +320,27 @@ const SpineDescription& defaultSimplifiedSpine() {
   return simplified;
 }
 
+// The paper's §5.1 count: 32 equality rows = 17 swing + 7 revolute joints (a region with s swing
+// and t revolute joints has 2(s - 1) + (t - 1) rows). The paper names the first revolute of each
+// region (L2, T8, C6) but not every joint; the seventh revolute is put at vc4 (C4-C5), so the
+// neck alternates swing and revolute from C7 up (docs/spine.md, "The paper's layout").
+const SpineDescription& paperSpine() {
+  static const SpineDescription paper = [] {
+    json j = json::parse(detail::kFullSpineJson);
+    j["name"] = "paper";
+    for (json& site : j["sites"])
+      if (site["first"] == "vc4") site["joints"] = "revolute";
+    auto r = parseSpineDescription(j);
+    if (!r) throw std::logic_error("embedded paper spine: " + r.error());
+    return std::move(*r);
+  }();
+  return paper;
+}
+
 Result<SpineDescription> loadSpineModel(const std::string& nameOrPath) {
   if (nameOrPath == "full") return defaultFullSpine();
   if (nameOrPath == "simplified") return defaultSimplifiedSpine();
+  if (nameOrPath == "paper") return paperSpine();
   return loadSpineDescription(nameOrPath);
 }
 
@@ -347,29 +365,31 @@ Result<SpineDescription> withSites(const SpineDescription& base, const std::vect
   return d;
 }
 
-std::vector<Eigen::Vector3d> siteRanges(const SpineDescription& d, bool distribute) {
-  std::vector<Eigen::Vector3d> ranges(d.sites.size(), Eigen::Vector3d::Zero());
-  for (size_t s = 0; s < d.sites.size(); ++s)
-    for (int k = d.sites[s].first; k < d.sites[s].first + d.sites[s].count; ++k)
-      if (!distribute) ranges[s] += d.vertebrae[k].range;
-  if (!distribute) return ranges;
-  for (int k = 0; k < static_cast<int>(d.vertebrae.size()); ++k) {
-    const Vertebra& v = d.vertebrae[k];
-    for (int c = 0; c < kComponentCount; ++c) {
-      int best = -1, bestDistance = 0;
-      for (size_t s = 0; s < d.sites.size(); ++s) {
-        const Site& site = d.sites[s];
-        const bool carries = c == static_cast<int>(Component::Torsion) ? site.revolute : site.swing;
-        if (!carries || site.region != v.region) continue;
-        const int distance = k < site.first ? site.first - k : k >= site.first + site.count ? k - (site.first + site.count - 1) : 0;
-        if (best < 0 || distance < bestDistance) {  // strict: the caudal site wins a tie
-          best = static_cast<int>(s);
-          bestDistance = distance;
-        }
-      }
-      ranges[best][c] += v.range[c];  // validate() guarantees every region has a carrier
+int carrierSite(const SpineDescription& d, int vertebra, Component component, bool distribute) {
+  int best = -1, bestDistance = 0;
+  for (size_t s = 0; s < d.sites.size(); ++s) {
+    const Site& site = d.sites[s];
+    const int last = site.first + site.count - 1;
+    if (!distribute) {
+      if (vertebra >= site.first && vertebra <= last) return static_cast<int>(s);
+      continue;
+    }
+    const bool carries = component == Component::Torsion ? site.revolute : site.swing;
+    if (!carries || site.region != d.vertebrae[vertebra].region) continue;
+    const int distance = vertebra < site.first ? site.first - vertebra : vertebra > last ? vertebra - last : 0;
+    if (best < 0 || distance < bestDistance) {  // strict: the caudal site wins a tie
+      best = static_cast<int>(s);
+      bestDistance = distance;
     }
   }
+  return best;
+}
+
+std::vector<Eigen::Vector3d> siteRanges(const SpineDescription& d, bool distribute) {
+  std::vector<Eigen::Vector3d> ranges(d.sites.size(), Eigen::Vector3d::Zero());
+  for (int k = 0; k < static_cast<int>(d.vertebrae.size()); ++k)
+    for (int c = 0; c < kComponentCount; ++c)  // validate() guarantees every region has a carrier
+      ranges[carrierSite(d, k, Component(c), distribute)][c] += d.vertebrae[k].range[c];
   return ranges;
 }
 

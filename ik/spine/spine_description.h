@@ -89,7 +89,10 @@ nlohmann::json toJson(const SpineDescription& description);
 // elsewhere) and "simplified" (8 sites: 3 lumbar, 3 thoracic, 2 cervical; 8 swing + 5 revolute).
 const SpineDescription& defaultFullSpine();
 const SpineDescription& defaultSimplifiedSpine();
-// "full", "simplified", or a path to a JSON file.
+// "paper": the full model with the revolute count of the paper's §5.1 (17 swing + 7 revolute,
+// 32 equality rows: a fourth cervical revolute at vc4); the default has 18 + 6 and 33 rows.
+const SpineDescription& paperSpine();
+// "full", "simplified", "paper", or a path to a JSON file.
 Result<SpineDescription> loadSpineModel(const std::string& nameOrPath);
 
 // One entry of a custom grouping: vertebrae `first` … `last` (H-Anim names, caudal first).
@@ -110,6 +113,9 @@ Result<SpineDescription> withSites(const SpineDescription& base, const std::vect
 // range is kept however the joints are placed; components a site does not carry are 0.
 // distribute = false (ball joints): each site carries the sum of its own vertebrae's ranges.
 std::vector<Eigen::Vector3d> siteRanges(const SpineDescription& description, bool distribute);
+// The site whose joint carries a vertebra's component under the same rule (distribute = false:
+// the site the vertebra belongs to); -1 when none does (a description validate() refuses).
+int carrierSite(const SpineDescription& description, int vertebra, Component component, bool distribute);
 
 // Lower / upper joint limit of a component for a range (flexion split by flexion_share).
 double lowerLimit(const SpineDescription& description, Component component, double range);

@@ -27,51 +27,46 @@ std::string rowName(const SpineDescription& d, int component, int from, int to) 
   return std::string(toString(Component(component))) + " " + d.sites[to].name + " = r * " + d.sites[from].name;
 }
 
-}  // namespace
-
-Result<SpineJoints> appendSpine(ik::ModelBuilder& b, const SpineDescription& d, ik::JointId parent,
-                                std::span<const Eigen::Isometry3d> rests, const SpineOptions& options) {
-  if (rests.size() != d.sites.size())
-    return Error{"appendSpine: " + std::to_string(rests.size()) + " rest frames for " + std::to_string(d.sites.size()) +
-                 " sites"};
-  for (const Eigen::Isometry3d& r : rests)
-    if (!r.matrix().allFinite()) return Error{"appendSpine: a rest frame is not finite"};
-  SpineJoints out;
-  out.coupled = options.coupled;
-  out.ranges = siteRanges(d, options.coupled);
-  out.sites.resize(d.sites.size());
-  const Eigen::Vector3d axis = Eigen::Vector3d::UnitY();
-  ik::JointId prev = parent;
-
-  auto limit = [&](ik::DofRef dof, Component c, double range) {
-    b.setLimits(dof, lowerLimit(d, c, range), upperLimit(d, c, range));
+// Limits of the uncoupled ball joints, as JointDesc limits (one row per bound).
+void limitBall(ik::ModelBuilder& b, const SpineDescription& d, ik::JointId j, const Eigen::Vector3d& r, SpineJoints& out) {
+  auto limit = [&](int dof, Component c, double range) {
+    b.setLimits({j, dof}, lowerLimit(d, c, range), upperLimit(d, c, range));
     out.limit_inequalities += 2;
   };
-  // Coupled limits go in as explicit rows ahead of the bands rather than as JointDesc limits: the
-  // solver pins violated rows user couplings first, then limits, first added wins. A band pinned
-  // at its slack before the neighbouring region's limit makes that limit row linearly dependent
-  // (band + the other region's limit fix it), so the joint would end up past its limit by s.
-  // Checked first, the anatomical limit wins and the band yields.
+  limit(0, Component::Flexion, r[kFlexion]);  // exp-map x: flexion
+  limit(1, Component::Torsion, r[kTorsion]);  // exp-map y: torsion (the spine axis)
+  limit(2, Component::Bending, r[kBending]);  // exp-map z: minus bending (symmetric)
+}
+
+// The uncoupled variant: one ball joint per site with its own limits, no rows.
+void appendBallJoints(ik::ModelBuilder& b, const SpineDescription& d, ik::JointId parent,
+                      std::span<const Eigen::Isometry3d> rests, SpineJoints& out) {
+  ik::JointId prev = parent;
+  for (size_t s = 0; s < d.sites.size(); ++s) {
+    const ik::JointId j = b.addJoint(d.sites[s].name, prev, ik::JointType::Ball, rests[s], Eigen::Vector3d::UnitY());
+    limitBall(b, d, j, out.ranges[s], out);
+    out.sites[s].ball = prev = j;
+  }
+  out.top = prev;
+}
+
+// Coupled joints: per site a swing and/or a revolute (the revolute on the swing at the same
+// place). Limits on the first carrier of each region (or every joint) go in as explicit rows
+// ahead of the bands rather than as JointDesc limits: the solver pins violated rows user
+// couplings first, then limits, first added wins. A band pinned at its slack before the
+// neighbouring region's limit makes that limit row linearly dependent (band + the other region's
+// limit fix it), so the joint would end up past its limit by s. Checked first, the anatomical
+// limit wins and the band yields.
+void appendCoupledJoints(ik::ModelBuilder& b, const SpineDescription& d, ik::JointId parent,
+                         std::span<const Eigen::Isometry3d> rests, const SpineOptions& options, SpineJoints& out) {
   std::vector<ik::InequalityRow> limitRows;
   auto limitRow = [&](ik::DofRef dof, Component c, double range) {
     limitRows.push_back({"", {{dof, 1.0}}, upperLimit(d, c, range), ik::InequalityKind::UserCoupling});
     limitRows.push_back({"", {{dof, -1.0}}, -lowerLimit(d, c, range), ik::InequalityKind::UserCoupling});
     out.limit_inequalities += 2;
   };
-
-  if (!options.coupled) {
-    for (size_t s = 0; s < d.sites.size(); ++s) {
-      const Eigen::Vector3d& r = out.ranges[s];
-      const ik::JointId j = b.addJoint(d.sites[s].name, prev, ik::JointType::Ball, rests[s], axis);
-      limit({j, 0}, Component::Flexion, r[kFlexion]);  // exp-map x: flexion
-      limit({j, 1}, Component::Torsion, r[kTorsion]);  // exp-map y: torsion (the spine axis)
-      limit({j, 2}, Component::Bending, r[kBending]);  // exp-map z: minus bending (symmetric)
-      out.sites[s].ball = prev = j;
-    }
-    out.top = prev;
-    return out;
-  }
-
+  const Eigen::Vector3d axis = Eigen::Vector3d::UnitY();
+  ik::JointId prev = parent;
   bool swingLimited[kRegionCount] = {}, torsionLimited[kRegionCount] = {};
   for (size_t s = 0; s < d.sites.size(); ++s) {
     const Site& site = d.sites[s];
@@ -105,8 +100,10 @@ Result<SpineJoints> appendSpine(ik::ModelBuilder& b, const SpineDescription& d, 
     row.name = b.joints()[dof.joint].name + "[" + std::to_string(dof.component) + "] " + (upper ? "<= upper" : ">= lower");
     b.addInequality(std::move(row));
   }
+}
 
-  // Inside each region: chain consecutive carriers of a component, exactly two entries per row.
+// Inside each region: chain consecutive carriers of a component, exactly two entries per row.
+void appendRegionChains(ik::ModelBuilder& b, const SpineDescription& d, SpineJoints& out) {
   for (int region = 0; region < kRegionCount; ++region)
     for (int c = 0; c < kComponentCount; ++c) {
       const std::vector<int> chain = carriers(d, out, Region(region), c);
@@ -117,8 +114,10 @@ Result<SpineJoints> appendSpine(ik::ModelBuilder& b, const SpineDescription& d, 
         ++out.equalities;
       }
     }
+}
 
-  // Between neighbouring regions: a band on the same component (relaxed coupling).
+// Between neighbouring regions: a band on the same component (relaxed coupling).
+void appendRegionBands(ik::ModelBuilder& b, const SpineDescription& d, SpineJoints& out) {
   for (int region = 0; region + 1 < kRegionCount; ++region)
     for (int c = 0; c < kComponentCount; ++c) {
       const int i = carriers(d, out, Region(region), c).back();
@@ -130,26 +129,49 @@ Result<SpineJoints> appendSpine(ik::ModelBuilder& b, const SpineDescription& d, 
       b.addInequality({name + " (lower)", {{qj, -1.0}, {qi, ratio}}, d.band_slack, ik::InequalityKind::UserCoupling});
       out.band_inequalities += 2;
     }
+}
 
-  // Cross-axis: the region's torsion follows its bending. The first revolute and the first swing
-  // stand for their region through the chains: region total = own value * (region range / own
-  // range), so q_t = sign * k * (r_t / T) * (B / r_b) * q_b.
-  if (options.axis_coupling) {
-    for (const AxisCoupling& a : d.axis_couplings) {
-      const std::vector<int> twist = carriers(d, out, a.region, kTorsion);
-      const std::vector<int> bend = carriers(d, out, a.region, kBending);
-      double totalTwist = 0, totalBend = 0;
-      for (int s : twist) totalTwist += out.ranges[s][kTorsion];
-      for (int s : bend) totalBend += out.ranges[s][kBending];
-      const int t = twist.front(), s = bend.front();
-      const double k = (a.same_side ? 1.0 : -1.0) * a.torsion_per_bending * (out.ranges[t][kTorsion] / totalTwist) *
-                       (totalBend / out.ranges[s][kBending]);
-      b.addEquality(std::string(toString(a.region)) + " torsion follows bending", carrier(out.sites[t], kTorsion), 1.0,
-                    carrier(out.sites[s], kBending), -k);
-      ++out.equalities;
-      ++out.axis_equalities;
-    }
+// Cross-axis: the region's torsion follows its bending. The first revolute and the first swing
+// stand for their region through the chains: region total = own value * (region range / own
+// range), so q_t = sign * k * (r_t / T) * (B / r_b) * q_b.
+void appendAxisCouplings(ik::ModelBuilder& b, const SpineDescription& d, SpineJoints& out) {
+  for (const AxisCoupling& a : d.axis_couplings) {
+    const std::vector<int> twist = carriers(d, out, a.region, kTorsion);
+    const std::vector<int> bend = carriers(d, out, a.region, kBending);
+    double totalTwist = 0, totalBend = 0;
+    for (int s : twist) totalTwist += out.ranges[s][kTorsion];
+    for (int s : bend) totalBend += out.ranges[s][kBending];
+    const int t = twist.front(), s = bend.front();
+    const double k = (a.same_side ? 1.0 : -1.0) * a.torsion_per_bending * (out.ranges[t][kTorsion] / totalTwist) *
+                     (totalBend / out.ranges[s][kBending]);
+    b.addEquality(std::string(toString(a.region)) + " torsion follows bending", carrier(out.sites[t], kTorsion), 1.0,
+                  carrier(out.sites[s], kBending), -k);
+    ++out.equalities;
+    ++out.axis_equalities;
   }
+}
+
+}  // namespace
+
+Result<SpineJoints> appendSpine(ik::ModelBuilder& b, const SpineDescription& d, ik::JointId parent,
+                                std::span<const Eigen::Isometry3d> rests, const SpineOptions& options) {
+  if (rests.size() != d.sites.size())
+    return Error{"appendSpine: " + std::to_string(rests.size()) + " rest frames for " + std::to_string(d.sites.size()) +
+                 " sites"};
+  for (const Eigen::Isometry3d& r : rests)
+    if (!r.matrix().allFinite()) return Error{"appendSpine: a rest frame is not finite"};
+  SpineJoints out;
+  out.coupled = options.coupled;
+  out.ranges = siteRanges(d, options.coupled);
+  out.sites.resize(d.sites.size());
+  if (!options.coupled) {
+    appendBallJoints(b, d, parent, rests, out);
+    return out;
+  }
+  appendCoupledJoints(b, d, parent, rests, options, out);
+  appendRegionChains(b, d, out);
+  appendRegionBands(b, d, out);
+  if (options.axis_coupling) appendAxisCouplings(b, d, out);
   return out;
 }
 
