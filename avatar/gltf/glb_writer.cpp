@@ -143,7 +143,8 @@ json materialJson(const Material& m, const AvatarAsset& asset, std::set<std::str
 
 }  // namespace
 
-Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimation* animation) {
+Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimation* animation,
+                                       std::string_view extensionsJson) {
   const Skeleton& sk = asset.skeleton;
   const SkinnedMesh& mesh = asset.mesh;
   const size_t n = sk.joints.size();
@@ -228,6 +229,27 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
           doc, bin.view(weights1.data(), weights1.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC4");
     }
   }
+  // Morph targets: one dense POSITION + NORMAL accessor pair per channel over the whole vertex
+  // array, shared by every primitive (they share the vertex attributes too).
+  json targets = json::array();
+  if (vc > 0)
+    for (size_t c = 0; c < mesh.morphChannels.size(); ++c) {
+      std::vector<float> dp(vc * 3, 0.0f), dn(vc * 3, 0.0f);
+      for (const MorphDelta& d : mesh.morphDeltas) {
+        if (d.channel != c || d.vertex >= vc) continue;
+        for (int k = 0; k < 3; ++k) dp[d.vertex * 3 + k] = d.position[k], dn[d.vertex * 3 + k] = d.normal[k];
+      }
+      glm::vec3 tlo(std::numeric_limits<float>::max()), thi(-std::numeric_limits<float>::max());
+      for (size_t i = 0; i < vc; ++i) {
+        tlo = glm::min(tlo, glm::vec3(dp[i * 3], dp[i * 3 + 1], dp[i * 3 + 2]));
+        thi = glm::max(thi, glm::vec3(dp[i * 3], dp[i * 3 + 1], dp[i * 3 + 2]));
+      }
+      const int ap = accessor(doc, bin.view(dp.data(), dp.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC3");
+      doc["accessors"][static_cast<size_t>(ap)]["min"] = {tlo.x, tlo.y, tlo.z};
+      doc["accessors"][static_cast<size_t>(ap)]["max"] = {thi.x, thi.y, thi.z};
+      const int an = accessor(doc, bin.view(dn.data(), dn.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC3");
+      targets.push_back({{"POSITION", ap}, {"NORMAL", an}});
+    }
   const int indexView = bin.view(mesh.indices.data(), mesh.indices.size() * 4, kElementArrayBuffer, doc);
   json primitives = json::array();
   for (const Primitive& p : mesh.primitives) {
@@ -240,6 +262,7 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
         {"mode", 4}};
     if (p.material >= 0 && static_cast<size_t>(p.material) < asset.materials.size())
       prim["material"] = p.material;
+    if (!targets.empty()) prim["targets"] = targets;
     primitives.push_back(prim);
   }
 
@@ -267,11 +290,28 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
   }
   std::set<std::string> extensionsUsed;
   for (const Material& m : asset.materials) doc["materials"].push_back(materialJson(m, asset, extensionsUsed));
+  if (!extensionsJson.empty()) {
+    const json ext = json::parse(extensionsJson, nullptr, false);
+    if (!ext.is_object()) return Error{"extensionsJson is not a JSON object"};
+    for (const auto& [name, value] : ext.items()) {
+      doc["extensions"][name] = value;
+      extensionsUsed.insert(name);
+    }
+  }
   if (!extensionsUsed.empty()) doc["extensionsUsed"] = extensionsUsed;
 
   json sceneNodes = json::array({root});
   if (!primitives.empty()) {
     doc["meshes"] = json::array({{{"name", "body"}, {"primitives", primitives}}});
+    if (!targets.empty()) {
+      json weights = json::array(), names = json::array();
+      for (const MorphChannel& c : mesh.morphChannels) {
+        weights.push_back(c.defaultWeight);
+        names.push_back(c.name.empty() ? "target" + std::to_string(names.size()) : c.name);
+      }
+      doc["meshes"][0]["weights"] = weights;
+      doc["meshes"][0]["extras"] = {{"targetNames", names}};
+    }
     doc["skins"] =
         json::array({{{"inverseBindMatrices", ibmAccessor}, {"joints", skinJoints}, {"skeleton", root}}});
     doc["nodes"].push_back({{"name", "body"}, {"mesh", 0}, {"skin", 0}});
@@ -301,8 +341,9 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
   return out;
 }
 
-Status writeGlbFile(const AvatarAsset& asset, const std::string& path, const GlbAnimation* animation) {
-  auto bytes = encodeGlb(asset, animation);
+Status writeGlbFile(const AvatarAsset& asset, const std::string& path, const GlbAnimation* animation,
+                    std::string_view extensionsJson) {
+  auto bytes = encodeGlb(asset, animation, extensionsJson);
   if (!bytes.ok()) return Error{bytes.error()};
   std::ofstream f(path, std::ios::binary);
   if (!f) return Error{"cannot write '" + path + "'"};
