@@ -109,9 +109,6 @@ struct Walk {
     const Transform& t = job.pose->local[static_cast<size_t>(j)];
     return parentGlobal(j) * localMatrix(t.translation, job.skeleton->joints[static_cast<size_t>(j)].rest.rotation, t.scale);
   }
-  glm::vec3 tailLocal(const SpringJoint& sj) const {
-    return sj.child >= 0 ? job.pose->local[static_cast<size_t>(sj.child)].translation : sj.virtualTail;
-  }
   glm::mat4 centre(int chain) const {
     const int c = job.setup->chains[static_cast<size_t>(chain)].center;
     return c < 0 ? glm::mat4(1.0f) : s.globals[static_cast<size_t>(c)];
@@ -124,7 +121,7 @@ struct Walk {
       s.globals[j] = k < 0 ? parentGlobal(static_cast<int>(j)) * job.pose->local[j].matrix() : restRotated(static_cast<int>(j));
       if (k < 0) continue;
       const SpringJoint& sj = jointOf(k);
-      const glm::vec3 tl = tailLocal(sj);
+      const glm::vec3 tl = sj.tail;
       const float len = glm::length(tl);
       s.restAxis[static_cast<size_t>(k)] = len > 1e-9f ? tl / len : glm::vec3(0.0f, 1.0f, 0.0f);
       const glm::vec3 origin(s.globals[j][3]);

@@ -41,8 +41,8 @@ struct SpringJointSettings {
 // child < 0) follows the simulated tail.
 struct SpringJoint {
   int joint = -1;
-  int child = -1;                    // the tail joint, -1 for a virtual tail
-  glm::vec3 virtualTail{0.0f};       // tail in the joint's frame when child < 0 (VRM 0.x leaves: 7 cm)
+  int child = -1;         // the tail joint (a child or a deeper descendant), -1 for a virtual tail
+  glm::vec3 tail{0.0f};   // the tail in the joint's rest frame (VRM 0.x leaves: 7 cm along its own offset)
   SpringJointSettings settings;
 };
 

@@ -70,6 +70,8 @@ std::vector<int> groupColliders(const Json& groups, const std::vector<std::vecto
 
 void parseVrm1(const Json& sb, const AvatarAsset& asset, SpringBoneSetup& setup, std::vector<std::string>& w,
                std::vector<bool>& claimed) {
+  std::vector<glm::mat4> restGlobals;
+  computeGlobals(asset.skeleton, SkeletonPose::rest(asset.skeleton), restGlobals);
   std::vector<int> keptIndex;  // file collider -> setup collider, -1 when dropped
   size_t ci = 0;
   for (const Json& c : vrm::arrayOf(member(sb, "colliders"))) {
@@ -110,6 +112,8 @@ void parseVrm1(const Json& sb, const AvatarAsset& asset, SpringBoneSetup& setup,
       SpringJoint sj;
       sj.joint = a;
       sj.child = b;
+      // b may sit deeper than a's child (the joints between are not simulated): its rest offset in a's frame.
+      sj.tail = glm::vec3(glm::inverse(restGlobals[static_cast<size_t>(a)]) * restGlobals[static_cast<size_t>(b)][3]);
       sj.settings = readSettings(joints[k], "stiffness", what + " joint " + std::to_string(k), w, false);
       chain.joints.push_back(sj);
     }
@@ -160,8 +164,9 @@ void parseVrm0(const Json& sa, const AvatarAsset& asset, SpringBoneSetup& setup,
         sj.settings = settings;
         for (size_t c = j + 1; c < asset.skeleton.joints.size() && sj.child < 0; ++c)
           if (asset.skeleton.joints[c].parent == static_cast<int>(j)) sj.child = static_cast<int>(c);
+        if (sj.child >= 0) sj.tail = asset.skeleton.joints[static_cast<size_t>(sj.child)].rest.translation;
         if (sj.child < 0)
-          sj.virtualTail = unitOr(asset.skeleton.joints[j].rest.translation, glm::vec3(0.0f, 1.0f, 0.0f)) * kVrm0VirtualTail;
+          sj.tail = unitOr(asset.skeleton.joints[j].rest.translation, glm::vec3(0.0f, 1.0f, 0.0f)) * kVrm0VirtualTail;
         chain.joints.push_back(sj);
       }
       if (!chain.joints.empty()) setup.chains.push_back(std::move(chain));

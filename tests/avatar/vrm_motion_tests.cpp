@@ -113,7 +113,7 @@ TEST_CASE("vrm 0.x: secondaryAnimation and blend shape groups are read", "[vrm]"
   for (const auto& c : a.springBones.chains) {
     REQUIRE(c.joints.size() == 5);  // the whole subtree sways; the leaf gets a 7 cm virtual tail
     CHECK(c.joints.back().child == -1);
-    CHECK(glm::length(c.joints.back().virtualTail) == Approx(0.07f));
+    CHECK(glm::length(c.joints.back().tail) == Approx(0.07f));
     CHECK(c.joints[0].settings.stiffness == Approx(1.5f));  // from "stiffiness"
   }
   REQUIRE(a.springBones.colliders.size() == 2);
@@ -196,6 +196,25 @@ TEST_CASE("spring bones: a teleport resets the springs instead of flinging the h
   motion.update(stalled, 2.0, std::nullopt);
   CHECK(motion.lastSpringJob().stepsRun == motion.lastSpringJob().maxStepsPerRun);
   for (const auto& tr : stalled.local) CHECK(std::isfinite(tr.rotation.w + tr.rotation.x));
+}
+
+TEST_CASE("spring bones: a chain that skips a joint aims at the deeper joint", "[vrm]") {
+  test::VrmTestAvatar t = test::buildVrmTestAvatar();
+  auto ext = nlohmann::json::parse(t.extensionsJson);
+  auto& joints = ext["VRMC_springBone"]["springs"][0]["joints"];
+  joints.erase(2);  // strand 0: joints 0, 1, 3, 4 (1 swings towards 3 over 2)
+  const AvatarAsset a = loadTestVrm({}, ext.dump());
+  CHECK(a.vrmWarnings.empty());
+  const SpringChain& c = a.springBones.chains[0];
+  REQUIRE(c.joints.size() == 3);
+  CHECK(c.joints[1].child == t.strands[0][3]);
+  CHECK(glm::length(c.joints[1].tail) == Approx(2.0f * std::sqrt(0.055f * 0.055f + 0.012f * 0.012f)).epsilon(1e-4));
+  // At rest with no gravity and no motion nothing moves.
+  SecondaryMotion motion(a, {.blink = false});
+  SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+  motion.update(pose, 0.0, std::nullopt);
+  for (size_t j = 0; j < pose.local.size(); ++j)
+    CHECK(std::abs(glm::dot(pose.local[j].rotation, a.skeleton.joints[j].rest.rotation)) == Approx(1.0f).margin(1e-6));
 }
 
 TEST_CASE("spring bone job: Validate rejects malformed inputs", "[vrm]") {

@@ -2,7 +2,8 @@
 // The project's own small VRM 1.0 avatar for the spring-bone, expression and look-at tests and
 // goldens (no third-party file): a bust (root, hips, spine, chest, neck, head, two eyes) with a
 // sphere head, eye whites, pupils and a mouth, and eight hair strands of five joints each hanging
-// around the back and sides of the head. Built as an AvatarAsset and written with the project's
+// around the back and sides of the head; arms and legs are joints without skin (a complete
+// humanoid for the body model). Built as an AvatarAsset and written with the project's
 // GLB writer plus the VRMC_vrm / VRMC_springBone extension JSON.
 //
 // Morph targets (channels on the mesh node, in this order): blink (eyes squashed shut),
@@ -35,6 +36,7 @@ struct VrmTestAvatar {
   std::string extensionsJson;  // {"VRMC_vrm": ..., "VRMC_springBone": ...} (or {"VRM": ...})
   int head = 5, leftEye = 6, rightEye = 7;
   std::vector<std::vector<int>> strands;  // joints of each hair strand, root first
+  std::vector<std::pair<std::string, int>> limbBones;  // VRM bone name -> joint (arms, legs; no skin)
   int meshNode() const { return static_cast<int>(asset.skeleton.joints.size()); }
 };
 
@@ -141,6 +143,25 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
     }
     t.strands.push_back(strand);
   }
+  // Limbs without skin (after the hair, so every index above stays): the humanoid is complete, so
+  // the IK body model and `embody render` accept the file.
+  const struct { const char* name; const char* bone; int parentLimb; glm::vec3 global; } limbs[] = {
+      {"J_UpperArm_L", "leftUpperArm", -1, {0.17f, 1.42f, 0}}, {"J_LowerArm_L", "leftLowerArm", 0, {0.43f, 1.42f, 0}},
+      {"J_Hand_L", "leftHand", 1, {0.68f, 1.42f, 0}},           {"J_UpperArm_R", "rightUpperArm", -1, {-0.17f, 1.42f, 0}},
+      {"J_LowerArm_R", "rightLowerArm", 3, {-0.43f, 1.42f, 0}}, {"J_Hand_R", "rightHand", 4, {-0.68f, 1.42f, 0}},
+      {"J_UpperLeg_L", "leftUpperLeg", -2, {0.09f, 0.88f, 0}},  {"J_LowerLeg_L", "leftLowerLeg", 6, {0.09f, 0.48f, 0}},
+      {"J_Foot_L", "leftFoot", 7, {0.09f, 0.08f, 0}},           {"J_UpperLeg_R", "rightUpperLeg", -2, {-0.09f, 0.88f, 0}},
+      {"J_LowerLeg_R", "rightLowerLeg", 9, {-0.09f, 0.48f, 0}}, {"J_Foot_R", "rightFoot", 10, {-0.09f, 0.08f, 0}}};
+  std::vector<int> limbJoint;
+  std::vector<glm::vec3> limbGlobal;
+  for (const auto& l : limbs) {
+    const int parent = l.parentLimb == -1 ? 3 : l.parentLimb == -2 ? 1 : limbJoint[static_cast<size_t>(l.parentLimb)];
+    const glm::vec3 parentPos = l.parentLimb == -1 ? glm::vec3(0, 1.2f, 0) : l.parentLimb == -2 ? glm::vec3(0, 0.9f, 0)
+                                                                                               : limbGlobal[static_cast<size_t>(l.parentLimb)];
+    limbJoint.push_back(addJoint(s, l.name, parent, l.global - parentPos));
+    limbGlobal.push_back(l.global);
+    t.limbBones.emplace_back(l.bone, limbJoint.back());
+  }
   a.mesh.inverseBind.assign(s.joints.size(), glm::mat4(1.0f));
   {
     std::vector<glm::mat4> g;
@@ -231,6 +252,10 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
                         {"gravityDir", {0, -1, 0}}, {"hitRadius", 0.01}});
     springs.push_back({{"name", "hair" + std::to_string(k)}, {"joints", joints}, {"colliderGroups", {0}}});
   }
+  json humanBones = {{"hips", {{"node", 1}}}, {"spine", {{"node", 2}}}, {"chest", {{"node", 3}}},
+                     {"neck", {{"node", 4}}}, {"head", {{"node", 5}}}, {"leftEye", {{"node", 6}}},
+                     {"rightEye", {{"node", 7}}}};
+  for (const auto& [bone, joint] : t.limbBones) humanBones[bone] = {{"node", joint}};
   const json range = {{"inputMaxValue", 45.0}, {"outputScale", o.boneLookAt ? 12.0 : 1.0}};
   json vrm = {
       {"specVersion", "1.0"},
@@ -238,9 +263,7 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
                 {"licenseUrl", "https://vrm.dev/licenses/1.0/"}, {"avatarPermission", "onlyAuthor"},
                 {"commercialUsage", "personalNonProfit"}, {"creditNotation", "required"},
                 {"allowRedistribution", false}, {"modification", "prohibited"}}},
-      {"humanoid", {{"humanBones", {{"hips", {{"node", 1}}}, {"spine", {{"node", 2}}}, {"chest", {{"node", 3}}},
-                                    {"neck", {{"node", 4}}}, {"head", {{"node", 5}}}, {"leftEye", {{"node", 6}}},
-                                    {"rightEye", {{"node", 7}}}}}}},
+      {"humanoid", {{"humanBones", humanBones}}},
       {"firstPerson", {{"meshAnnotations", {{{"node", mesh}, {"type", "auto"}}}}}},
       {"lookAt", {{"offsetFromHeadBone", {0, 0.11, 0.07}}, {"type", o.boneLookAt ? "bone" : "expression"},
                   {"rangeMapHorizontalInner", range}, {"rangeMapHorizontalOuter", range},
@@ -272,8 +295,7 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
   // which the parsers do not care about).
   a.format = avatar::AvatarFormat::Vrm0;
   json bones = json::array();
-  for (const char* b : {"hips", "spine", "chest", "neck", "head", "leftEye", "rightEye"})
-    bones.push_back({{"bone", b}, {"node", vrm["humanoid"]["humanBones"][b]["node"]}});
+  for (const auto& [bone, node] : humanBones.items()) bones.push_back({{"bone", bone}, {"node", node["node"]}});
   json roots = json::array();
   for (const auto& strand : t.strands) roots.push_back(strand[0]);
   auto group = [&](const char* preset, int channel, double w) {
