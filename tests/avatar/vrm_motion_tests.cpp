@@ -217,6 +217,28 @@ TEST_CASE("spring bones: a chain that skips a joint aims at the deeper joint", "
     CHECK(std::abs(glm::dot(pose.local[j].rotation, a.skeleton.joints[j].rest.rotation)) == Approx(1.0f).margin(1e-6));
 }
 
+TEST_CASE("spring bones: with a centre node, moving with it does not swing the hair", "[vrm]") {
+  test::VrmTestAvatar t = test::buildVrmTestAvatar({.gravityPower = 0.0f});  // at rest nothing moves
+  auto ext = nlohmann::json::parse(t.extensionsJson);
+  for (auto& spring : ext["VRMC_springBone"]["springs"]) spring["center"] = 1;  // the hips
+  float lag[2] = {0.0f, 0.0f};
+  for (int withCentre = 0; withCentre < 2; ++withCentre) {
+    const AvatarAsset a = loadTestVrm({}, withCentre ? ext.dump() : t.extensionsJson);
+    CHECK(a.springBones.chains[0].center == (withCentre ? 1 : -1));
+    SecondaryMotion motion(a, {.blink = false});
+    for (int i = 0; i < 60; ++i) {  // rest, then the body slides 8 cm a frame (7 m/s) for 12 frames
+      SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+      pose.local[1].translation.z += 0.08f * float(std::max(0, i - 40));
+      const SkeletonPose rigid = pose;
+      motion.update(pose, 1.0 / 90.0, std::nullopt);
+      for (const auto& s : t.strands)
+        lag[withCentre] = std::max(lag[withCentre], glm::length(jointPosition(a, pose, s.back()) - rigidTip(a, rigid, s)));
+    }
+  }
+  CHECK(lag[0] > 0.02f);   // world inertia: the hair streams behind
+  CHECK(lag[1] < 0.002f);  // centre space: it rides along
+}
+
 TEST_CASE("spring bone job: Validate rejects malformed inputs", "[vrm]") {
   const AvatarAsset a = loadTestVrm();
   SpringBoneState state;
