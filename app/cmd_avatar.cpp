@@ -24,6 +24,20 @@ namespace {
 using namespace embody;
 using namespace embody::avatar;
 
+// Spring bones, expressions, look-at and morph targets (docs/avatars.md "VRM motion").
+nlohmann::json describeVrmMotion(const AvatarAsset& a) {
+  nlohmann::json expressions = nlohmann::json::array();
+  for (const auto& e : a.expressions.expressions) expressions.push_back(e.name);
+  const char* lookAt[] = {"none", "bone", "expression"};
+  return {{"springs", a.springBones.chains.size()},
+          {"spring_joints", a.springBones.jointCount()},
+          {"colliders", a.springBones.colliders.size()},
+          {"expressions", expressions},
+          {"look_at", lookAt[static_cast<int>(a.lookAt.type)]},
+          {"morph_channels", a.mesh.morphChannels.size()},
+          {"warnings", a.vrmWarnings}};
+}
+
 nlohmann::json describe(const AvatarAsset& a, const GltfLoadReport& report) {
   const HumanoidMap& h = a.humanoid;
   auto nodeName = [&](int j) {
@@ -71,6 +85,7 @@ nlohmann::json describe(const AvatarAsset& a, const GltfLoadReport& report) {
                        {"annotations", a.firstPerson.annotations}};
   j["notes"] = h.notes;
   j["warnings"] = report.warnings;
+  j["vrm_motion"] = describeVrmMotion(a);
   return j;
 }
 
@@ -127,6 +142,11 @@ void printText(const nlohmann::json& j) {
   std::printf("  first person: %s, head '%s', %s triangles hidden, %s drawn\n", s(fp["mode"]).c_str(),
               s(fp["head"]).c_str(), s(fp["removed_triangles"]).c_str(), s(fp["triangles"]).c_str());
   for (const auto& a : fp["annotations"]) std::printf("    annotation %s\n", s(a).c_str());
+  const auto& vm = j["vrm_motion"];
+  std::printf("  vrm motion: %s springs (%s joints, %s colliders), %zu expressions, look-at %s, %s morph channels\n",
+              s(vm["springs"]).c_str(), s(vm["spring_joints"]).c_str(), s(vm["colliders"]).c_str(),
+              vm["expressions"].size(), s(vm["look_at"]).c_str(), s(vm["morph_channels"]).c_str());
+  for (const auto& w : vm["warnings"]) std::printf("    %s\n", s(w).c_str());
   const auto& body = j["body_model"];
   if (body.contains("error")) {
     std::printf("  body model: not built (%s)\n", s(body["error"]).c_str());

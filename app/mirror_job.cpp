@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "app/job_inputs.h"
+#include "avatar/vrm/secondary_motion.h"
 #include "engine/avatar_renderer.h"
 #include "engine/desktop_window.h"
 #include "engine/image_io.h"
@@ -28,8 +29,11 @@ using Clock = std::chrono::steady_clock;
 
 // One window frame of `pose`: the camera for the window's view, the scene, and the renderer's
 // begin / draw / end / present. `drawn`: the window had an image to draw into.
+// `secondary` adds the VRM spring bones, blinking and look-at (at the window's camera in third
+// person) to the solved pose, in `shown`, before skinning.
 Status drawFrame(engine::AvatarRenderer& ar, engine::DesktopWindow& win, VkQueue queue, const avatar::SkeletonPose& pose,
-                 const RenderJob& job, uint64_t rendererFrame, bool screenshot, bool& drawn) {
+                 const RenderJob& job, uint64_t rendererFrame, bool screenshot, bool& drawn,
+                 avatar::SecondaryMotion& secondary, avatar::SkeletonPose& shown, double dt) {
   if (auto s = ar.computePose(pose); !s) return s;
   engine::Camera cam;
   const bool third = win.thirdPerson();
@@ -40,9 +44,13 @@ Status drawFrame(engine::AvatarRenderer& ar, engine::DesktopWindow& win, VkQueue
     const glm::mat4 eye = ar.eyePose(pose) * glm::mat4_cast(glm::angleAxis(glm::radians(-60.0f), glm::vec3(1, 0, 0)));
     cam = engine::cameraFromPose(eye, engine::FovAngles::symmetric(glm::radians(90.0f), win.aspect()), 0.02f);
   }
+  shown = pose;
+  secondary.update(shown, dt, third ? std::optional<glm::vec3>(cam.position()) : std::nullopt);
+  if (auto s = ar.computePose(shown); !s) return s;
   engine::SceneFrame scene;
   scene.avatar = &ar.gpuAvatar();
   scene.palette = ar.palette();
+  scene.morphWeights = secondary.morphWeights();
   scene.firstPerson = !third;
   scene.grid = job.grid;
   engine::Renderer& r = ar.renderer();
@@ -190,6 +198,9 @@ int runMirror(const MirrorJob& mj) {
   MirrorMotion motion{*inputs->source, ik, mj.loop};
   motion.recenterPending = mj.recenterAtStart;
   runtime::StatsRecorder stats;
+  avatar::SecondaryMotion secondary(asset);
+  avatar::SkeletonPose shownPose = rest;  // the solved pose with the secondary motion on it
+  uint64_t recentersSeen = 0;
   const auto frameTime = std::chrono::duration<double>(1.0 / job.fps);
   uint64_t rendererFrames = 0, shown = 0;
   auto last = Clock::now();
@@ -213,8 +224,10 @@ int runMirror(const MirrorJob& mj) {
     const avatar::SkeletonPose& pose = ik.framesSolved() > 0 ? ik.frame().pose : rest;
     bool drawn = false;
     const bool screenshot = lastFrameOf(mj, shown) && !mj.screenshot.empty();
+    if (motion.recenters != recentersSeen) secondary.reset();  // the springs restart at rest after a recenter
+    recentersSeen = motion.recenters;
     if (auto st = drawFrame(*display.renderer, win, display.device().queue(), pose, job, ++rendererFrames, screenshot,
-                            drawn);
+                            drawn, secondary, shownPose, dt);
         !st) {
       error = st.error();
       break;

@@ -16,6 +16,7 @@
 #include "app/job_inputs.h"
 #include "app/motion_export.h"
 #include "avatar/gltf/glb_writer.h"
+#include "avatar/vrm/secondary_motion.h"
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
 #include "engine/image_io.h"
@@ -181,7 +182,9 @@ struct FrameLoop {
   tracking::TraceWriter& recorder;
   runtime::IkThread& ik;
   MotionExport& exported;
+  avatar::SecondaryMotion& secondary;  // VRM spring bones, blinking, look-at (after IK, before skinning)
   int frames = 0;
+  avatar::SkeletonPose shown;  // the solved pose with the secondary motion on it
   runtime::StatsRecorder stats;
   runtime::SeatedStats seated = runtime::SeatedStats();
   UprightCount upright;
@@ -210,7 +213,13 @@ struct FrameLoop {
       if (job.seated) seated.add(solver);
       upright.add(solver);
       const auto t0 = Clock::now();
-      Result<avatar::Image> image = renderView(renderer, solved.pose, job, fo);
+      // Third person: the avatar looks at the viewer (the orbit camera); first person: ahead.
+      std::optional<glm::vec3> viewer;
+      if (job.view == "third") viewer = renderer.orbitAround(solved.pose, job.yaw, job.pitch).position();
+      shown = solved.pose;
+      secondary.update(shown, 1.0 / job.fps, viewer);
+      fo.morphWeights = secondary.morphWeights();
+      Result<avatar::Image> image = renderView(renderer, shown, job, fo);
       if (!image) return image.error();
       fs.renderSeconds = std::chrono::duration<double>(Clock::now() - t0).count();
       stats.add(fs);
@@ -279,7 +288,8 @@ int runRenderJob(const RenderJob& job) {
   cfg.guard.userHeight = inputs->sourceOptions.userHeight;
   runtime::IkThread ik(**solver, runtime::steadyClock(), cfg, avatar::SkeletonPose::rest(asset.skeleton));
   ik.start();
-  FrameLoop loop{job, source, **solver, **created, recorder, ik, exported, frames};
+  avatar::SecondaryMotion secondary(asset);
+  FrameLoop loop{job, source, **solver, **created, recorder, ik, exported, secondary, frames};
   const std::string error = loop.run();
   ik.stop();
   if (!error.empty()) return runtimeError(error);

@@ -30,12 +30,26 @@ void computeSkinningPalette(const AvatarAsset& asset, const std::vector<glm::mat
     palette[j] = j < asset.mesh.inverseBind.size() ? globals[j] * asset.mesh.inverseBind[j] : globals[j];
 }
 
+std::vector<float> defaultMorphWeights(const SkinnedMesh& mesh) {
+  std::vector<float> w(mesh.morphChannels.size());
+  for (size_t c = 0; c < w.size(); ++c) w[c] = mesh.morphChannels[c].defaultWeight;
+  return w;
+}
+
 void skinOnCpu(const SkinnedMesh& mesh, const std::vector<glm::mat4>& palette,
-               std::vector<glm::vec3>& positions, std::vector<glm::vec3>& normals) {
+               std::vector<glm::vec3>& positions, std::vector<glm::vec3>& normals,
+               std::span<const float> morphWeights) {
   positions.resize(mesh.vertices.size());
   normals.resize(mesh.vertices.size());
+  size_t d = 0;  // morph deltas are sorted by vertex
   for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-    const SkinnedVertex& v = mesh.vertices[i];
+    SkinnedVertex v = mesh.vertices[i];
+    for (; d < mesh.morphDeltas.size() && mesh.morphDeltas[d].vertex <= i; ++d) {
+      const MorphDelta& md = mesh.morphDeltas[d];
+      if (md.vertex != i || md.channel >= morphWeights.size()) continue;
+      v.position += morphWeights[md.channel] * md.position;
+      v.normal += morphWeights[md.channel] * md.normal;
+    }
     glm::mat4 m(0.0f);
     for (int k = 0; k < 4; ++k) {
       if (v.weights0[k] != 0.0f) m += v.weights0[k] * palette[v.joints0[k]];

@@ -10,11 +10,15 @@
 // indices). A mesh attached rigidly to a node is expressed as weight 1 on that node with an
 // identity inverse bind, so one formula draws everything. Weights are normalised to sum to 1.
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "avatar/humanoid/humanoid_map.h"
 #include "avatar/skeleton.h"
+#include "avatar/vrm/expressions.h"
+#include "avatar/vrm/look_at.h"
+#include "avatar/vrm/spring_bone.h"
 
 namespace embody::avatar {
 
@@ -109,6 +113,25 @@ struct Primitive {
   int sourceMesh = -1;
 };
 
+// Morph targets (glTF `targets`), applied before skinning: position' = position + sum_c w_c * delta.
+// A channel is one target index of one glTF mesh instanced by one node: every primitive of that
+// mesh shares the channel's weight, as glTF's `weights` do. VRM expressions bind to channels
+// (1.0 by node + index, 0.x by mesh + index).
+struct MorphChannel {
+  int sourceNode = -1, sourceMesh = -1;
+  int targetIndex = 0;
+  std::string name;            // mesh.extras.targetNames[targetIndex] when present
+  float defaultWeight = 0.0f;  // mesh.weights[targetIndex] (glTF default, 0 when absent)
+};
+
+// One vertex's offset in one channel (sparse: only vertices the target moves). Sorted by vertex.
+struct MorphDelta {
+  uint32_t vertex = 0;
+  uint32_t channel = 0;
+  glm::vec3 position{0.0f};
+  glm::vec3 normal{0.0f};
+};
+
 struct SkinnedMesh {
   std::vector<SkinnedVertex> vertices;
   std::vector<uint32_t> indices;      // triangle list, all primitives back to back
@@ -118,6 +141,8 @@ struct SkinnedMesh {
   std::vector<uint32_t> firstPersonIndices;
   std::vector<Primitive> firstPersonPrimitives;
   std::vector<glm::mat4> inverseBind;  // one per skeleton joint (identity where unused)
+  std::vector<MorphChannel> morphChannels;
+  std::vector<MorphDelta> morphDeltas;  // sorted by vertex
   size_t triangleCount() const { return indices.size() / 3; }
 };
 
@@ -144,6 +169,12 @@ struct AvatarAsset {
   std::vector<int> gltfNodeToJoint;  // glTF node index -> Skeleton joint index (empty for procedural)
   HumanoidMap humanoid;              // filled by loadAvatarFile / buildDefaultAvatar
   FirstPersonInfo firstPerson;
+  // VRM motion (avatar/vrm; filled by prepareAvatar from rawJson): spring bones, expressions,
+  // look-at, and what their parsers dropped or defaulted.
+  SpringBoneSetup springBones;
+  ExpressionSet expressions;
+  LookAtSetup lookAt;
+  std::vector<std::string> vrmWarnings;
 };
 
 // Palette for a pose: palette[j] = global[j] * inverseBind[j].
@@ -151,7 +182,12 @@ void computeSkinningPalette(const AvatarAsset& asset, const std::vector<glm::mat
                             std::vector<glm::mat4>& palette);
 
 // Reference CPU skinner with the contract above: positions and normals for every vertex.
+// morphWeights (one per mesh.morphChannels, may be empty: the base shape) are applied first.
 void skinOnCpu(const SkinnedMesh& mesh, const std::vector<glm::mat4>& palette,
-               std::vector<glm::vec3>& positions, std::vector<glm::vec3>& normals);
+               std::vector<glm::vec3>& positions, std::vector<glm::vec3>& normals,
+               std::span<const float> morphWeights = {});
+
+// The glTF default weight of every morph channel (what a frame without expressions draws).
+std::vector<float> defaultMorphWeights(const SkinnedMesh& mesh);
 
 }  // namespace embody::avatar

@@ -7,8 +7,24 @@
 
 #include "avatar/gltf/gltf_loader.h"
 #include "avatar/humanoid/first_person.h"
+#include "avatar/vrm/vrm_parsers.h"
 
 namespace embody::avatar {
+
+namespace {
+
+// Spring bones, expressions and look-at from the VRM extensions (nothing for other files).
+void readVrmMotion(AvatarAsset& asset) {
+  if (asset.rawJson.empty()) return;
+  const auto doc = vrm::Json::parse(asset.rawJson, nullptr, false);
+  if (doc.is_discarded()) return;
+  asset.vrmWarnings.clear();
+  asset.springBones = parseSpringBones(doc, asset, asset.vrmWarnings);
+  asset.expressions = parseExpressions(doc, asset, asset.vrmWarnings);
+  asset.lookAt = parseLookAt(doc, asset, asset.vrmWarnings);
+}
+
+}  // namespace
 
 Status prepareAvatar(AvatarAsset& asset, const std::string& boneMapJson) {
   HumanoidInputs in;
@@ -29,6 +45,7 @@ Status prepareAvatar(AvatarAsset& asset, const std::string& boneMapJson) {
   if (!map.ok()) return Error{map.error()};
   asset.humanoid = std::move(map.value());
   buildFirstPerson(asset);
+  readVrmMotion(asset);
   return {};
 }
 

@@ -82,6 +82,7 @@ Result<std::unique_ptr<AvatarRenderer>> AvatarRenderer::create(const Device& dev
   if (!target) return Error{target.error()};
   r->target_ = std::move(target).value();
   r->anchors_ = findAnchors(asset);
+  r->defaultMorphWeights_ = avatar::defaultMorphWeights(asset.mesh);
 
   // Eye position from the rest pose: inside the head's geometry (vertices mostly on the head joint
   // or its descendants), a little above its middle and towards the front (+Z).
@@ -194,6 +195,7 @@ Status AvatarRenderer::submitFrame(const avatar::SkeletonPose& pose, std::span<c
   SceneFrame scene;
   scene.avatar = avatar_.get();
   scene.palette = palette_;
+  scene.morphWeights = options.morphWeights.empty() ? std::span<const float>(defaultMorphWeights_) : options.morphWeights;
   scene.firstPerson = options.view == ViewKind::FirstPerson;
   scene.grid = options.grid;
   scene.lines = lines_;

@@ -31,6 +31,8 @@ struct FrameOptions {
   std::vector<Gizmo> gizmos;    // tracking targets (head, hands)
   Lighting lighting;
   glm::vec4 clearColor{0.30f, 0.33f, 0.38f, 1.0f};
+  // One per mesh.morphChannels (avatar::SecondaryMotion::morphWeights()); empty: the file's defaults.
+  std::span<const float> morphWeights;
 };
 
 struct AvatarRendererOptions {
@@ -69,6 +71,8 @@ class AvatarRenderer {
   Status computePose(const avatar::SkeletonPose& pose);
   const std::vector<glm::mat4>& globals() const { return globals_; }
   const std::vector<glm::mat4>& palette() const { return palette_; }
+  // The file's default morph weights (glTF mesh.weights), for frames without expressions.
+  const std::vector<float>& defaultMorphWeights() const { return defaultMorphWeights_; }
 
   // An orbit camera that frames the avatar in `pose` (yaw/pitch in radians; yaw 0 = from the front).
   Camera orbitAround(const avatar::SkeletonPose& pose, float yaw = 0.5f, float pitch = 0.15f);
@@ -93,6 +97,7 @@ class AvatarRenderer {
   OffscreenTarget target_;
   AvatarAnchors anchors_;
   std::vector<glm::mat4> globals_, restGlobals_, palette_;
+  std::vector<float> defaultMorphWeights_;
   std::vector<glm::vec3> skinnedPositions_, skinnedNormals_;
   std::vector<LineVertex> lines_, overlay_;
   glm::vec3 eyeOffsetInHead_{0.0f};  // eye position in the head joint's rest frame

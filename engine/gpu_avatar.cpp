@@ -120,6 +120,12 @@ std::string GpuAvatar::validate(const avatar::AvatarAsset& asset) {
     }
     return {};
   };
+  for (size_t i = 0; i < mesh.morphDeltas.size(); ++i) {
+    const auto& d = mesh.morphDeltas[i];
+    if (d.vertex >= mesh.vertices.size() || d.channel >= mesh.morphChannels.size() ||
+        (i > 0 && d.vertex < mesh.morphDeltas[i - 1].vertex))
+      return "morph delta " + std::to_string(i) + " is out of range or out of vertex order";
+  }
   if (auto s = checkList(mesh.indices, mesh.primitives, "third-person"); !s.empty()) return s;
   if (auto s = checkList(mesh.firstPersonIndices, mesh.firstPersonPrimitives, "first-person"); !s.empty()) return s;
   for (const auto& m : asset.materials) {
@@ -154,7 +160,40 @@ Status GpuAvatar::uploadMesh(const Device& device, Uploader& up, const avatar::S
   indices_ = std::move(ib).value();
   if (auto s = up.upload(vertices_, asBytes(mesh.vertices)); !s) return s;
   if (auto s = up.upload(indices_, asBytes(mesh.indices)); !s) return s;
-  return up.upload(indices_, asBytes(mesh.firstPersonIndices), mesh.indices.size() * sizeof(uint32_t));
+  if (auto s = up.upload(indices_, asBytes(mesh.firstPersonIndices), mesh.indices.size() * sizeof(uint32_t)); !s)
+    return s;
+  return uploadMorphTargets(device, up, mesh);
+}
+
+// shaders/morphing.glsl: a (first, count) range per vertex into the sparse deltas, each delta two
+// vec4s with the channel's index in position.w. Nothing is uploaded for a mesh without morphs.
+Status GpuAvatar::uploadMorphTargets(const Device& device, Uploader& up, const avatar::SkinnedMesh& mesh) {
+  morphChannelCount_ = static_cast<uint32_t>(mesh.morphChannels.size());
+  if (mesh.morphDeltas.empty()) return {};
+  std::vector<glm::uvec2> ranges(mesh.vertices.size(), glm::uvec2(0));
+  std::vector<glm::vec4> deltas;
+  deltas.reserve(mesh.morphDeltas.size() * 2);
+  for (size_t i = 0; i < mesh.morphDeltas.size(); ++i) {
+    const avatar::MorphDelta& d = mesh.morphDeltas[i];
+    glm::uvec2& r = ranges[d.vertex];
+    if (r.y == 0) r.x = static_cast<uint32_t>(i);
+    ++r.y;
+    uint32_t channelBits = d.channel;
+    float channel;
+    std::memcpy(&channel, &channelBits, sizeof channel);
+    deltas.emplace_back(d.position, channel);
+    deltas.emplace_back(d.normal, 0.0f);
+  }
+  auto rb = Buffer::create(device, ranges.size() * sizeof(glm::uvec2), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                           MemoryUse::DeviceLocal);
+  auto db = Buffer::create(device, deltas.size() * sizeof(glm::vec4), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                           MemoryUse::DeviceLocal);
+  if (!rb) return Error{rb.error()};
+  if (!db) return Error{db.error()};
+  morphRanges_ = std::move(rb).value();
+  morphDeltas_ = std::move(db).value();
+  if (auto s = up.upload(morphRanges_, asBytes(ranges)); !s) return s;
+  return up.upload(morphDeltas_, asBytes(deltas));
 }
 
 // Every image a material uses, mipmapped (when the device can blit the format linearly), after a

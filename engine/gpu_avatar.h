@@ -54,6 +54,10 @@ class GpuAvatar {
   // The head-less list, or the full mesh when the asset has no first-person list.
   const GpuDrawList& firstPerson() const { return hasFirstPerson_ ? firstPerson_ : thirdPerson_; }
   size_t triangleCount() const { return triangles_; }
+  // Morph targets (shaders/morphing.glsl); null handles when the mesh has none.
+  VkBuffer morphRanges() const { return morphRanges_.handle(); }
+  VkBuffer morphDeltas() const { return morphDeltas_.handle(); }
+  uint32_t morphChannelCount() const { return morphChannelCount_; }
 
   // Checks what the GPU would otherwise read out of bounds: joint indices against the skeleton,
   // vertex indices against the vertex count, primitive ranges, material and image indices.
@@ -64,6 +68,7 @@ class GpuAvatar {
   GpuAvatar() = default;
   // Steps of Renderer::upload.
   Status uploadMesh(const Device& device, Uploader& up, const avatar::SkinnedMesh& mesh);
+  Status uploadMorphTargets(const Device& device, Uploader& up, const avatar::SkinnedMesh& mesh);
   struct TextureIndex {  // per asset image: its texture as sRGB colour and as linear data (0: none)
     std::vector<int> srgb, linear;
   };
@@ -73,6 +78,8 @@ class GpuAvatar {
                          const std::vector<avatar::Material>& materials, const TextureIndex& textureOf);
   void buildDrawLists(const avatar::AvatarAsset& asset, const std::vector<avatar::Material>& materials);
   Buffer vertices_, indices_, materialBlocks_;
+  Buffer morphRanges_, morphDeltas_;
+  uint32_t morphChannelCount_ = 0;
   std::vector<Image> textures_;
   UniqueSampler sampler_;
   UniqueDescriptorPool pool_;

@@ -59,7 +59,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const Device& device) {
   r->commandPool_ = UniqueCommandPool(dev, pool);
 
   VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, kFramesInFlight},
-                                   {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, kFramesInFlight}};
+                                   {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 4 * kFramesInFlight}};  // palette + 3 morph
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dpci.maxSets = kFramesInFlight;
   dpci.poolSizeCount = 2;
@@ -67,6 +67,12 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const Device& device) {
   VkDescriptorPool dpool = VK_NULL_HANDLE;
   if (vkCreateDescriptorPool(dev, &dpci, nullptr, &dpool) != VK_SUCCESS) return Error{"vkCreateDescriptorPool failed"};
   r->framePool_ = UniqueDescriptorPool(dev, dpool);
+
+  auto placeholder = Buffer::create(device, 32, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::HostUpload);
+  if (!placeholder) return Error{placeholder.error()};
+  r->morphPlaceholder_ = std::move(placeholder).value();
+  std::memset(r->morphPlaceholder_.mapped(), 0, 32);
+  r->morphPlaceholder_.flush();
 
   for (auto& f : r->frames_) {
     VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
@@ -87,10 +93,13 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const Device& device) {
                                   MemoryUse::HostUpload);
     auto lines = Buffer::create(device, sizeof(LineVertex) * 256, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT,
                                 MemoryUse::HostUpload);
-    if (!block || !palette || !lines) return Error{"could not allocate per-frame buffers"};
+    auto morphWeights = Buffer::create(device, sizeof(float) * 64, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                       MemoryUse::HostUpload);
+    if (!block || !palette || !lines || !morphWeights) return Error{"could not allocate per-frame buffers"};
     f.sceneBlock = std::move(block).value();
     f.palette = std::move(palette).value();
     f.lines = std::move(lines).value();
+    f.morphWeights = std::move(morphWeights).value();
     r->writeFrameDescriptors(f);
   }
 
@@ -112,20 +121,26 @@ Renderer::~Renderer() {
 }
 
 void Renderer::writeFrameDescriptors(FrameSlot& f) {
-  VkDescriptorBufferInfo ubo{f.sceneBlock.handle(), 0, VK_WHOLE_SIZE};
-  VkDescriptorBufferInfo ssbo{f.palette.handle(), 0, VK_WHOLE_SIZE};
-  VkWriteDescriptorSet w[2] = {{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}, {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}};
-  w[0].dstSet = f.set;
-  w[0].dstBinding = 0;
-  w[0].descriptorCount = 1;
-  w[0].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-  w[0].pBufferInfo = &ubo;
-  w[1].dstSet = f.set;
-  w[1].dstBinding = 1;
-  w[1].descriptorCount = 1;
-  w[1].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-  w[1].pBufferInfo = &ssbo;
-  vkUpdateDescriptorSets(device_.handle(), 2, w, 0, nullptr);
+  // 0: scene block, 1: palette, 3..5: morph ranges, deltas (the avatar's, or the placeholder) and weights.
+  const VkBuffer ranges = f.avatar && f.avatar->morphRanges() ? f.avatar->morphRanges() : morphPlaceholder_.handle();
+  const VkBuffer deltas = f.avatar && f.avatar->morphDeltas() ? f.avatar->morphDeltas() : morphPlaceholder_.handle();
+  const VkDescriptorBufferInfo infos[5] = {{f.sceneBlock.handle(), 0, VK_WHOLE_SIZE},
+                                           {f.palette.handle(), 0, VK_WHOLE_SIZE},
+                                           {ranges, 0, VK_WHOLE_SIZE},
+                                           {deltas, 0, VK_WHOLE_SIZE},
+                                           {f.morphWeights.handle(), 0, VK_WHOLE_SIZE}};
+  const uint32_t bindings[5] = {0, 1, 3, 4, 5};
+  VkWriteDescriptorSet w[5];
+  for (int i = 0; i < 5; ++i) {
+    w[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    w[i].dstSet = f.set;
+    w[i].dstBinding = bindings[i];
+    w[i].descriptorCount = 1;
+    w[i].descriptorType = i == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    w[i].pBufferInfo = &infos[i];
+  }
+  vkUpdateDescriptorSets(device_.handle(), 5, w, 0, nullptr);
+  f.boundMorphRanges = ranges;
 }
 
 Status Renderer::ensureCapacity(Buffer& buffer, VkDeviceSize bytes, VkBufferUsageFlags usage, FrameSlot& slot) {
@@ -164,11 +179,24 @@ Status Renderer::setScene(const SceneFrame& scene) {
   if (scene.avatar && scene.palette.size() < scene.avatar->jointCount())
     return Error{"the palette has " + std::to_string(scene.palette.size()) + " matrices; the avatar needs " +
                  std::to_string(scene.avatar->jointCount())};
+  if (scene.avatar && !scene.morphWeights.empty() && scene.morphWeights.size() < scene.avatar->morphChannelCount())
+    return Error{"the frame has " + std::to_string(scene.morphWeights.size()) + " morph weights; the avatar has " +
+                 std::to_string(scene.avatar->morphChannelCount()) + " morph channels"};
   const bool paletteGrows = f.palette.size() < scene.palette.size_bytes();
   if (auto s = ensureCapacity(f.palette, scene.palette.size_bytes(), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, f); !s)
     return s;
-  if (paletteGrows) writeFrameDescriptors(f);
+  const bool weightsGrow = f.morphWeights.size() < scene.morphWeights.size_bytes();
+  if (auto s = ensureCapacity(f.morphWeights, scene.morphWeights.size_bytes(), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, f); !s)
+    return s;
+  f.avatar = scene.avatar;
+  const VkBuffer ranges = f.avatar && f.avatar->morphRanges() ? f.avatar->morphRanges() : morphPlaceholder_.handle();
+  if (paletteGrows || weightsGrow || ranges != f.boundMorphRanges) writeFrameDescriptors(f);
   if (!scene.palette.empty()) std::memcpy(f.palette.mapped(), scene.palette.data(), scene.palette.size_bytes());
+  // Weights beyond this frame's (a larger buffer from another avatar) read as zero.
+  std::memset(f.morphWeights.mapped(), 0, f.morphWeights.size());
+  if (!scene.morphWeights.empty())
+    std::memcpy(f.morphWeights.mapped(), scene.morphWeights.data(), scene.morphWeights.size_bytes());
+  f.morphWeights.flush();
   const size_t lineBytes = (scene.lines.size() + scene.overlayLines.size()) * sizeof(LineVertex);
   if (auto s = ensureCapacity(f.lines, lineBytes, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, f); !s) return s;
   auto* dst = static_cast<LineVertex*>(f.lines.mapped());
@@ -184,7 +212,6 @@ Status Renderer::setScene(const SceneFrame& scene) {
   block->lightColor = glm::vec4(scene.lighting.lightColor, 1.0f);
   block->skyColor = glm::vec4(scene.lighting.skyColor, 1.0f);
   block->groundColor = glm::vec4(scene.lighting.groundColor, 1.0f);
-  f.avatar = scene.avatar;
   f.firstPerson = scene.firstPerson;
   f.grid = scene.grid;
   // Blended draws' centres in this pose, for sorting them per pass (vectors grow once, then reuse).

@@ -44,6 +44,8 @@ struct Lighting {
 struct SceneFrame {
   const GpuAvatar* avatar = nullptr;
   std::span<const glm::mat4> palette;  // skinning palette, one matrix per skeleton joint
+  // Morph target weights, one per mesh.morphChannels (shaders/morphing.glsl); empty: all zero.
+  std::span<const float> morphWeights;
   bool firstPerson = false;            // draw the first-person list (the user's head hidden)
   bool grid = true;                    // the ground grid on y = 0
   std::span<const LineVertex> lines;          // line list, depth-tested (tracking-target gizmos)
@@ -121,7 +123,8 @@ class Renderer {
   struct FrameSlot {
     VkCommandBuffer cmd = VK_NULL_HANDLE;
     UniqueFence fence;
-    Buffer sceneBlock, palette, lines;
+    Buffer sceneBlock, palette, lines, morphWeights;
+    VkBuffer boundMorphRanges = VK_NULL_HANDLE;  // the avatar morph buffers the set points at
     VkDescriptorSet set = VK_NULL_HANDLE;
     RetireQueue retired;
     uint32_t viewsUsed = 0;
@@ -184,6 +187,7 @@ class Renderer {
   UniqueDescriptorPool framePool_;
   UniqueCommandPool commandPool_;
   Buffer grid_;
+  Buffer morphPlaceholder_;  // bound for avatars without morph targets (reads as "no deltas")
   uint32_t gridVertexCount_ = 0;
   std::map<PipelineKey, PipelineSet> pipelines_;
   std::vector<Transient> transients_;

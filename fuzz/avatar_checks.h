@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "avatar/avatar_asset.h"
+#include "avatar/vrm/secondary_motion.h"
 #include "fuzz/fuzz_target.h"
 
 namespace embody::fuzz {
@@ -34,6 +35,12 @@ inline void checkAvatar(const avatar::AvatarAsset& a) {
   }
   for (const auto& p : m.primitives)
     EMBODY_FUZZ_CHECK(p.material < static_cast<int>(a.materials.size()));
+  for (size_t i = 0; i < m.morphDeltas.size(); ++i) {
+    const auto& d = m.morphDeltas[i];
+    EMBODY_FUZZ_CHECK(d.vertex < m.vertices.size() && d.channel < m.morphChannels.size());
+    EMBODY_FUZZ_CHECK(i == 0 || m.morphDeltas[i - 1].vertex <= d.vertex);
+    EMBODY_FUZZ_CHECK(finite(d.position) && finite(d.normal));
+  }
   for (const auto& mat : a.materials) {
     EMBODY_FUZZ_CHECK(mat.baseColorImage < static_cast<int>(a.images.size()));
     EMBODY_FUZZ_CHECK(mat.emissiveImage < static_cast<int>(a.images.size()));
@@ -60,6 +67,27 @@ inline void checkAvatar(const avatar::AvatarAsset& a) {
   for (int j : a.humanoid.bones) EMBODY_FUZZ_CHECK(j < static_cast<int>(joints));
   for (const auto& s : a.humanoid.spine) EMBODY_FUZZ_CHECK(s.joint < static_cast<int>(joints));
   EMBODY_FUZZ_CHECK(a.firstPerson.headJoint < static_cast<int>(joints));
+}
+
+// Spring bones, expressions and look-at of a loaded avatar: valid references, and a few frames
+// of motion (a head turn, a teleport of the root, a look target) leave the pose and the morph
+// weights finite.
+inline void checkSecondaryMotion(const avatar::AvatarAsset& a) {
+  const int joints = static_cast<int>(a.skeleton.joints.size());
+  for (const auto& c : a.springBones.chains)
+    for (const auto& j : c.joints) EMBODY_FUZZ_CHECK(j.joint >= 0 && j.joint < joints && j.child < joints);
+  for (const auto& e : a.expressions.expressions)
+    for (const auto& b : e.morphBinds) EMBODY_FUZZ_CHECK(b.channel < a.mesh.morphChannels.size());
+  avatar::SecondaryMotion motion(a);
+  const int head = a.humanoid.joint(avatar::HumanBone::head);
+  for (int frame = 0; frame < 4; ++frame) {
+    avatar::SkeletonPose pose = avatar::SkeletonPose::rest(a.skeleton);
+    if (head >= 0) pose.local[static_cast<size_t>(head)].rotation = glm::angleAxis(0.4f * float(frame), glm::vec3(0, 1, 0));
+    if (frame == 2 && !pose.local.empty()) pose.local[0].translation += glm::vec3(30.0f, 0.0f, 0.0f);
+    motion.update(pose, frame == 3 ? 5.0 : 1.0 / 90.0, glm::vec3(0.5f, 1.6f, 1.0f));
+    for (const auto& t : pose.local) EMBODY_FUZZ_CHECK(std::isfinite(t.rotation.w + t.rotation.x + t.rotation.y + t.rotation.z));
+    for (float w : motion.morphWeights()) EMBODY_FUZZ_CHECK(std::isfinite(w) && w >= 0.0f && w <= 1.0f);
+  }
 }
 
 }  // namespace embody::fuzz

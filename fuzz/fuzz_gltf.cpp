@@ -13,6 +13,8 @@ EMBODY_FUZZ_TARGET(gltf) {
   auto asset = loadGltfFromMemory(bytes, "/nonexistent-embody-fuzz");
   if (!asset.ok()) return 0;
   embody::fuzz::checkAvatar(asset.value());
-  if (prepareAvatar(asset.value(), "").ok()) embody::fuzz::checkAvatar(asset.value());
+  if (!prepareAvatar(asset.value(), "").ok()) return 0;
+  embody::fuzz::checkAvatar(asset.value());
+  embody::fuzz::checkSecondaryMotion(asset.value());
   return 0;
 }

@@ -9,8 +9,10 @@
 #include <string>
 
 #include "avatar/body/calibration.h"
+#include "avatar/gltf/glb_writer.h"
 #include "avatar/procedural/default_avatar.h"
 #include "avatar/humanoid_test_files.h"
+#include "support/vrm_test_avatar.h"
 #include "ik/spine/spine_description.h"
 #include "tests/support/mtoon_test_avatar.h"
 #include "tracking/pose_source.h"
@@ -70,6 +72,58 @@ void gltfSeeds() {
       {"firstPerson", {{"meshAnnotations", {{{"node", vrm1.hairNode}, {"type", "thirdPersonOnly"}},
                                             {{"node", vrm1.innerNode}, {"type", "firstPersonOnly"}}}}}}};
   write("gltf/humanoid_vrm1.vrm", vrm1.glb());
+  // The VRM test bust: morph targets, spring bones, expressions, look-at (1.0 and 0.x).
+  for (bool vrm0 : {false, true}) {
+    const test::VrmTestAvatar bust = test::buildVrmTestAvatar({.vrm0 = vrm0});
+    auto bytes = avatar::encodeGlb(bust.asset, nullptr, bust.extensionsJson);
+    if (bytes) write(vrm0 ? "gltf/vrm0_bust.vrm" : "gltf/vrm1_bust.vrm", *bytes);
+  }
+}
+
+// Spring bones, expressions and look-at over the mannequin (its left and right arms as spring
+// chains, colliders on the chest and spine), VRM 1.0 and 0.x.
+void vrmMotionSeeds(const avatar::AvatarAsset& a, const json& v1, const json& v0) {
+  using B = avatar::HumanBone;
+  auto joint = [&](B b) { return a.humanoid.joint(b); };
+  json chain = json::array();
+  chain.push_back({{"node", joint(B::leftUpperArm)}, {"stiffness", 1.0}, {"dragForce", 0.4}, {"gravityPower", 0.5},
+                   {"gravityDir", {0, -1, 0}}, {"hitRadius", 0.02}});
+  chain.push_back({{"node", joint(B::leftLowerArm)}, {"stiffness", 2.0}});
+  chain.push_back({{"node", joint(B::leftHand)}});
+  json spring = {{"name", "arm"}, {"joints", chain}, {"colliderGroups", {0}}, {"center", joint(B::hips)}};
+  json sphere = {{"node", joint(B::chest)}, {"shape", {{"sphere", {{"offset", {0, 0.1, 0}}, {"radius", 0.15}}}}}};
+  json capsule = {{"node", joint(B::spine)},
+                  {"shape", {{"capsule", {{"offset", {0, 0, 0}}, {"tail", {0, 0.3, 0}}, {"radius", 0.1}}}}}};
+  json group = {{"colliders", {0, 1}}};
+  json springBone = {{"specVersion", "1.0"},
+                     {"colliders", json::array({sphere, capsule})},
+                     {"colliderGroups", json::array({group})},
+                     {"springs", json::array({spring})}};
+  json blinkBind = {{"node", 0}, {"index", 0}, {"weight", 1}};
+  json expressions = {{"preset", {{"blink", {{"morphTargetBinds", json::array({blinkBind})}}},
+                                  {"happy", {{"overrideBlink", "block"}, {"isBinary", true}}}}},
+                      {"custom", {{"wink", {{"overrideMouth", "blend"}}}}}};
+  json range = {{"inputMaxValue", 90}, {"outputScale", 10}};
+  json lookAt = {{"type", "expression"}, {"offsetFromHeadBone", {0, 0.06, 0.08}}, {"rangeMapHorizontalOuter", range}};
+  json vrm1 = {{"specVersion", "1.0"}, {"humanoid", {{"humanBones", v1}}}, {"lookAt", lookAt}, {"expressions", expressions}};
+  json ext1 = {{"VRMC_vrm", vrm1}, {"VRMC_springBone", springBone}};
+  write("vrm/vrm1_springs.json", json{{"extensions", ext1}}.dump(1));
+
+  json collider0 = {{"offset", {{"x", 0}, {"y", 0.1}, {"z", 0}}}, {"radius", 0.15}};
+  json group0 = {{"node", joint(B::chest)}, {"colliders", json::array({collider0})}};
+  json boneGroup = {{"stiffiness", 1.0}, {"gravityPower", 0.3}, {"gravityDir", {{"x", 0}, {"y", -1}, {"z", 0}}},
+                    {"dragForce", 0.4}, {"center", -1}, {"hitRadius", 0.02},
+                    {"bones", {joint(B::rightUpperArm)}}, {"colliderGroups", {0}}};
+  json blink0 = {{"presetName", "blink"}, {"binds", json::array({json{{"mesh", 0}, {"index", 0}, {"weight", 100}}})}};
+  json joy0 = {{"presetName", "joy"}, {"isBinary", true}};
+  json firstPerson = {{"firstPersonBone", joint(B::head)}, {"lookAtTypeName", "Bone"},
+                      {"firstPersonBoneOffset", {{"x", 0}, {"y", 0.06}, {"z", 0}}},
+                      {"lookAtHorizontalOuter", {{"xRange", 90}, {"yRange", 10}}}};
+  json vrm0 = {{"humanoid", {{"humanBones", v0}}},
+               {"firstPerson", firstPerson},
+               {"blendShapeMaster", {{"blendShapeGroups", json::array({blink0, joy0})}}},
+               {"secondaryAnimation", {{"boneGroups", json::array({boneGroup})}, {"colliderGroups", json::array({group0})}}}};
+  write("vrm/vrm0_springs.json", json{{"extensions", {{"VRM", vrm0}}}}.dump(1));
 }
 
 // Extensions alone, over the default mannequin's joints (the vrm target's skeleton).
@@ -100,6 +154,7 @@ void vrmSeeds() {
                   {{"firstPersonBone", head},
                    {"meshAnnotations", {{{"mesh", 0}, {"firstPersonFlag", "ThirdPersonOnly"}}}}}}}}}}}
             .dump(1));
+  vrmMotionSeeds(a, v1, v0);
   json byName = json::object(), byIndex = json::object();
   for (int b = 0; b < avatar::kHumanBoneCount; ++b) {
     const int j = a.humanoid.bones[static_cast<size_t>(b)];

@@ -13,6 +13,7 @@ layout(set = 0, binding = 2, std430) writeonly buffer Output { Skinned v[]; } ou
 layout(push_constant) uniform Push { uint vertexCount; } pc;
 
 #include "skinning.glsl"
+#include "morphing.glsl"
 
 const uint kStride = 26u;
 
@@ -25,11 +26,12 @@ void main() {
   const uint i = gl_GlobalInvocationID.x;
   if (i >= pc.vertexCount) return;
   const uint b = i * kStride;
-  const vec3 p = vec3(vertices.words[b], vertices.words[b + 1u], vertices.words[b + 2u]);
-  const vec3 n = vec3(vertices.words[b + 3u], vertices.words[b + 4u], vertices.words[b + 5u]);
+  vec3 p = vec3(vertices.words[b], vertices.words[b + 1u], vertices.words[b + 2u]);
+  vec3 n = vec3(vertices.words[b + 3u], vertices.words[b + 4u], vertices.words[b + 5u]);
+  applyMorphs(i, p, n);
   const mat4 m = skinMatrix(readUvec4(b + 8u), readUvec4(b + 12u), readVec4(b + 16u), readVec4(b + 20u));
   const vec3 sn = mat3(m) * n;
   const float len = length(sn);
   outputs.v[i].position = vec4((m * vec4(p, 1.0)).xyz, 1.0);
-  outputs.v[i].normal = vec4(len > 0.0 ? sn / len : n, 0.0);
+  outputs.v[i].normal = vec4(len > 0.0 ? sn / len : normalize(n), 0.0);
 }

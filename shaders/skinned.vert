@@ -6,6 +6,7 @@
 
 layout(set = 0, binding = 1, std430) readonly buffer Palette { mat4 joints[]; } palette;
 #include "skinning.glsl"
+#include "morphing.glsl"
 #include "material.glsl"
 #include "outline.glsl"
 
@@ -25,9 +26,11 @@ layout(location = 1) out vec4 outUvs;  // xy: TEXCOORD_0, zw: TEXCOORD_1
 layout(location = 2) out vec3 outWorld;
 
 void main() {
+  vec3 position = inPosition, normal = inNormal;
+  applyMorphs(uint(gl_VertexIndex), position, normal);  // morph targets first, then skinning
   const mat4 m = skinMatrix(inJoints0, inJoints1, inWeights0, inWeights1);
-  const vec4 world = m * vec4(inPosition, 1.0);
-  outNormal = mat3(m) * inNormal;  // normalised per fragment
+  const vec4 world = m * vec4(position, 1.0);
+  outNormal = mat3(m) * normal;  // normalised per fragment
   outUvs = vec4(inUv, inUv1);
   outWorld = world.xyz;
   gl_Position = kOutline ? outlineClipPosition(world.xyz, outNormal, outUvs) : scene.views[viewIndex()].viewProj * world;

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "avatar/hand/finger_retarget.h"
+#include "avatar/vrm/secondary_motion.h"
 #include "engine/avatar_renderer.h"
 #include "engine/desktop_window.h"
 #include "engine/device.h"
@@ -125,6 +126,7 @@ class HeadsetLoop {
   Status drawEyes(const FrameWork& f, engine::SceneFrame& scene);
   Status drawMirror(const FrameWork& f, engine::SceneFrame& scene, engine::SubmitSync& sync);
   void appendHandGizmos();
+  void applySecondaryMotion(const FrameWork& f);
   void recordFrame(const FrameWork& f);
   void recordAges(const FrameWork& f);
 
@@ -140,6 +142,9 @@ class HeadsetLoop {
   std::unique_ptr<runtime::IkThread> ik_;
   std::atomic<bool> resetBody_{false};
   avatar::SkeletonPose rest_, pose_;
+  // VRM spring bones, blinking and look-at on the shown body (after IK, before skinning).
+  std::unique_ptr<avatar::SecondaryMotion> secondary_;
+  XrTime lastSecondaryTime_ = 0;
   // Fingers: driven when the runtime tracks hands and the avatar has finger bones.
   avatar::FingerRig fingerRig_;
   bool driveFingers_ = false;
@@ -218,6 +223,7 @@ Status HeadsetLoop::setupSession() {
 void HeadsetLoop::setupBody() {
   rest_ = avatar::SkeletonPose::rest(o_.avatar->skeleton);
   pose_ = rest_;
+  secondary_ = std::make_unique<avatar::SecondaryMotion>(*o_.avatar);
   const glm::vec3 avatarEye(renderer_->eyePose(rest_)[3]);
   placement_ = std::make_unique<AvatarPlacement>(avatarEye, renderer_->anchors().forward, o_.placement);
   fingerRig_ = avatar::buildFingerRig(o_.avatar->skeleton, o_.avatar->humanoid);
@@ -322,6 +328,7 @@ void HeadsetLoop::recenterAndCalibrate(FrameWork& f, const Pose& headTracking) {
   const bool runtimeRecenter = pendingSpaceChange_ && f.timing.predictedDisplayTime >= pendingSpaceChange_;
   if (f.views.valid && ((o_.recenterAtStart && !recentered_) || buttonRecenter || runtimeRecenter)) {
     placement_->recenter(headTracking);
+    if (secondary_) secondary_->reset();  // the avatar jumps: the springs restart at rest
     recentered_ = true;
     ++rep_.recenters;
     if (runtimeRecenter) ++rep_.runtimeRecenters, pendingSpaceChange_ = 0;
@@ -472,6 +479,17 @@ void HeadsetLoop::appendHandGizmos() {
   }
 }
 
+// Spring bones, blinking and look-at at the display time; the eyes look where the head looks
+// (2 m ahead of the HMD), the springs swing in the world the avatar is placed in.
+void HeadsetLoop::applySecondaryMotion(const FrameWork& f) {
+  const XrTime t = f.timing.predictedDisplayTime;
+  const double dt = lastSecondaryTime_ && t > lastSecondaryTime_ ? double(t - lastSecondaryTime_) * 1e-9 : 0.0;
+  lastSecondaryTime_ = t;
+  std::optional<glm::vec3> gaze;
+  if (f.views.valid) gaze = glm::vec3(f.head.matrix() * glm::vec4(0.0f, 0.0f, -2.0f, 1.0f));
+  secondary_->update(pose_, dt, gaze);
+}
+
 // The renderer's frame: started while the IK thread solves, then the body, skinning, the eyes,
 // the mirror, submit, release.
 Status HeadsetLoop::render(FrameWork& f) {
@@ -488,11 +506,13 @@ Status HeadsetLoop::render(FrameWork& f) {
   }
   driveFingers(f);
   if (o_.onBodyShown) o_.onBodyShown(pose_, double(f.timing.predictedDisplayTime) * 1e-9);
+  applySecondaryMotion(f);
   if (auto s = renderer_->computePose(pose_); !s) return s;
   appendHandGizmos();
   engine::SceneFrame scene;
   scene.avatar = &renderer_->gpuAvatar();
   scene.palette = renderer_->palette();
+  scene.morphWeights = secondary_->morphWeights();
   scene.firstPerson = true;  // the user's own head is hidden
   scene.lines = lines_;
   scene.overlayLines = overlay_;  // hand gizmos stay visible through the avatar's hands

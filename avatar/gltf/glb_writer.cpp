@@ -261,8 +261,35 @@ json vertexAttributes(const AvatarAsset& asset, BinBuilder& bin, json& doc) {
   return attributes;
 }
 
+// Morph targets: one dense POSITION + NORMAL accessor pair per channel over the whole vertex
+// array, shared by every primitive (they share the vertex attributes too).
+json morphTargets(const SkinnedMesh& mesh, BinBuilder& bin, json& doc) {
+  json targets = json::array();
+  const size_t vc = mesh.vertices.size();
+  if (vc == 0) return targets;
+  for (size_t c = 0; c < mesh.morphChannels.size(); ++c) {
+    std::vector<float> dp(vc * 3, 0.0f), dn(vc * 3, 0.0f);
+    for (const MorphDelta& d : mesh.morphDeltas) {
+      if (d.channel != c || d.vertex >= vc) continue;
+      for (int k = 0; k < 3; ++k) dp[d.vertex * 3 + k] = d.position[k], dn[d.vertex * 3 + k] = d.normal[k];
+    }
+    glm::vec3 tlo(std::numeric_limits<float>::max()), thi(-std::numeric_limits<float>::max());
+    for (size_t i = 0; i < vc; ++i) {
+      tlo = glm::min(tlo, glm::vec3(dp[i * 3], dp[i * 3 + 1], dp[i * 3 + 2]));
+      thi = glm::max(thi, glm::vec3(dp[i * 3], dp[i * 3 + 1], dp[i * 3 + 2]));
+    }
+    const int ap = accessor(doc, bin.view(dp.data(), dp.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC3");
+    doc["accessors"][static_cast<size_t>(ap)]["min"] = {tlo.x, tlo.y, tlo.z};
+    doc["accessors"][static_cast<size_t>(ap)]["max"] = {thi.x, thi.y, thi.z};
+    const int an = accessor(doc, bin.view(dn.data(), dn.size() * 4, kArrayBuffer, doc), 0, kFloat, vc, "VEC3");
+    targets.push_back({{"POSITION", ap}, {"NORMAL", an}});
+  }
+  return targets;
+}
+
 // The mesh's primitives over one shared index bufferView.
-Result<json> meshPrimitives(const AvatarAsset& asset, const json& attributes, BinBuilder& bin, json& doc) {
+Result<json> meshPrimitives(const AvatarAsset& asset, const json& attributes, const json& targets, BinBuilder& bin,
+                            json& doc) {
   const SkinnedMesh& mesh = asset.mesh;
   const int indexView = bin.view(mesh.indices.data(), mesh.indices.size() * 4, kElementArrayBuffer, doc);
   json primitives = json::array();
@@ -276,13 +303,14 @@ Result<json> meshPrimitives(const AvatarAsset& asset, const json& attributes, Bi
         {"mode", 4}};
     if (p.material >= 0 && static_cast<size_t>(p.material) < asset.materials.size())
       prim["material"] = p.material;
+    if (!targets.empty()) prim["targets"] = targets;
     primitives.push_back(prim);
   }
   return primitives;
 }
 
-// Images as PNG (one texture each), then the materials.
-void addImagesAndMaterials(const AvatarAsset& asset, BinBuilder& bin, json& doc) {
+// Images as PNG (one texture each), then the materials, then the caller's top-level extensions.
+Status addImagesAndMaterials(const AvatarAsset& asset, std::string_view extensionsJson, BinBuilder& bin, json& doc) {
   for (size_t i = 0; i < asset.images.size(); ++i) {
     const Image& im = asset.images[i];
     std::vector<uint8_t> png;
@@ -298,7 +326,27 @@ void addImagesAndMaterials(const AvatarAsset& asset, BinBuilder& bin, json& doc)
   }
   std::set<std::string> extensionsUsed;
   for (const Material& m : asset.materials) doc["materials"].push_back(materialJson(m, asset, extensionsUsed));
+  if (!extensionsJson.empty()) {
+    const json ext = json::parse(extensionsJson, nullptr, false);
+    if (!ext.is_object()) return Error{"extensionsJson is not a JSON object"};
+    for (const auto& [name, value] : ext.items()) {
+      doc["extensions"][name] = value;
+      extensionsUsed.insert(name);
+    }
+  }
   if (!extensionsUsed.empty()) doc["extensionsUsed"] = extensionsUsed;
+  return {};
+}
+
+// The mesh's default morph weights and target names (extras.targetNames, as exporters write them).
+void addMorphWeights(const SkinnedMesh& mesh, json& meshJson) {
+  json weights = json::array(), names = json::array();
+  for (const MorphChannel& c : mesh.morphChannels) {
+    weights.push_back(c.defaultWeight);
+    names.push_back(c.name.empty() ? "target" + std::to_string(names.size()) : c.name);
+  }
+  meshJson["weights"] = weights;
+  meshJson["extras"] = {{"targetNames", names}};
 }
 
 // The GLB container: header, JSON chunk (space-padded), BIN chunk (zero-padded).
@@ -325,7 +373,8 @@ Result<std::vector<uint8_t>> glbContainer(json& doc, BinBuilder& bin) {
 
 }  // namespace
 
-Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimation* animation) {
+Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimation* animation,
+                                       std::string_view extensionsJson) {
   if (auto why = skinProblem(asset); !why.empty()) return Error{why};
   const Skeleton& sk = asset.skeleton;
   const size_t n = sk.joints.size();
@@ -337,7 +386,8 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
   BinBuilder bin;
   addJointNodes(sk, doc);
   const json attributes = vertexAttributes(asset, bin, doc);
-  auto primitives = meshPrimitives(asset, attributes, bin, doc);
+  const json targets = morphTargets(asset.mesh, bin, doc);
+  auto primitives = meshPrimitives(asset, attributes, targets, bin, doc);
   if (!primitives) return Error{primitives.error()};
 
   std::vector<float> ibm;
@@ -347,11 +397,12 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
   for (size_t i = 0; i < n; ++i) skinJoints.push_back(i);
   int root = 0;
   while (sk.joints[static_cast<size_t>(root)].parent >= 0) ++root;
-  addImagesAndMaterials(asset, bin, doc);
+  if (auto s = addImagesAndMaterials(asset, extensionsJson, bin, doc); !s) return Error{s.error()};
 
   json sceneNodes = json::array({root});
   if (!primitives->empty()) {
     doc["meshes"] = json::array({{{"name", "body"}, {"primitives", *primitives}}});
+    if (!targets.empty()) addMorphWeights(asset.mesh, doc["meshes"][0]);
     doc["skins"] =
         json::array({{{"inverseBindMatrices", ibmAccessor}, {"joints", skinJoints}, {"skeleton", root}}});
     doc["nodes"].push_back({{"name", "body"}, {"mesh", 0}, {"skin", 0}});
@@ -363,8 +414,9 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
   return glbContainer(doc, bin);
 }
 
-Status writeGlbFile(const AvatarAsset& asset, const std::string& path, const GlbAnimation* animation) {
-  auto bytes = encodeGlb(asset, animation);
+Status writeGlbFile(const AvatarAsset& asset, const std::string& path, const GlbAnimation* animation,
+                    std::string_view extensionsJson) {
+  auto bytes = encodeGlb(asset, animation, extensionsJson);
   if (!bytes.ok()) return Error{bytes.error()};
   std::ofstream f(path, std::ios::binary);
   if (!f) return Error{"cannot write '" + path + "'"};

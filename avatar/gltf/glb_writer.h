@@ -5,10 +5,13 @@
 // vertex has more than four influences; TEXCOORD_1 when a material or vertex uses it), one
 // primitive per draw-list primitive, materials with base colour (factor, texture,
 // KHR_texture_transform), emissive (+ KHR_materials_emissive_strength), KHR_materials_unlit, alpha
-// mode, double-sidedness and VRMC_materials_mtoon (avatar::MToon, every property). Images are embedded as PNG. The skeleton must have a single root
+// mode, double-sidedness and VRMC_materials_mtoon (avatar::MToon, every property), morph targets
+// (mesh.morphChannels as dense targets, with default weights and extras.targetNames). Images are
+// embedded as PNG. The skeleton must have a single root
 // (glTF requires the joints of a skin to share one).
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "avatar/avatar_asset.h"
@@ -25,7 +28,12 @@ struct GlbAnimation {
   std::vector<SkeletonPose> frames;  // each sized to the skeleton
 };
 
-Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimation* animation = nullptr);
-Status writeGlbFile(const AvatarAsset& asset, const std::string& path, const GlbAnimation* animation = nullptr);
+// extensionsJson: a JSON object of top-level extensions to write as given (e.g. VRMC_vrm,
+// VRMC_springBone), each also listed in extensionsUsed. Node i is skeleton joint i; the mesh
+// node, when there is a mesh, is node skeleton.joints.size().
+Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimation* animation = nullptr,
+                                       std::string_view extensionsJson = {});
+Status writeGlbFile(const AvatarAsset& asset, const std::string& path, const GlbAnimation* animation = nullptr,
+                    std::string_view extensionsJson = {});
 
 }  // namespace embody::avatar

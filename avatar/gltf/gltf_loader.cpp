@@ -204,6 +204,8 @@ double readComponent(const uint8_t* p, int type, bool normalized) {
   }
 }
 
+constexpr size_t kMaxMorphTargets = 1024;  // per primitive
+
 class AccessorReader {
  public:
   AccessorReader(const tinygltf::Model& m, const GltfLimits& l) : model_(m), limits_(l) {}
@@ -649,6 +651,9 @@ struct MeshBuilder {
     }
     if (nrm->empty()) computeNormals(asset.mesh.vertices, first, tris);
     if (auto s = checkFinite(first, where); !s.ok()) return s;
+    const glm::mat3 deltaToBind = skin ? glm::mat3(1.0f) : glm::mat3(rigidToBind);
+    const glm::mat3 normalDeltaToBind = skin ? glm::mat3(1.0f) : rigidNormal;
+    if (auto s = addMorphTargets(node, p, first, vcount, deltaToBind, normalDeltaToBind, where); !s.ok()) return s;
 
     Primitive prim;
     prim.firstIndex = static_cast<uint32_t>(asset.mesh.indices.size());
@@ -661,9 +666,71 @@ struct MeshBuilder {
                          " out of range; default material used");
     for (uint32_t i : tris) asset.mesh.indices.push_back(static_cast<uint32_t>(first) + i);
     if (prim.indexCount > 0) asset.mesh.primitives.push_back(prim);
-    if (!p.targets.empty() && warnings.size() < 1000)
-      warnings.push_back(where + ": " + std::to_string(p.targets.size()) +
-                         " morph targets loaded as the base shape");
+    return {};
+  }
+
+  // The channel for (node, target), created with the mesh's default weight and target name.
+  uint32_t morphChannel(int node, int target) {
+    auto& channels = asset.mesh.morphChannels;
+    for (size_t c = 0; c < channels.size(); ++c)
+      if (channels[c].sourceNode == node && channels[c].targetIndex == target) return static_cast<uint32_t>(c);
+    MorphChannel ch;
+    ch.sourceNode = node;
+    ch.sourceMesh = m.nodes[node].mesh;
+    ch.targetIndex = target;
+    const auto& mesh = m.meshes[static_cast<size_t>(ch.sourceMesh)];
+    if (static_cast<size_t>(target) < mesh.weights.size() && std::isfinite(mesh.weights[target]))
+      ch.defaultWeight = static_cast<float>(mesh.weights[target]);
+    const auto& names = mesh.extras.Get("targetNames");
+    if (names.IsArray() && static_cast<size_t>(target) < names.ArrayLen() && names.Get(target).IsString())
+      ch.name = names.Get(target).Get<std::string>();
+    channels.push_back(std::move(ch));
+    return static_cast<uint32_t>(channels.size() - 1);
+  }
+
+  // glTF morph targets of one primitive (POSITION and NORMAL deltas; TANGENT is not used) as
+  // sparse deltas of vertices [first, first + vcount), in the space the vertices were stored in.
+  Status addMorphTargets(int node, const tinygltf::Primitive& p, size_t first, size_t vcount, const glm::mat3& toBind,
+                         const glm::mat3& normalToBind, const std::string& where) {
+    if (p.targets.empty()) return {};
+    if (p.targets.size() > kMaxMorphTargets)
+      return Error{where + ": " + std::to_string(p.targets.size()) + " morph targets (at most " +
+                   std::to_string(kMaxMorphTargets) + ")"};
+    AccessorReader reader(m, limits);
+    auto& deltas = asset.mesh.morphDeltas;
+    const size_t before = deltas.size();
+    for (size_t t = 0; t < p.targets.size(); ++t) {
+      const std::string what = where + " target " + std::to_string(t);
+      std::vector<double> data[2];
+      const char* names[2] = {"POSITION", "NORMAL"};
+      for (int a = 0; a < 2; ++a) {
+        const auto it = p.targets[t].find(names[a]);
+        if (it == p.targets[t].end()) continue;
+        auto r = reader.read(it->second, 3, {TINYGLTF_COMPONENT_TYPE_FLOAT}, what + " " + names[a]);
+        if (!r.ok()) return Error{r.error()};
+        if (r->size() != vcount * 3)
+          return Error{what + " " + names[a] + ": " + std::to_string(r->size() / 3) + " elements for " +
+                       std::to_string(vcount) + " vertices"};
+        data[a] = std::move(r.value());
+      }
+      if (data[0].empty() && data[1].empty()) continue;
+      const uint32_t channel = morphChannel(node, static_cast<int>(t));
+      for (size_t i = 0; i < vcount; ++i) {
+        glm::vec3 dp(0.0f), dn(0.0f);
+        if (!data[0].empty()) dp = glm::vec3(data[0][i * 3], data[0][i * 3 + 1], data[0][i * 3 + 2]);
+        if (!data[1].empty()) dn = glm::vec3(data[1][i * 3], data[1][i * 3 + 1], data[1][i * 3 + 2]);
+        if (dp == glm::vec3(0.0f) && dn == glm::vec3(0.0f)) continue;
+        MorphDelta d{static_cast<uint32_t>(first + i), channel, toBind * dp, normalToBind * dn};
+        if (!std::isfinite(d.position.x + d.position.y + d.position.z + d.normal.x + d.normal.y + d.normal.z))
+          return Error{what + ": vertex " + std::to_string(i) + " has a non-finite delta"};
+        if (deltas.size() >= limits.maxTotalVertices)
+          return Error{what + ": more than " + std::to_string(limits.maxTotalVertices) + " morph deltas in total"};
+        deltas.push_back(d);
+      }
+    }
+    // This primitive's vertices come after every earlier one: sorting its own deltas keeps the whole list sorted.
+    std::stable_sort(deltas.begin() + static_cast<std::ptrdiff_t>(before), deltas.end(),
+                     [](const MorphDelta& a, const MorphDelta& b) { return a.vertex < b.vertex; });
     return {};
   }
 

@@ -11,8 +11,9 @@
 //     skeleton joint. Rigid primitives get weight 1 on their node; their vertices are pre-multiplied
 //     by the inverse of that joint's inverse bind, so the one skinning formula draws both.
 //     Missing normals are computed (area-weighted); missing UVs are 0. Triangle strips and fans
-//     are converted to lists; points and lines are skipped with a warning. Morph targets are
-//     tolerated and ignored (the base shape is drawn).
+//     are converted to lists; points and lines are skipped with a warning. Morph targets
+//     (POSITION/NORMAL deltas) become mesh.morphChannels (one per node and target, with the
+//     mesh's default weights) and sparse mesh.morphDeltas.
 //   - materials (base colour factor/texture, alpha mode, cutoff, double-sided) and every image
 //     decoded to RGBA8 (embedded in the GLB, data URIs, or external files next to the .gltf).
 //   - rawJson (the glTF JSON) and format (gltf, vrm0 from the "VRM" extension, vrm1 from

@@ -10,13 +10,16 @@
 
 #include "allocation_counter.h"
 #include "avatar/avatar_loader.h"
+#include "avatar/gltf/glb_writer.h"
 #include "avatar/gltf/gltf_loader.h"
+#include "avatar/vrm/secondary_motion.h"
 #include "avatar/humanoid_test_files.h"
 #include "avatar/procedural/default_avatar.h"
 #include "runtime/tracked_avatar_body.h"
 #include "test_paths.h"
 #include "tracking/bvh_avatar.h"
 #include "tracking/pose_source.h"
+#include "tests/support/vrm_test_avatar.h"
 
 using namespace embody;
 using tracking::TrackerId;
@@ -110,6 +113,33 @@ TEST_CASE("a runtime frame allocates nothing: a BVH clip as the avatar", "[relia
     REQUIRE(bvh->asset.humanoid.usable());
     CHECK(allocationsPerFrameLoop(bvh->asset, "synthetic:reach", true) == 0);
     CHECK(allocationsPerFrameLoop(bvh->asset, clip.c_str(), false) == 0);
+  }
+}
+
+TEST_CASE("VRM secondary motion allocates nothing: spring bones, look-at, expressions, blinking", "[reliability][allocation]") {
+  for (bool boneLookAt : {false, true}) {
+    const test::VrmTestAvatar bust = test::buildVrmTestAvatar({.boneLookAt = boneLookAt});
+    auto bytes = avatar::encodeGlb(bust.asset, nullptr, bust.extensionsJson);
+    REQUIRE(bytes.ok());
+    auto asset = avatar::loadGltfFromMemory(*bytes, ".");
+    REQUIRE(asset.ok());
+    REQUIRE(avatar::prepareAvatar(*asset, "").ok());
+    REQUIRE(asset->springBones.chains.size() == 8);
+    avatar::SecondaryMotion motion(*asset);
+    avatar::SkeletonPose pose = avatar::SkeletonPose::rest(asset->skeleton);
+    const avatar::SkeletonPose rest = pose;
+    const int head = asset->humanoid.joint(avatar::HumanBone::head);
+    auto frame = [&](int i) {
+      pose = rest;  // same size: copies into the existing storage
+      pose.local[static_cast<size_t>(head)].rotation = glm::angleAxis(0.8f * std::sin(0.07f * float(i)), glm::vec3(0, 1, 0));
+      if (i % 50 == 25) pose.local[1].translation.x += 20.0f;  // a teleport
+      if (i % 70 == 0) motion.reset();                          // a recenter
+      motion.update(pose, i % 33 == 0 ? 0.5 : 1.0 / 90.0, glm::vec3(std::sin(0.1f * float(i)), 1.6f, 1.0f));
+    };
+    for (int i = 0; i < 10; ++i) frame(i);
+    test::CountAllocations counter;
+    for (int i = 10; i < 400; ++i) frame(i);
+    CHECK(counter.counts().count == 0);
   }
 }
 

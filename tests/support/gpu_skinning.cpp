@@ -1,5 +1,6 @@
 #include "tests/support/gpu_skinning.h"
 
+#include <algorithm>
 #include <cstring>
 
 #include "shaders/skin_comp.spv.h"
@@ -10,11 +11,12 @@ using namespace embody::engine;
 Result<std::unique_ptr<GpuSkinner>> GpuSkinner::create(const Device& device) {
   std::unique_ptr<GpuSkinner> s(new GpuSkinner(device));
   const VkDevice dev = device.handle();
-  VkDescriptorSetLayoutBinding bindings[3];
-  for (uint32_t i = 0; i < 3; ++i)
+  // 0 vertices, 1 palette, 2 output, 3..5 morph ranges, deltas, weights (shaders/morphing.glsl).
+  VkDescriptorSetLayoutBinding bindings[6];
+  for (uint32_t i = 0; i < 6; ++i)
     bindings[i] = {i, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
   VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-  lci.bindingCount = 3;
+  lci.bindingCount = 6;
   lci.pBindings = bindings;
   VkDescriptorSetLayout layout = VK_NULL_HANDLE;
   if (vkCreateDescriptorSetLayout(dev, &lci, nullptr, &layout) != VK_SUCCESS) return Error{"descriptor set layout"};
@@ -42,7 +44,7 @@ Result<std::unique_ptr<GpuSkinner>> GpuSkinner::create(const Device& device) {
     return Error{"vkCreateComputePipelines failed"};
   s->pipeline_ = UniquePipeline(dev, pipeline);
 
-  VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 3};
+  VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6};
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dpci.maxSets = 1;
   dpci.poolSizeCount = 1;
@@ -57,7 +59,7 @@ Result<std::unique_ptr<GpuSkinner>> GpuSkinner::create(const Device& device) {
 }
 
 Status GpuSkinner::run(const GpuAvatar& avatar, std::span<const glm::mat4> palette, std::vector<glm::vec3>& positions,
-                       std::vector<glm::vec3>& normals) {
+                       std::vector<glm::vec3>& normals, std::span<const float> morphWeights) {
   if (palette.size() < avatar.jointCount()) return Error{"palette smaller than the avatar's skeleton"};
   const uint32_t n = avatar.vertexCount();
   if (palette_.size() < palette.size_bytes()) {
@@ -73,12 +75,31 @@ Status GpuSkinner::run(const GpuAvatar& avatar, std::span<const glm::mat4> palet
   }
   std::memcpy(palette_.mapped(), palette.data(), palette.size_bytes());
   palette_.flush();
+  const VkDeviceSize weightBytes = std::max<VkDeviceSize>(morphWeights.size_bytes(), 16);
+  if (weights_.size() < weightBytes) {
+    auto b = Buffer::create(device_, weightBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::HostUpload);
+    if (!b) return Error{b.error()};
+    weights_ = std::move(b).value();
+  }
+  std::memset(weights_.mapped(), 0, weights_.size());
+  if (!morphWeights.empty()) std::memcpy(weights_.mapped(), morphWeights.data(), morphWeights.size_bytes());
+  weights_.flush();
+  // Without morph targets a zeroed placeholder stands in: ranges (0, 0), no deltas.
+  if (placeholder_.size() == 0) {
+    auto b = Buffer::create(device_, 32, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::HostUpload);
+    if (!b) return Error{b.error()};
+    placeholder_ = std::move(b).value();
+    std::memset(placeholder_.mapped(), 0, 32);
+    placeholder_.flush();
+  }
+  const VkBuffer ranges = avatar.morphRanges() ? avatar.morphRanges() : placeholder_.handle();
+  const VkBuffer deltas = avatar.morphDeltas() ? avatar.morphDeltas() : placeholder_.handle();
 
-  VkDescriptorBufferInfo infos[3] = {{avatar.vertexBuffer(), 0, VK_WHOLE_SIZE},
-                                     {palette_.handle(), 0, VK_WHOLE_SIZE},
-                                     {output_.handle(), 0, VK_WHOLE_SIZE}};
-  VkWriteDescriptorSet w[3];
-  for (uint32_t i = 0; i < 3; ++i) {
+  VkDescriptorBufferInfo infos[6] = {{avatar.vertexBuffer(), 0, VK_WHOLE_SIZE}, {palette_.handle(), 0, VK_WHOLE_SIZE},
+                                     {output_.handle(), 0, VK_WHOLE_SIZE},      {ranges, 0, VK_WHOLE_SIZE},
+                                     {deltas, 0, VK_WHOLE_SIZE},                {weights_.handle(), 0, VK_WHOLE_SIZE}};
+  VkWriteDescriptorSet w[6];
+  for (uint32_t i = 0; i < 6; ++i) {
     w[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     w[i].dstSet = set_;
     w[i].dstBinding = i;
@@ -86,7 +107,7 @@ Status GpuSkinner::run(const GpuAvatar& avatar, std::span<const glm::mat4> palet
     w[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     w[i].pBufferInfo = &infos[i];
   }
-  vkUpdateDescriptorSets(device_.handle(), 3, w, 0, nullptr);
+  vkUpdateDescriptorSets(device_.handle(), 6, w, 0, nullptr);
 
   auto status = device_.submitAndWait([&](VkCommandBuffer cmd) {
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.get());

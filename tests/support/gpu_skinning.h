@@ -15,9 +15,10 @@ namespace embody::test {
 class GpuSkinner {
  public:
   static Result<std::unique_ptr<GpuSkinner>> create(const engine::Device& device);
-  // Skins every vertex of `avatar` with `palette` and returns positions and normals (blocking).
+  // Morphs (weights: one per morph channel, empty: none) and skins every vertex of `avatar` with
+  // `palette`, and returns positions and normals (blocking).
   Status run(const engine::GpuAvatar& avatar, std::span<const glm::mat4> palette, std::vector<glm::vec3>& positions,
-             std::vector<glm::vec3>& normals);
+             std::vector<glm::vec3>& normals, std::span<const float> morphWeights = {});
 
  private:
   explicit GpuSkinner(const engine::Device& device) : device_(device) {}
@@ -27,7 +28,7 @@ class GpuSkinner {
   engine::UniquePipeline pipeline_;
   engine::UniqueDescriptorPool pool_;
   VkDescriptorSet set_ = VK_NULL_HANDLE;
-  engine::Buffer palette_, output_;
+  engine::Buffer palette_, output_, weights_, placeholder_;
 };
 
 }  // namespace embody::test

@@ -1,0 +1,457 @@
+// VRM motion (avatar/vrm): the project's test bust (tests/support/vrm_test_avatar.h) written as
+// a .vrm, validated by the Khronos validator, loaded back, and its spring bones, expressions,
+// look-at and blinking checked by numbers. Hostile extension JSON gets defaults and warnings.
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "avatar/gltf/gltf_loader.h"
+#include "avatar/vrm/secondary_motion.h"
+#include "tests/support/gltf_validator.h"
+#include "tests/support/vrm_test_avatar.h"
+
+using namespace embody;
+using namespace embody::avatar;
+
+namespace {
+
+std::string tempPath(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / ("embody_" + std::to_string(::getpid()) + "_" + name)).string();
+}
+
+AvatarAsset loadTestVrm(const test::VrmTestAvatarOptions& o = {}, const std::string& extensionsOverride = "") {
+  test::VrmTestAvatar t = test::buildVrmTestAvatar(o);
+  if (!extensionsOverride.empty()) t.extensionsJson = extensionsOverride;
+  const std::string path = tempPath("vrm_motion.vrm");
+  REQUIRE(test::writeVrmTestAvatar(t, path).ok());
+  auto a = loadAvatarFile(path);
+  std::filesystem::remove(path);
+  REQUIRE(a.ok());
+  return std::move(a.value());
+}
+
+glm::vec3 jointPosition(const AvatarAsset& a, const SkeletonPose& pose, int joint) {
+  std::vector<glm::mat4> g;
+  computeGlobals(a.skeleton, pose, g);
+  return glm::vec3(g[static_cast<size_t>(joint)][3]);
+}
+
+// The pose with the head turned `yaw` radians about +Y (the neck takes none of it).
+SkeletonPose headTurned(const AvatarAsset& a, float yaw) {
+  SkeletonPose p = SkeletonPose::rest(a.skeleton);
+  const int head = a.humanoid.joint(HumanBone::head);
+  p.local[static_cast<size_t>(head)].rotation = glm::angleAxis(yaw, glm::vec3(0, 1, 0));
+  return p;
+}
+
+// Tip joint position of strand k in the rigid (no spring) version of `pose`.
+glm::vec3 rigidTip(const AvatarAsset& a, const SkeletonPose& pose, const std::vector<int>& strand) {
+  return jointPosition(a, pose, strand.back());
+}
+
+}  // namespace
+
+TEST_CASE("vrm test avatar: passes the Khronos glTF validator", "[vrm]") {
+  for (bool vrm0 : {false, true}) {
+    test::VrmTestAvatarOptions o;
+    o.vrm0 = vrm0;
+    const std::string path = tempPath(vrm0 ? "validate0.vrm" : "validate1.vrm");
+    REQUIRE(test::writeVrmTestAvatar(test::buildVrmTestAvatar(o), path).ok());
+    const auto v = test::validateGltfFile(path);
+    std::filesystem::remove(path);
+    if (!v.skipReason.empty()) {
+      WARN("SKIPPED: " << v.skipReason);
+      return;
+    }
+    INFO(v.report);
+    REQUIRE(v.exitCode != 3);
+    const auto report = nlohmann::json::parse(v.report, nullptr, false);
+    REQUIRE_FALSE(report.is_discarded());
+    CHECK(report["numErrors"].get<int>() == 0);
+    CHECK(v.exitCode == 0);
+  }
+}
+
+TEST_CASE("vrm 1.0: spring bones, expressions, look-at and morph targets are read", "[vrm]") {
+  const AvatarAsset a = loadTestVrm();
+  CHECK(a.format == AvatarFormat::Vrm1);
+  INFO((a.vrmWarnings.empty() ? std::string() : a.vrmWarnings.front()));
+  CHECK(a.vrmWarnings.empty());
+  REQUIRE(a.springBones.chains.size() == 8);
+  for (const auto& c : a.springBones.chains) {
+    CHECK(c.joints.size() == 4);  // five joints: the last is the tail
+    CHECK(c.colliders.size() == 2);
+    CHECK(c.joints[0].settings.stiffness == Approx(1.5f));
+    CHECK(c.joints[0].settings.dragForce == Approx(0.4f));
+    CHECK(c.joints[0].settings.hitRadius == Approx(0.01f));
+  }
+  REQUIRE(a.springBones.colliders.size() == 2);
+  CHECK(a.springBones.colliders[0].shape == SpringCollider::Shape::Sphere);
+  CHECK(a.springBones.colliders[1].shape == SpringCollider::Shape::Capsule);
+  CHECK(a.springBones.colliders[1].tail.y == Approx(0.2f));
+  REQUIRE(a.mesh.morphChannels.size() == 6);
+  CHECK(a.mesh.morphChannels[0].name == "blink");
+  CHECK_FALSE(a.mesh.morphDeltas.empty());
+  CHECK(a.expressions.expressions.size() == 8);
+  CHECK(a.expressions.find(ExpressionPreset::Blink) >= 0);
+  CHECK(a.expressions.find(ExpressionPreset::LookLeft) >= 0);
+  CHECK(a.expressions.find("wink") >= 0);
+  CHECK(a.lookAt.type == LookAtSetup::Type::Expression);
+  CHECK(a.lookAt.horizontalOuter.inputMaxValue == Approx(45.0f));
+  CHECK(a.lookAt.offsetFromHead.z == Approx(0.07f));
+}
+
+TEST_CASE("vrm 0.x: secondaryAnimation and blend shape groups are read", "[vrm]") {
+  test::VrmTestAvatarOptions o;
+  o.vrm0 = true;
+  const AvatarAsset a = loadTestVrm(o);
+  CHECK(a.format == AvatarFormat::Vrm0);
+  REQUIRE(a.springBones.chains.size() == 8);
+  for (const auto& c : a.springBones.chains) {
+    REQUIRE(c.joints.size() == 5);  // the whole subtree sways; the leaf gets a 7 cm virtual tail
+    CHECK(c.joints.back().child == -1);
+    CHECK(glm::length(c.joints.back().tail) == Approx(0.07f));
+    CHECK(c.joints[0].settings.stiffness == Approx(1.5f));  // from "stiffiness"
+  }
+  REQUIRE(a.springBones.colliders.size() == 2);
+  CHECK(a.springBones.colliders[0].offset.y == Approx(0.1f));
+  const int blink = a.expressions.find(ExpressionPreset::Blink);
+  REQUIRE(blink >= 0);
+  REQUIRE(a.expressions.expressions[static_cast<size_t>(blink)].morphBinds.size() == 1);
+  CHECK(a.expressions.expressions[static_cast<size_t>(blink)].morphBinds[0].weight == Approx(1.0f));  // 100 -> 1
+  CHECK(a.expressions.find(ExpressionPreset::Aa) >= 0);  // "a"
+  CHECK(a.lookAt.type == LookAtSetup::Type::Expression);  // BlendShape
+  CHECK(a.lookAt.offsetFromHead.z == Approx(0.07f));     // z flipped from Unity's
+}
+
+TEST_CASE("spring bones: hair swings after a head turn and settles; colliders hold", "[vrm]") {
+  const AvatarAsset a = loadTestVrm();
+  test::VrmTestAvatar t = test::buildVrmTestAvatar();
+  SecondaryMotion motion(a, {.blink = false});
+  const double dt = 1.0 / 90.0;
+  SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+  for (int i = 0; i < 180; ++i) {  // settle 2 s at rest
+    pose = SkeletonPose::rest(a.skeleton);
+    motion.update(pose, dt, std::nullopt);
+  }
+  const SkeletonPose rest = SkeletonPose::rest(a.skeleton);
+  float settled = 0.0f;
+  for (const auto& s : t.strands) settled = std::max(settled, glm::length(jointPosition(a, pose, s.back()) - rigidTip(a, rest, s)));
+  CHECK(settled < 0.03f);  // gravity sags it a little, no more
+  // Turn the head 60 degrees in 0.15 s, then hold.
+  float maxLag = 0.0f, lagAfter3s = 0.0f;
+  int steps = 0;
+  for (int i = 0; i < 360; ++i) {
+    const float yaw = glm::radians(60.0f) * std::min(1.0f, float(i) / 13.5f);
+    pose = headTurned(a, yaw);
+    const SkeletonPose rigid = pose;
+    motion.update(pose, dt, std::nullopt);
+    steps += motion.lastSpringJob().stepsRun;
+    float lag = 0.0f;
+    for (const auto& s : t.strands) {
+      lag = std::max(lag, glm::length(jointPosition(a, pose, s.back()) - rigidTip(a, rigid, s)));
+      // No joint inside the head sphere (radius 0.095 around head + (0, 0.1, 0)).
+      std::vector<glm::mat4> g;
+      computeGlobals(a.skeleton, pose, g);
+      const glm::vec3 c(g[5] * glm::vec4(0, 0.1f, 0, 1));
+      for (size_t j = 1; j < s.size(); ++j) CHECK(glm::length(glm::vec3(g[static_cast<size_t>(s[j])][3]) - c) > 0.095f);
+      for (const auto& tr : pose.local) REQUIRE(std::isfinite(tr.rotation.w + tr.rotation.x + tr.rotation.y + tr.rotation.z));
+    }
+    if (i < 60) maxLag = std::max(maxLag, lag);
+    if (i == 359) lagAfter3s = lag;
+  }
+  CHECK(maxLag > 0.03f);          // the tips trail the turn by centimetres
+  CHECK(lagAfter3s < settled + 0.01f);  // and come back to where they hung
+  CHECK(std::abs(steps - 480) <= 1);    // 4 s at the fixed 120 Hz sub-step
+}
+
+TEST_CASE("spring bones: a teleport resets the springs instead of flinging the hair", "[vrm]") {
+  const AvatarAsset a = loadTestVrm();
+  test::VrmTestAvatar t = test::buildVrmTestAvatar();
+  SecondaryMotion motion(a, {.blink = false});
+  SkeletonPose pose;
+  for (int i = 0; i < 90; ++i) {
+    pose = headTurned(a, glm::radians(30.0f) * std::sin(float(i) * 0.2f));
+    motion.update(pose, 1.0 / 90.0, std::nullopt);
+  }
+  // Jump 25 m and turn 170 degrees in one frame (a recenter or teleport).
+  SkeletonPose jumped = SkeletonPose::rest(a.skeleton);
+  jumped.local[1].translation += glm::vec3(25.0f, 0.0f, -3.0f);
+  jumped.local[1].rotation = glm::angleAxis(glm::radians(170.0f), glm::vec3(0, 1, 0));
+  const SkeletonPose rigid = jumped;
+  motion.update(jumped, 1.0 / 90.0, std::nullopt);
+  CHECK(motion.lastSpringJob().wasReset);
+  for (const auto& s : t.strands)
+    CHECK(glm::length(jointPosition(a, jumped, s.back()) - rigidTip(a, rigid, s)) < 0.01f);
+  // An explicit reset (recenter) does the same.
+  motion.reset();
+  SkeletonPose again = rigid;
+  motion.update(again, 1.0 / 90.0, std::nullopt);
+  CHECK(motion.lastSpringJob().wasReset);
+  // A long stall (2 s in one frame) is capped, not integrated as one huge step.
+  SkeletonPose stalled = rigid;
+  motion.update(stalled, 2.0, std::nullopt);
+  CHECK(motion.lastSpringJob().stepsRun == motion.lastSpringJob().maxStepsPerRun);
+  for (const auto& tr : stalled.local) CHECK(std::isfinite(tr.rotation.w + tr.rotation.x));
+}
+
+TEST_CASE("spring bones: a chain that skips a joint aims at the deeper joint", "[vrm]") {
+  test::VrmTestAvatar t = test::buildVrmTestAvatar();
+  auto ext = nlohmann::json::parse(t.extensionsJson);
+  auto& joints = ext["VRMC_springBone"]["springs"][0]["joints"];
+  joints.erase(2);  // strand 0: joints 0, 1, 3, 4 (1 swings towards 3 over 2)
+  const AvatarAsset a = loadTestVrm({}, ext.dump());
+  CHECK(a.vrmWarnings.empty());
+  const SpringChain& c = a.springBones.chains[0];
+  REQUIRE(c.joints.size() == 3);
+  CHECK(c.joints[1].child == t.strands[0][3]);
+  CHECK(glm::length(c.joints[1].tail) == Approx(2.0f * std::sqrt(0.055f * 0.055f + 0.012f * 0.012f)).epsilon(1e-4));
+  // At rest with no gravity and no motion nothing moves.
+  SecondaryMotion motion(a, {.blink = false});
+  SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+  motion.update(pose, 0.0, std::nullopt);
+  for (size_t j = 0; j < pose.local.size(); ++j)
+    CHECK(std::abs(glm::dot(pose.local[j].rotation, a.skeleton.joints[j].rest.rotation)) == Approx(1.0f).margin(1e-6));
+}
+
+TEST_CASE("spring bones: with a centre node, moving with it does not swing the hair", "[vrm]") {
+  test::VrmTestAvatar t = test::buildVrmTestAvatar({.gravityPower = 0.0f});  // at rest nothing moves
+  auto ext = nlohmann::json::parse(t.extensionsJson);
+  for (auto& spring : ext["VRMC_springBone"]["springs"]) spring["center"] = 1;  // the hips
+  float lag[2] = {0.0f, 0.0f};
+  for (int withCentre = 0; withCentre < 2; ++withCentre) {
+    const AvatarAsset a = loadTestVrm({}, withCentre ? ext.dump() : t.extensionsJson);
+    CHECK(a.springBones.chains[0].center == (withCentre ? 1 : -1));
+    SecondaryMotion motion(a, {.blink = false});
+    for (int i = 0; i < 60; ++i) {  // rest, then the body slides 8 cm a frame (7 m/s) for 12 frames
+      SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+      pose.local[1].translation.z += 0.08f * float(std::max(0, i - 40));
+      const SkeletonPose rigid = pose;
+      motion.update(pose, 1.0 / 90.0, std::nullopt);
+      for (const auto& s : t.strands)
+        lag[withCentre] = std::max(lag[withCentre], glm::length(jointPosition(a, pose, s.back()) - rigidTip(a, rigid, s)));
+    }
+  }
+  CHECK(lag[0] > 0.02f);   // world inertia: the hair streams behind
+  CHECK(lag[1] < 0.002f);  // centre space: it rides along
+}
+
+TEST_CASE("spring bone job: Validate rejects malformed inputs", "[vrm]") {
+  const AvatarAsset a = loadTestVrm();
+  SpringBoneState state;
+  state.resize(a.springBones, a.skeleton.joints.size());
+  SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+  std::vector<glm::mat4> g;
+  computeGlobals(a.skeleton, pose, g);
+  SpringBoneJob job;
+  job.setup = &a.springBones;
+  job.skeleton = &a.skeleton;
+  job.pose = &pose;
+  job.globals = g;
+  job.state = &state;
+  job.deltaTime = 1.0 / 90.0;
+  CHECK(job.Validate());
+  job.deltaTime = std::nan("");
+  CHECK_FALSE(job.Validate());
+  CHECK_FALSE(job.Run());
+  job.deltaTime = 0.01;
+  job.rootJoint = 10000;
+  CHECK_FALSE(job.Validate());
+  job.rootJoint = 0;
+  SpringBoneState small;
+  job.state = &small;
+  CHECK_FALSE(job.Validate());
+  job.state = &state;
+  SkeletonPose wrong;
+  job.pose = &wrong;
+  CHECK_FALSE(job.Validate());
+}
+
+TEST_CASE("vrm parsers: hostile extension values take defaults with warnings, never crash", "[vrm]") {
+  test::VrmTestAvatar t = test::buildVrmTestAvatar();
+  auto ext = nlohmann::json::parse(t.extensionsJson);
+  auto& springs = ext["VRMC_springBone"]["springs"];
+  springs[0]["joints"][0]["stiffness"] = "stiff";
+  springs[0]["joints"][0]["dragForce"] = 7.5;
+  springs[0]["joints"][0]["gravityDir"] = {0, 0, 0};
+  springs[1]["joints"][1]["node"] = 99999;          // the chain ends at joint 1
+  springs[2]["joints"][2]["node"] = 0;              // not below joint 1
+  springs[3]["colliderGroups"] = {42, -1, "x"};
+  springs[4]["joints"] = springs[5]["joints"];       // claimed twice: the second is skipped
+  ext["VRMC_springBone"]["colliders"][1]["shape"] = {{"cone", {}}};
+  ext["VRMC_vrm"]["expressions"]["preset"]["blink"]["morphTargetBinds"][0]["index"] = 77;
+  ext["VRMC_vrm"]["expressions"]["preset"]["aa"]["overrideMouth"] = "sometimes";
+  ext["VRMC_vrm"]["lookAt"]["rangeMapHorizontalOuter"]["inputMaxValue"] = -3;
+  const AvatarAsset a = loadTestVrm({}, ext.dump());
+  CHECK(a.vrmWarnings.size() >= 8);
+  REQUIRE(a.springBones.chains.size() >= 5);
+  const auto& s0 = a.springBones.chains[0].joints[0].settings;
+  CHECK(s0.stiffness == 1.0f);  // the specification's default
+  CHECK(s0.dragForce == 0.5f);
+  CHECK(s0.gravityDir == glm::vec3(0, -1, 0));
+  CHECK(a.springBones.colliders.size() == 1);
+  CHECK(a.expressions.expressions[static_cast<size_t>(a.expressions.find(ExpressionPreset::Blink))].morphBinds.empty());
+  CHECK(a.lookAt.horizontalOuter.inputMaxValue == 90.0f);
+  // And it still runs.
+  SecondaryMotion motion(a);
+  for (int i = 0; i < 30; ++i) {
+    SkeletonPose p = headTurned(a, 0.05f * float(i));
+    motion.update(p, 1.0 / 90.0, glm::vec3(1, 1.6f, 1));
+    for (const auto& tr : p.local) REQUIRE(std::isfinite(tr.rotation.w + tr.rotation.x + tr.rotation.y + tr.rotation.z));
+  }
+  // Garbage in every VRM object: no crash, no motion data.
+  for (const char* junk : {R"({"VRMC_springBone": [1,2], "VRMC_vrm": {"expressions": 5, "lookAt": "x"}})",
+                           R"({"VRM": {"secondaryAnimation": {"boneGroups": [{"bones": [1e300, -5, null]}], "colliderGroups": 3},
+                                       "blendShapeMaster": {"blendShapeGroups": [{"binds": [{"mesh": 0, "index": 0, "weight": 1e9}]}]},
+                                       "firstPerson": {"lookAtTypeName": 3}}})"}) {
+    const AvatarAsset j = loadTestVrm({}, junk);
+    CHECK(j.springBones.chains.empty());
+  }
+}
+
+TEST_CASE("expressions: binary, overrides and morph weights", "[vrm]") {
+  const AvatarAsset a = loadTestVrm();
+  const ExpressionSet& set = a.expressions;
+  std::vector<float> w(set.expressions.size(), 0.0f), eff(w.size()), morph(a.mesh.morphChannels.size());
+  const std::vector<float> defaults = defaultMorphWeights(a.mesh);
+  ExpressionEvaluateJob job{&set, defaults, w, eff, morph};
+  const size_t blink = static_cast<size_t>(set.find(ExpressionPreset::Blink)), happy = static_cast<size_t>(set.find(ExpressionPreset::Happy)),
+               wink = static_cast<size_t>(set.find("wink")), aa = static_cast<size_t>(set.find(ExpressionPreset::Aa));
+  w[blink] = 0.7f;
+  REQUIRE(job.Run());
+  CHECK(morph[0] == Approx(0.7f));
+  w[happy] = 1.0f;  // happy blocks blinking: only happy's own half blink remains
+  REQUIRE(job.Run());
+  CHECK(eff[blink] == 0.0f);
+  CHECK(morph[0] == Approx(0.5f));
+  CHECK(morph[5] == Approx(0.3f));
+  w[happy] = 0.0f;
+  w[blink] = 0.0f;
+  w[wink] = 0.4f;
+  REQUIRE(job.Run());
+  CHECK(morph[0] == 0.0f);  // binary: below half is off
+  w[wink] = 0.6f;
+  w[aa] = 0.9f;
+  REQUIRE(job.Run());
+  CHECK(morph[0] == Approx(0.8f));
+  CHECK(morph[5] == Approx(0.9f));
+  w[aa] = std::nanf("");
+  REQUIRE(job.Run());
+  CHECK(morph[5] == 0.0f);
+  std::vector<float> shortWeights(2);
+  job.weights = shortWeights;
+  CHECK_FALSE(job.Validate());
+}
+
+TEST_CASE("look-at: expression type maps yaw and pitch through the range maps", "[vrm]") {
+  const AvatarAsset a = loadTestVrm();
+  SecondaryMotion motion(a, {.springBones = false, .blink = false});
+  SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+  const glm::vec3 eyes(0, 1.66f, 0.07f);
+  const auto weightOf = [&](ExpressionPreset p) {
+    return motion.effectiveExpressionWeights()[static_cast<size_t>(a.expressions.find(p))];
+  };
+  motion.update(pose, 0.01, eyes + glm::vec3(1.0f, 0.0f, 1.0f));  // 45 degrees to the avatar's left
+  CHECK(motion.lastGaze().yawDegrees == Approx(45.0f).margin(0.1));
+  CHECK(weightOf(ExpressionPreset::LookLeft) == Approx(1.0f).margin(0.01));
+  CHECK(weightOf(ExpressionPreset::LookRight) == 0.0f);
+  CHECK(motion.morphWeights()[1] == Approx(1.0f).margin(0.01));
+  motion.update(pose, 0.01, eyes + glm::vec3(-0.2f, 0.0f, 1.0f));  // 11.3 degrees right: a quarter of 45
+  CHECK(weightOf(ExpressionPreset::LookRight) == Approx(0.2513f).margin(0.01));
+  motion.update(pose, 0.01, eyes + glm::vec3(0.0f, -1.0f, 1.0f));  // 45 down
+  CHECK(weightOf(ExpressionPreset::LookDown) == Approx(1.0f).margin(0.01));
+  // The head turned 90 degrees left: a target straight ahead of the body is 90 degrees to its right.
+  SkeletonPose turned = headTurned(a, glm::radians(90.0f));
+  motion.update(turned, 0.01, glm::vec3(0, 1.66f, 5.0f));
+  CHECK(motion.lastGaze().yawDegrees < -80.0f);
+  CHECK(weightOf(ExpressionPreset::LookRight) == Approx(1.0f));
+}
+
+TEST_CASE("look-at: bone type turns the eyes, each by its range map", "[vrm]") {
+  test::VrmTestAvatarOptions o;
+  o.boneLookAt = true;
+  const AvatarAsset a = loadTestVrm(o);
+  REQUIRE(a.lookAt.type == LookAtSetup::Type::Bone);
+  SecondaryMotion motion(a, {.springBones = false, .blink = false});
+  SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+  motion.update(pose, 0.01, glm::vec3(0, 1.66f, 0.07f) + glm::vec3(0.2f, 0.0f, 1.0f));  // 11.3 degrees left
+  std::vector<glm::mat4> g;
+  computeGlobals(a.skeleton, pose, g);
+  for (int eye : {6, 7}) {
+    const glm::vec3 fwd = glm::normalize(glm::vec3(g[static_cast<size_t>(eye)] * glm::vec4(0, 0, 1, 0)));
+    const float yaw = glm::degrees(std::atan2(fwd.x, fwd.z));
+    CHECK(yaw == Approx(12.0f * 11.31f / 45.0f).margin(0.1));  // outputScale 12 at 45 degrees in
+    CHECK(std::abs(fwd.y) < 1e-4f);
+  }
+}
+
+TEST_CASE("blinking: a natural, deterministic schedule", "[vrm]") {
+  BlinkSchedule a(7), b(7), c(8);
+  int blinks = 0;
+  double lastStart = -1.0, minGap = 1e9, maxGap = 0.0;
+  bool closed = false, differs = false;
+  for (int i = 0; i < 90 * 600; ++i) {  // 10 minutes at 90 Hz
+    const float wa = a.advance(1.0 / 90.0), wb = b.advance(1.0 / 90.0), wc = c.advance(1.0 / 90.0);
+    REQUIRE(wa == wb);
+    differs |= wa != wc;
+    REQUIRE(wa >= 0.0f);
+    REQUIRE(wa <= 1.0f);
+    if (wa > 0.99f && !closed) {
+      ++blinks;
+      const double start = a.nextBlinkStart();
+      if (lastStart >= 0.0) minGap = std::min(minGap, start - lastStart), maxGap = std::max(maxGap, start - lastStart);
+      lastStart = start;
+    }
+    closed = wa > 0.99f;
+  }
+  CHECK(differs);
+  CHECK(blinks >= 100);  // 10 to 25 a minute
+  CHECK(blinks <= 250);
+  CHECK(minGap >= 0.25 + 0.2);
+  CHECK(maxGap <= 10.0 + 0.23);
+}
+
+TEST_CASE("morph targets: the CPU skinner applies weights before skinning", "[vrm]") {
+  const AvatarAsset a = loadTestVrm();
+  std::vector<glm::mat4> g, palette;
+  computeGlobals(a.skeleton, SkeletonPose::rest(a.skeleton), g);
+  computeSkinningPalette(a, g, palette);
+  std::vector<glm::vec3> base, n0, moved, n1;
+  skinOnCpu(a.mesh, palette, base, n0);
+  std::vector<float> w(a.mesh.morphChannels.size(), 0.0f);
+  w[1] = 1.0f;  // lookLeft: pupils 8 mm towards +X
+  skinOnCpu(a.mesh, palette, moved, n1, w);
+  // The writer shares one vertex array between its primitives and the loader copies it per
+  // primitive: count the vertices the draw lists use.
+  std::vector<bool> drawn(base.size(), false);
+  for (uint32_t i : a.mesh.indices) drawn[i] = true;
+  size_t movedCount = 0;
+  for (size_t i = 0; i < base.size(); ++i) {
+    if (!drawn[i]) continue;
+    const glm::vec3 d = moved[i] - base[i];
+    if (glm::length(d) > 1e-6f) {
+      ++movedCount;
+      CHECK(d.x == Approx(0.008f).margin(1e-5));
+    }
+  }
+  CHECK(movedCount == 34);  // two pupils of 17 vertices
+}
+
+TEST_CASE("first person: spring hair stays out of the HMD's draw list", "[vrm]") {
+  for (const char* type : {"auto", "thirdPersonOnly"}) {
+    test::VrmTestAvatar t = test::buildVrmTestAvatar();
+    auto ext = nlohmann::json::parse(t.extensionsJson);
+    ext["VRMC_vrm"]["firstPerson"]["meshAnnotations"][0]["type"] = type;
+    const AvatarAsset a = loadTestVrm({}, ext.dump());
+    INFO(type);
+    CHECK(a.mesh.firstPersonIndices.size() < a.mesh.indices.size());
+    for (uint32_t i : a.mesh.firstPersonIndices) {
+      const auto& v = a.mesh.vertices[i];
+      for (const auto& s : t.strands)
+        for (int j : s) CHECK((v.joints0[0] != static_cast<uint32_t>(j) || v.weights0[0] == 0.0f));
+    }
+  }
+}
