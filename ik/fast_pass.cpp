@@ -118,6 +118,208 @@ void markedRanges(const std::vector<char>& mark, int r, std::vector<Workspace::R
 
 }  // namespace
 
+namespace {
+
+// One level of the fast pass: its rows, its support in reduced coordinates and J̃ there.
+struct FastLevel {
+  size_t k = 0;
+  int first_row = 0, m = 0;
+  const std::vector<int>* support = nullptr;
+  const std::vector<Workspace::Range>* ranges = nullptr;
+  int p = 0;            // support size
+  bool gather = false;  // J̃ gathered on the support (else the block of J N over all r columns)
+};
+
+// The level's support (its recruited dofs in mask mode; in dense mode the columns of N that reach
+// any of them) and J̃ on it: gathered (mask mode: J diag(mask) read straight from J), or the block
+// of J N when the level reaches every reduced coordinate.
+FastLevel gatherLevel(const Model::Level& level, size_t k, Workspace& w, int r) {
+  const bool maskMode = w.mask_mode;
+  FastLevel f;
+  f.k = k;
+  f.first_row = level.first_row;
+  f.m = level.rows;
+  if (!maskMode) denseSupport(w, w.level_ranges[k], r);
+  f.support = maskMode ? &w.level_support[k] : &w.dense_support;
+  f.ranges = maskMode ? &w.level_ranges[k] : &w.dense_support_ranges;
+  f.p = static_cast<int>(f.support->size());
+  f.gather = maskMode || f.p < r;
+  if (f.gather) {
+    auto g = w.gathered_j.topLeftCorner(f.m, f.p);
+    for (int i = 0; i < f.p; ++i) {
+      const int c = (*f.support)[i];
+      if (!maskMode)
+        g.col(i) = w.reduced_jacobian.col(c).segment(f.first_row, f.m);
+      else if (w.rank == 0 || w.mask(c) != 0.0)  // no pinned dof: J̃ = J
+        g.col(i) = w.jacobian.col(c).segment(f.first_row, f.m);
+      else
+        g.col(i).setZero();
+    }
+  }
+  return f;
+}
+
+Eigen::Ref<const Eigen::MatrixXd> levelJacobian(const FastLevel& f, const Workspace& w, int r) {
+  return f.gather ? Eigen::Ref<const Eigen::MatrixXd>(w.gathered_j.topLeftCorner(f.m, f.p))
+                  : Eigen::Ref<const Eigen::MatrixXd>(w.reduced_jacobian.block(f.first_row, 0, f.m, r));
+}
+
+// J̃W block by block, over the rows the level shares with each block (marks the blocks touched).
+template <typename JRows, typename JW>
+void levelTimesW(const FastLevel& f, Workspace& w, const JRows& jRows, JW& jw, int blocks) {
+  for (int b = 0; b < blocks; ++b) {
+    auto jwb = jw.middleCols(w.block_begin[b], w.block_size[b]);
+    jwb.setZero();
+    bool touched = false;
+    forEachOverlap(*f.ranges, w.block_ranges[b], [&](int lo, int hi) {
+      addProduct(jwb, jRows.middleCols(lo, hi - lo), w.row_space.block(lo, w.block_begin[b], hi - lo, w.block_size[b]), 1.0);
+      touched = true;
+    });
+    w.block_touched[b] = touched ? 1 : 0;
+  }
+}
+
+// The damped step Δz = Ĵᵀ (G + λ² I)⁻¹ res (trust region applied), added to z.
+template <typename JW, typename Z>
+void levelStep(const FastLevel& f, Workspace& w, const SolveOptions& o, const Eigen::Ref<const Eigen::MatrixXd>& js,
+               const JW& jw, const LevelDamping& d, int r, int blocks, Z& z) {
+  const size_t k = f.k;
+  const Eigen::MatrixXd& gram = w.level_gram[k];
+  Eigen::VectorXd& y = w.level_y[k];
+  y = w.level_res[k];
+  if (d.lambda2 > 0) {
+    Eigen::MatrixXd& damped = w.level_factor2[k];
+    damped = gram;
+    damped.diagonal().array() += d.lambda2;
+    // G + λ² I with λ² > 0 is positive definite unless round-off made G indefinite by more
+    // than λ²; then this level takes no step rather than a wrong one.
+    if (detail::choleskyInPlace(damped, w.level_factor2_inv[k]))
+      detail::choleskySolve(damped, w.level_factor2_inv[k], y.data());
+    else
+      y.setZero();
+  } else if (d.gram_pd && d.sigma_min > o.rank_tolerance) {
+    detail::choleskySolve(w.level_factor[k], w.level_factor_inv[k], y.data());
+  } else {  // λ = 0 on a rank-deficient level: only with damping_max = 0
+    truncatedSolve(gram, w, k, o, y);
+  }
+  auto dz = w.tmp_n.head(r);
+  if (f.gather) {
+    auto jty = w.small_a.head(f.p);
+    jty.noalias() = js.transpose() * y;
+    dz.setZero();
+    for (int i = 0; i < f.p; ++i) dz((*f.support)[i]) = jty(i);
+  } else {
+    dz.noalias() = js.transpose() * y;
+  }
+  for (int b = 0; b < blocks; ++b) {
+    if (!w.block_touched[b]) continue;
+    const int c0 = w.block_begin[b], nb = w.block_size[b];
+    auto wy = w.small_b.head(nb);
+    wy.noalias() = jw.middleCols(c0, nb).transpose() * y;
+    for (const Workspace::Range& g : w.block_ranges[b])
+      dz.segment(g.begin, g.end - g.begin).noalias() -= w.row_space.block(g.begin, c0, g.end - g.begin, nb) * wy;
+  }
+  if (const double cap = levelStepScale(dz.norm(), o); cap < 1.0) dz *= cap;
+  z += dz;
+}
+
+// Ĵᵀ = J̃ᵀ - W (J̃W)ᵀ into `jt` (r x m), non-zero on the rows marked in w.row_mark; the marked rows
+// as ranges into w.block_ranges[blocks] (the new block's rows).
+template <typename JT, typename JW>
+void projectedTranspose(const FastLevel& f, Workspace& w, const Eigen::Ref<const Eigen::MatrixXd>& js, const JW& jw,
+                        JT& jt, int r, int blocks) {
+  std::fill(w.row_mark.begin(), w.row_mark.begin() + r, 0);
+  if (f.gather) {
+    for (const Workspace::Range& g : *f.ranges) {
+      jt.middleRows(g.begin, g.end - g.begin).setZero();
+      std::fill(w.row_mark.begin() + g.begin, w.row_mark.begin() + g.end, 1);
+    }
+    for (int i = 0; i < f.p; ++i) jt.row((*f.support)[i]) = js.col(i).transpose();
+  } else {
+    jt = js.transpose();
+    std::fill(w.row_mark.begin(), w.row_mark.begin() + r, 1);
+  }
+  for (int b = 0; b < blocks; ++b) {
+    if (!w.block_touched[b]) continue;
+    const int c0 = w.block_begin[b], nb = w.block_size[b];
+    for (const Workspace::Range& g : w.block_ranges[b]) {
+      const int len = g.end - g.begin;
+      for (int i = g.begin; i < g.end; ++i)
+        if (!w.row_mark[i]) {
+          jt.row(i).setZero();
+          w.row_mark[i] = 1;
+        }
+      addProduct(jt.middleRows(g.begin, len), w.row_space.block(g.begin, c0, len, nb), jw.middleCols(c0, nb).transpose(), -1.0);
+    }
+  }
+  markedRanges(w.row_mark, r, w.block_ranges[blocks]);
+}
+
+// Projector update (undamped, rank-thresholded): appends an orthonormal basis of Ĵ's rows to W
+// as block `blocks` (columns from s). Returns how many columns it added.
+template <typename JT>
+int appendLevelRows(const FastLevel& f, Workspace& w, const SolveOptions& o, const LevelDamping& d, const JT& jt,
+                    int r, int s, int blocks) {
+  const size_t k = f.k;
+  const int m = f.m;
+  std::vector<Workspace::Range>& newRanges = w.block_ranges[blocks];
+  int added = 0;
+  double smallest = 0.0;
+  if (d.gram_pd && d.sigma_min > o.rank_tolerance && m <= r - s) {
+    // Full rank: U = Ĵᵀ L⁻ᵀ (no eigen-decomposition), row range by row range.
+    added = m;
+    smallest = d.sigma_min;
+    auto u = w.row_space.block(0, s, r, m);
+    for (int i = 0, next = 0; i < static_cast<int>(newRanges.size()); ++i) {
+      const Workspace::Range& g = newRanges[i];
+      u.middleRows(next, g.begin - next).setZero();
+      auto rows = u.middleRows(g.begin, g.end - g.begin);
+      rows = jt.middleRows(g.begin, g.end - g.begin);
+      detail::solveRightLowerTransposed(w.level_factor[k], w.level_factor_inv[k], rows);
+      next = g.end;
+      if (i + 1 == static_cast<int>(newRanges.size())) u.bottomRows(r - g.end).setZero();
+    }
+  } else {
+    // Rank-deficient level: a pivoted Cholesky of G picks rows I of Ĵ that span its row space
+    // (pivots > tolerance²); then U = Ĵ_Iᵀ L_II⁻ᵀ as for a full-rank level. An eigen-
+    // decomposition would do too, at ten times the cost for a 24-row level (the seated legs).
+    Eigen::MatrixXd& work = w.level_factor2[k];
+    Eigen::VectorXi& perm = w.level_perm[k];
+    added = detail::pivotedCholesky(w.level_gram[k], o.rank_tolerance * o.rank_tolerance, r - s, work, perm,
+                                    w.level_factor2_inv[k]);
+    if (added == 0) return 0;
+    auto lower = work.topLeftCorner(added, added);
+    auto linvT = w.level_inverse[k].topLeftCorner(added, added);  // L_II⁻ᵀ
+    linvT.setIdentity();
+    detail::solveRightLowerTransposed(lower, w.level_factor2_inv[k], linvT);
+    auto coef = w.level_solve.topLeftCorner(m, added);
+    coef.setZero();
+    for (int a = 0; a < added; ++a) coef.row(perm(a)) = linvT.row(a);
+    auto u = w.row_space.block(0, s, r, added);
+    u.setZero();
+    for (const Workspace::Range& g : newRanges)
+      u.middleRows(g.begin, g.end - g.begin).noalias() = jt.middleRows(g.begin, g.end - g.begin) * coef;
+    smallest = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < added; ++a) smallest = std::min(smallest, work(a, a));
+  }
+  // The new rows are analytically orthogonal to W; round-off grows like eps |J̃| / σ, so
+  // re-orthogonalise (densely; rare) when a kept singular value is small.
+  if (smallest < 1e-3 && s > 0) {
+    for (int c = 0; c < added; ++c) {
+      auto col = w.row_space.col(s + c).head(r);
+      auto proj = w.small_b.head(s + c);
+      proj.noalias() = w.row_space.topLeftCorner(r, s + c).transpose() * col;
+      col.noalias() -= w.row_space.topLeftCorner(r, s + c) * proj;
+      col.normalize();
+    }
+    newRanges.clear();
+    newRanges.push_back({0, r});
+  }
+  return added;
+}
+
+}  // namespace
+
 // The fast pass works in reduced coordinates z (Δq = Δq0 + N Δz, or a diagonal mask when only
 // single-dof rows are active) and never forms a projected Jacobian Ĵ = J̃ (I - W Wᵀ): with W the
 // orthonormal rows the higher levels took (r x s),
@@ -156,185 +358,34 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
   for (size_t k = 0; k < model.levels.size(); ++k) {
     const Model::Level& level = model.levels[k];
     if (!levelActive(level, w) || s >= r) continue;
-    const int m = level.rows;
-    // The level's support in reduced coordinates: its recruited dofs in mask mode; in dense mode
-    // the columns of N that reach any of them (N's column groups over the level's dof ranges).
-    if (!maskMode) denseSupport(w, w.level_ranges[k], r);
-    const std::vector<int>& support = maskMode ? w.level_support[k] : w.dense_support;
-    const std::vector<Workspace::Range>& ranges = maskMode ? w.level_ranges[k] : w.dense_support_ranges;
-    const int p = static_cast<int>(support.size());
-    const bool gather = maskMode || p < r;
-    const auto jRows = jFull.middleRows(level.first_row, m);
-
-    // J̃ on the level's support: gathered (mask mode: J diag(mask) read straight from J), or the
-    // block of J N when the level reaches every reduced coordinate.
-    if (gather) {
-      auto g = w.gathered_j.topLeftCorner(m, p);
-      for (int i = 0; i < p; ++i) {
-        const int c = support[i];
-        if (!maskMode)
-          g.col(i) = w.reduced_jacobian.col(c).segment(level.first_row, m);
-        else if (w.rank == 0 || w.mask(c) != 0.0)  // no pinned dof: J̃ = J
-          g.col(i) = w.jacobian.col(c).segment(level.first_row, m);
-        else
-          g.col(i).setZero();
-      }
-    }
-    const Eigen::Ref<const Eigen::MatrixXd> js =
-        gather ? Eigen::Ref<const Eigen::MatrixXd>(w.gathered_j.topLeftCorner(m, p))
-               : Eigen::Ref<const Eigen::MatrixXd>(w.reduced_jacobian.block(level.first_row, 0, m, r));
-    // J̃W block by block, over the rows the level shares with each block.
+    const FastLevel f = gatherLevel(level, k, w, r);
+    const Eigen::Ref<const Eigen::MatrixXd> js = levelJacobian(f, w, r);
+    const auto jRows = jFull.middleRows(f.first_row, f.m);
     auto jw = w.level_jw[k].leftCols(s);
-    for (int b = 0; b < blocks; ++b) {
-      auto jwb = jw.middleCols(w.block_begin[b], w.block_size[b]);
-      jwb.setZero();
-      bool touched = false;
-      forEachOverlap(ranges, w.block_ranges[b], [&](int lo, int hi) {
-        addProduct(jwb, jRows.middleCols(lo, hi - lo), w.row_space.block(lo, w.block_begin[b], hi - lo, w.block_size[b]), 1.0);
-        touched = true;
-      });
-      w.block_touched[b] = touched ? 1 : 0;
-    }
+    levelTimesW(f, w, jRows, jw, blocks);
 
-    Eigen::VectorXd& res = w.level_res[k];
-    res = w.error.segment(level.first_row, m);
-    res -= jdq0.segment(level.first_row, m);  // compensated error
-    if (gather) {
-      auto zs = w.small_b.head(p);
-      for (int i = 0; i < p; ++i) zs(i) = z(support[i]);
+    Eigen::VectorXd& res = w.level_res[k];  // the compensated error e_k - J_k Δq
+    res = w.error.segment(f.first_row, f.m);
+    res -= jdq0.segment(f.first_row, f.m);
+    if (f.gather) {
+      auto zs = w.small_b.head(f.p);
+      for (int i = 0; i < f.p; ++i) zs(i) = z((*f.support)[i]);
       res.noalias() -= js * zs;
     } else {
       res.noalias() -= js * z;
     }
-
     Eigen::MatrixXd& gram = w.level_gram[k];  // lower triangle only: the kernels read just that
     gram.setZero();
     gram.selfadjointView<Eigen::Lower>().rankUpdate(js);
     if (s > 0) gram.selfadjointView<Eigen::Lower>().rankUpdate(jw, -1.0);
     const LevelDamping d = levelDamping(gram, w, k, o);
-
-    // Damped step: Δz = Ĵᵀ (G + λ² I)⁻¹ res.
-    Eigen::VectorXd& y = w.level_y[k];
-    y = res;
-    if (d.lambda2 > 0) {
-      Eigen::MatrixXd& damped = w.level_factor2[k];
-      damped = gram;
-      damped.diagonal().array() += d.lambda2;
-      // G + λ² I with λ² > 0 is positive definite unless round-off made G indefinite by more
-      // than λ²; then this level takes no step rather than a wrong one.
-      if (detail::choleskyInPlace(damped, w.level_factor2_inv[k]))
-        detail::choleskySolve(damped, w.level_factor2_inv[k], y.data());
-      else
-        y.setZero();
-    } else if (d.gram_pd && d.sigma_min > o.rank_tolerance) {
-      detail::choleskySolve(w.level_factor[k], w.level_factor_inv[k], y.data());
-    } else {  // λ = 0 on a rank-deficient level: only with damping_max = 0
-      truncatedSolve(gram, w, k, o, y);
-    }
-    auto dz = w.tmp_n.head(r);
-    if (gather) {
-      auto jty = w.small_a.head(p);
-      jty.noalias() = js.transpose() * y;
-      dz.setZero();
-      for (int i = 0; i < p; ++i) dz(support[i]) = jty(i);
-    } else {
-      dz.noalias() = js.transpose() * y;
-    }
-    for (int b = 0; b < blocks; ++b) {
-      if (!w.block_touched[b]) continue;
-      const int c0 = w.block_begin[b], nb = w.block_size[b];
-      auto wy = w.small_b.head(nb);
-      wy.noalias() = jw.middleCols(c0, nb).transpose() * y;
-      for (const Workspace::Range& g : w.block_ranges[b])
-        dz.segment(g.begin, g.end - g.begin).noalias() -= w.row_space.block(g.begin, c0, g.end - g.begin, nb) * wy;
-    }
-    if (const double cap = levelStepScale(dz.norm(), o); cap < 1.0) dz *= cap;
-    z += dz;
+    levelStep(f, w, o, js, jw, d, r, blocks, z);
 
     if (static_cast<int>(k) == lastActive) break;  // nothing below needs this level's rows
-
-    // Projector update (undamped, rank-thresholded): append an orthonormal basis of Ĵ's rows to
-    // W as a new block. Ĵᵀ = J̃ᵀ - W (J̃W)ᵀ first (in `jt`, r x m, non-zero on the marked rows).
-    auto jt = w.level_cols.topLeftCorner(r, m);
-    std::fill(w.row_mark.begin(), w.row_mark.begin() + r, 0);
-    if (gather) {
-      for (const Workspace::Range& g : ranges) {
-        jt.middleRows(g.begin, g.end - g.begin).setZero();
-        std::fill(w.row_mark.begin() + g.begin, w.row_mark.begin() + g.end, 1);
-      }
-      for (int i = 0; i < p; ++i) jt.row(support[i]) = js.col(i).transpose();
-    } else {
-      jt = js.transpose();
-      std::fill(w.row_mark.begin(), w.row_mark.begin() + r, 1);
-    }
-    for (int b = 0; b < blocks; ++b) {
-      if (!w.block_touched[b]) continue;
-      const int c0 = w.block_begin[b], nb = w.block_size[b];
-      for (const Workspace::Range& g : w.block_ranges[b]) {
-        const int len = g.end - g.begin;
-        for (int i = g.begin; i < g.end; ++i)
-          if (!w.row_mark[i]) {
-            jt.row(i).setZero();
-            w.row_mark[i] = 1;
-          }
-        addProduct(jt.middleRows(g.begin, len), w.row_space.block(g.begin, c0, len, nb), jw.middleCols(c0, nb).transpose(), -1.0);
-      }
-    }
-    std::vector<Workspace::Range>& newRanges = w.block_ranges[blocks];
-    markedRanges(w.row_mark, r, newRanges);
-
-    int added = 0;
-    double smallest = 0.0;
-    if (d.gram_pd && d.sigma_min > o.rank_tolerance && m <= r - s) {
-      // Full rank: U = Ĵᵀ L⁻ᵀ (no eigen-decomposition), row range by row range.
-      added = m;
-      smallest = d.sigma_min;
-      auto u = w.row_space.block(0, s, r, m);
-      for (int i = 0, next = 0; i < static_cast<int>(newRanges.size()); ++i) {
-        const Workspace::Range& g = newRanges[i];
-        u.middleRows(next, g.begin - next).setZero();
-        auto rows = u.middleRows(g.begin, g.end - g.begin);
-        rows = jt.middleRows(g.begin, g.end - g.begin);
-        detail::solveRightLowerTransposed(w.level_factor[k], w.level_factor_inv[k], rows);
-        next = g.end;
-        if (i + 1 == static_cast<int>(newRanges.size())) u.bottomRows(r - g.end).setZero();
-      }
-    } else {
-      // Rank-deficient level: a pivoted Cholesky of G picks rows I of Ĵ that span its row space
-      // (pivots > tolerance²); then U = Ĵ_Iᵀ L_II⁻ᵀ as for a full-rank level. An eigen-
-      // decomposition would do too, at ten times the cost for a 24-row level (the seated legs).
-      Eigen::MatrixXd& work = w.level_factor2[k];
-      Eigen::VectorXi& perm = w.level_perm[k];
-      added = detail::pivotedCholesky(gram, o.rank_tolerance * o.rank_tolerance, r - s, work, perm,
-                                      w.level_factor2_inv[k]);
-      if (added == 0) continue;
-      auto lower = work.topLeftCorner(added, added);
-      auto linvT = w.level_inverse[k].topLeftCorner(added, added);  // L_II⁻ᵀ
-      linvT.setIdentity();
-      detail::solveRightLowerTransposed(lower, w.level_factor2_inv[k], linvT);
-      auto coef = w.level_solve.topLeftCorner(m, added);
-      coef.setZero();
-      for (int a = 0; a < added; ++a) coef.row(perm(a)) = linvT.row(a);
-      auto u = w.row_space.block(0, s, r, added);
-      u.setZero();
-      for (const Workspace::Range& g : newRanges)
-        u.middleRows(g.begin, g.end - g.begin).noalias() = jt.middleRows(g.begin, g.end - g.begin) * coef;
-      smallest = std::numeric_limits<double>::infinity();
-      for (int a = 0; a < added; ++a) smallest = std::min(smallest, work(a, a));
-    }
-    // The new rows are analytically orthogonal to W; round-off grows like eps |J̃| / σ, so
-    // re-orthogonalise (densely; rare) when a kept singular value is small.
-    if (smallest < 1e-3 && s > 0) {
-      for (int c = 0; c < added; ++c) {
-        auto col = w.row_space.col(s + c).head(r);
-        auto proj = w.small_b.head(s + c);
-        proj.noalias() = w.row_space.topLeftCorner(r, s + c).transpose() * col;
-        col.noalias() -= w.row_space.topLeftCorner(r, s + c) * proj;
-        col.normalize();
-      }
-      newRanges.clear();
-      newRanges.push_back({0, r});
-    }
+    auto jt = w.level_cols.topLeftCorner(r, f.m);
+    projectedTranspose(f, w, js, jw, jt, r, blocks);
+    const int added = appendLevelRows(f, w, o, d, jt, r, s, blocks);
+    if (added == 0) continue;
     w.block_begin[blocks] = s;
     w.block_size[blocks] = added;
     ++blocks;
@@ -349,6 +400,5 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
           w.nullspace.block(g.row_begin, g.col_begin, g.row_end - g.row_begin, g.col_end - g.col_begin) *
           z.segment(g.col_begin, g.col_end - g.col_begin);
 }
-
 
 }  // namespace embody::ik::detail
