@@ -111,15 +111,9 @@ static void BM_SolveAndRetargetDefault(benchmark::State& state) {
 }
 BENCHMARK(BM_SolveAndRetargetDefault)->Unit(benchmark::kMicrosecond);
 
-// One PIK iteration (FK, Jacobians, every clamping pass, q += Δq) of the default avatar's body
-// model, the model the runtime solves every frame: coupled spine (24 vertebrae, 33 equality
-// rows) or uncoupled. The same state each time: targets from a bent pose, solved from rest.
-static void BM_BodyIteration(benchmark::State& state, bool coupled, ik::Path path) {
-  const AvatarAsset a = buildDefaultAvatar();
-  BodyModelOptions options;
-  options.coupledSpine = coupled;
-  auto body = buildBodyModel(a, options);
-  const ik::Model& model = body->model;
+// The body-iteration benchmarks' problem: solver state at rest, every task's target taken from a
+// bent pose (each dof past the root moved by up to 0.15 rad).
+static ik::Data bentPoseProblem(const ik::Model& model) {
   ik::Data probe(model);
   Eigen::VectorXd bent = probe.q();
   for (Eigen::Index i = 6; i < bent.size(); ++i) bent(i) += 0.15 * std::sin(1.7 * static_cast<double>(i));
@@ -133,6 +127,19 @@ static void BM_BodyIteration(benchmark::State& state, bool coupled, ik::Path pat
     pose.translation() = probe.taskPosition(id);
     (void)data.setTarget(id, pose);
   }
+  return data;
+}
+
+// One PIK iteration (FK, Jacobians, every clamping pass, q += Δq) of the default avatar's body
+// model, the model the runtime solves every frame: coupled spine (24 vertebrae, 33 equality
+// rows) or uncoupled. The same state each time: targets from a bent pose, solved from rest.
+static void BM_BodyIteration(benchmark::State& state, bool coupled, ik::Path path) {
+  const AvatarAsset a = buildDefaultAvatar();
+  BodyModelOptions options;
+  options.coupledSpine = coupled;
+  auto body = buildBodyModel(a, options);
+  const ik::Model& model = body->model;
+  ik::Data data = bentPoseProblem(model);
   const Eigen::VectorXd start = data.q();
   ik::SolveOptions o;
   o.path = path;
@@ -163,19 +170,7 @@ static void BM_BodyIterationInSolve(benchmark::State& state, bool coupled, bool 
   options.coupledSpine = coupled;
   auto body = buildBodyModel(a, options);
   const ik::Model& model = body->model;
-  ik::Data probe(model);
-  Eigen::VectorXd bent = probe.q();
-  for (Eigen::Index i = 6; i < bent.size(); ++i) bent(i) += 0.15 * std::sin(1.7 * static_cast<double>(i));
-  (void)probe.setConfiguration(bent);
-  ik::kinematics(model, probe, false);
-  ik::Data data(model);
-  for (size_t t = 0; t < model.tasks.size(); ++t) {
-    const auto id = static_cast<ik::TaskId>(t);
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.linear() = probe.taskOrientation(id).toRotationMatrix();
-    pose.translation() = probe.taskPosition(id);
-    (void)data.setTarget(id, pose);
-  }
+  ik::Data data = bentPoseProblem(model);
   ik::SolveOptions o;
   o.warm_active_set = warm;
   for (int i = 0; i < 8; ++i) ik::iterate(model, data, o);

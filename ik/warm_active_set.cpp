@@ -90,11 +90,14 @@ int startActiveSet(const Model& model, Workspace& w, const SolveOptions& o) {
 // Along it level k's error changes at the rate -(J_k d_p)ᵀ r_k = -μ_kp, with
 //   μ_k = F⁻¹ Bᵀ (J_kᵀ r_k)      (every row's multiplier at once: two products, one solve).
 // μ_kp > 0: level k pushes the row outward and the bound holds it; μ_kp < 0: level k pulls it
-// inside. Priorities decide as they do for the step: the most important level with a multiplier
-// above round-off (|μ| > kDecisive) releases the row (μ < 0) or keeps it (μ > 0); a row no level
-// cares about stays pinned (every task is met as well with it as without). Projecting is what
-// makes this right: with the raw row c_p instead of d_p, a limit and a band pinned on the same
-// dof would each be credited with the force that holds the other.
+// inside. A row is released as soon as one level (above round-off: |μ| > kDecisive) pulls it
+// inside, and stays when the levels that care all push it outward, or when none cares (every task
+// is met as well with it as without). Releasing on any pull errs on the safe side: a wrong
+// release costs a pass (the loop pins the row again if the new step violates it), a wrong keep
+// would hold a row the tasks want to leave. Projecting is what makes the multiplier right: with
+// the raw row c_p instead of d_p, a limit and a band pinned on the same dof would each be
+// credited with the force that holds the other. Known weakness: d_p keeps the other active rows
+// fixed, not the higher levels (docs/ik.md).
 bool releaseCarriedRows(const Model& model, Workspace& w, const SolveOptions& o) {
   if (w.carried_count == 0) return false;
   constexpr double kDecisive = 1e-12;
