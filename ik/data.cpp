@@ -14,6 +14,15 @@ using detail::fail;
 
 Workspace::Workspace(const Model& model)
     : n(model.dofs), task_count(static_cast<int>(model.tasks.size())), rows(model.task_rows) {
+  sizeTaskState(model);
+  factorEqualities(model);
+  sizeActiveSet();
+  sizeLevelScratch(model);
+  sizeInequalities(model);
+}
+
+// Per-task state and the forward-kinematics buffers.
+void Workspace::sizeTaskState(const Model& model) {
   q = model.neutral;
   target_position.assign(task_count, Eigen::Vector3d::Zero());
   target_orientation.assign(task_count, Eigen::Quaterniond::Identity());
@@ -44,7 +53,10 @@ Workspace::Workspace(const Model& model)
   jacobian.setZero(rows, n);
   error.setZero(rows);
   residual.resize(task_count);
+}
 
+// The equality rows factored once: Gram-Schmidt basis, null space, sparse terms.
+void Workspace::factorEqualities(const Model& model) {
   // Equality rows: Gram-Schmidt (twice, for orthogonality to round-off) with the same dependency
   // test as the model's corrected Algorithm 1.
   const Eigen::MatrixXd& a = model.equality_matrix;
@@ -100,6 +112,10 @@ Workspace::Workspace(const Model& model)
       }
     eq_begin.push_back(static_cast<int>(eq_dof.size()));
   }
+}
+
+// The active set's buffers, starting as the equality rows; the step vectors.
+void Workspace::sizeActiveSet() {
   basis.setZero(n, n);
   factor.setZero(n, n);
   basis.leftCols(eq_rank) = eq_basis.leftCols(eq_rank);
@@ -114,7 +130,10 @@ Workspace::Workspace(const Model& model)
   tmp_n2.setZero(n);
   y.setZero(n);
   previous_task_step.setZero(n);
+}
 
+// The priority passes' per-level scratch and the levels' supports.
+void Workspace::sizeLevelScratch(const Model& model) {
   reduced_jacobian.setZero(rows, n);
   row_space.setZero(n, n);
   projector.setZero(n, n);
@@ -176,7 +195,10 @@ Workspace::Workspace(const Model& model)
   small_b.setZero(n);
   small_z.setZero(n);
   small_rows.setZero(rows);
+}
 
+// The inequality rows in sparse form, the warm active set's buffers, the report.
+void Workspace::sizeInequalities(const Model& model) {
   ineq_begin.push_back(0);
   for (const InequalityRow& row : model.inequalities) {
     for (const LinearTerm& t : row.terms) {

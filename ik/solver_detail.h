@@ -16,6 +16,13 @@ namespace embody::ik {
 struct Workspace {
   explicit Workspace(const Model& model);
 
+  // The constructor's parts (data.cpp), in order.
+  void sizeTaskState(const Model& model);
+  void factorEqualities(const Model& model);
+  void sizeActiveSet();
+  void sizeLevelScratch(const Model& model);
+  void sizeInequalities(const Model& model);
+
   int n = 0;          // dofs
   int task_count = 0;
   int rows = 0;       // stacked task rows
