@@ -2,6 +2,8 @@
 // one solve + retarget frame on the default avatar.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+
 #include <cmath>
 
 #include "avatar/body/body_model.h"
@@ -113,15 +115,9 @@ static void BM_SolveAndRetargetDefault(benchmark::State& state) {
 }
 BENCHMARK(BM_SolveAndRetargetDefault)->Unit(benchmark::kMicrosecond);
 
-// One PIK iteration (FK, Jacobians, every clamping pass, q += Δq) of the default avatar's body
-// model, the model the runtime solves every frame: coupled spine (24 vertebrae, 33 equality
-// rows) or uncoupled. The same state each time: targets from a bent pose, solved from rest.
-static void BM_BodyIteration(benchmark::State& state, bool coupled, ik::Path path) {
-  const AvatarAsset a = buildDefaultAvatar();
-  BodyModelOptions options;
-  options.coupledSpine = coupled;
-  auto body = buildBodyModel(a, options);
-  const ik::Model& model = body->model;
+// The body-iteration benchmarks' problem: solver state at rest, every task's target taken from a
+// bent pose (each dof past the root moved by up to 0.15 rad).
+static ik::Data bentPoseProblem(const ik::Model& model) {
   ik::Data probe(model);
   Eigen::VectorXd bent = probe.q();
   for (Eigen::Index i = 6; i < bent.size(); ++i) bent(i) += 0.15 * std::sin(1.7 * static_cast<double>(i));
@@ -135,6 +131,19 @@ static void BM_BodyIteration(benchmark::State& state, bool coupled, ik::Path pat
     pose.translation() = probe.taskPosition(id);
     (void)data.setTarget(id, pose);
   }
+  return data;
+}
+
+// One PIK iteration (FK, Jacobians, every clamping pass, q += Δq) of the default avatar's body
+// model, the model the runtime solves every frame: coupled spine (24 vertebrae, 33 equality
+// rows) or uncoupled. The same state each time: targets from a bent pose, solved from rest.
+static void BM_BodyIteration(benchmark::State& state, bool coupled, ik::Path path) {
+  const AvatarAsset a = buildDefaultAvatar();
+  BodyModelOptions options;
+  options.coupledSpine = coupled;
+  auto body = buildBodyModel(a, options);
+  const ik::Model& model = body->model;
+  ik::Data data = bentPoseProblem(model);
   const Eigen::VectorXd start = data.q();
   ik::SolveOptions o;
   o.path = path;
@@ -177,5 +186,41 @@ static void BM_SecondaryMotionBust(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_SecondaryMotionBust)->Unit(benchmark::kMicrosecond);
+
+// The same problem, iteration 9 of the solve (the limits and bands the body touches are in
+// contact by then), cold (every iteration's clamping loop starts from the equality rows) or warm
+// (SolveOptions::warm_active_set: it starts from the rows pinned in the iteration before,
+// docs/ik.md). The Data is restored outside the timed region before each timed iteration, in all
+// four variants alike (the pause itself costs a few µs of each figure).
+static void BM_BodyIterationInSolve(benchmark::State& state, bool coupled, bool warm) {
+  const AvatarAsset a = buildDefaultAvatar();
+  BodyModelOptions options;
+  options.coupledSpine = coupled;
+  auto body = buildBodyModel(a, options);
+  const ik::Model& model = body->model;
+  ik::Data data = bentPoseProblem(model);
+  ik::SolveOptions o;
+  o.warm_active_set = warm;
+  for (int i = 0; i < 8; ++i) ik::iterate(model, data, o);
+  const ik::Data snapshot = data;
+  double passes = 0, pinned = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    data = snapshot;
+    state.ResumeTiming();
+    ik::iterate(model, data, o);
+    passes += data.report().clamp_passes;
+    pinned += static_cast<double>(data.report().active_clamps.size());
+    benchmark::DoNotOptimize(data.q().data());
+  }
+  const double n = static_cast<double>(std::max<benchmark::IterationCount>(state.iterations(), 1));
+  state.counters["dofs"] = model.dofs;
+  state.counters["clamp_passes"] = passes / n;
+  state.counters["pinned"] = pinned / n;
+}
+BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_coupled_cold, true, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_uncoupled_cold, false, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_coupled_warm, true, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_uncoupled_warm, false, true)->Unit(benchmark::kMicrosecond);
 
 BENCHMARK_MAIN();

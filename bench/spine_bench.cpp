@@ -3,6 +3,8 @@
 // is that coupling costs no more per iteration than the uncoupled spine, despite the rows.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+
 #include "ik/solver.h"
 #include "ik/spine/spine_model.h"
 
@@ -16,7 +18,13 @@ using namespace embody;
 // whole = false: kinematics + one priority pass with only the equality rows active, i.e. the
 // cost of the solve itself without the clamping loop (how many passes that takes depends on
 // how many bands and limits a pose touches).
-void iteration(benchmark::State& state, const ik::spine::SpineDescription& d, bool coupled, bool whole = true) {
+// restore = true: a state further into the same solve (after `before` iterations, when the bands
+// are already in contact), with or without the clamping loop's active set carried from the
+// iteration before (`warm`, SolveOptions::warm_active_set, docs/ik.md). The solver's Data is
+// restored outside the timed region before each timed iteration (all four variants alike; the
+// pause costs each about the same few µs), so every one starts from that state.
+void iteration(benchmark::State& state, const ik::spine::SpineDescription& d, bool coupled, bool whole = true,
+               bool restore = false, bool warm = false, int before = 3) {
   ik::spine::SpineOptions o;
   o.coupled = coupled;
   auto s = ik::spine::buildIsolatedSpine(d, o);
@@ -30,12 +38,23 @@ void iteration(benchmark::State& state, const ik::spine::SpineDescription& d, bo
   (void)data.setTarget(s->head_orientation, data.taskOrientation(s->head_orientation));
   (void)data.setTarget(s->neck_position, Eigen::Vector3d(neck + Eigen::Vector3d(0.12, 0, 0)));
   ik::SolveOptions so;
-  for (int i = 0; i < 3; ++i) ik::iterate(s->model, data, so);
+  so.warm_active_set = warm;
+  for (int i = 0; i < before; ++i) ik::iterate(s->model, data, so);
   const Eigen::VectorXd q0 = data.q();
+  const ik::Data snapshot = data;
+  double passes = 0;
   for (auto _ : state) {
-    if (whole) {
+    if (restore) {
+      state.PauseTiming();
+      data = snapshot;
+      state.ResumeTiming();
+      ik::iterate(s->model, data, so);
+      passes += data.report().clamp_passes;
+      benchmark::DoNotOptimize(data.q().data());
+    } else if (whole) {
       (void)data.setConfiguration(q0);
       ik::iterate(s->model, data, so);
+      passes += data.report().clamp_passes;
       benchmark::DoNotOptimize(data.q().data());
     } else {
       ik::kinematics(s->model, data, true);
@@ -43,11 +62,16 @@ void iteration(benchmark::State& state, const ik::spine::SpineDescription& d, bo
     }
   }
   state.counters["dofs"] = s->model.dofs;
-  state.counters["clamp_passes"] = data.report().clamp_passes;
+  state.counters["clamp_passes"] = passes / static_cast<double>(std::max<benchmark::IterationCount>(state.iterations(), 1));
 }
 
 void BM_IterationFullCoupled(benchmark::State& s) { iteration(s, ik::spine::defaultFullSpine(), true); }
 void BM_IterationFullUncoupled(benchmark::State& s) { iteration(s, ik::spine::defaultFullSpine(), false); }
+// Iteration 9 of the same solve (the bands in contact since iteration 4): cold and warm.
+void BM_InContactFullCoupledCold(benchmark::State& s) { iteration(s, ik::spine::defaultFullSpine(), true, true, true, false, 8); }
+void BM_InContactFullUncoupledCold(benchmark::State& s) { iteration(s, ik::spine::defaultFullSpine(), false, true, true, false, 8); }
+void BM_InContactFullCoupledWarm(benchmark::State& s) { iteration(s, ik::spine::defaultFullSpine(), true, true, true, true, 8); }
+void BM_InContactFullUncoupledWarm(benchmark::State& s) { iteration(s, ik::spine::defaultFullSpine(), false, true, true, true, 8); }
 void BM_IterationSimplifiedCoupled(benchmark::State& s) { iteration(s, ik::spine::defaultSimplifiedSpine(), true); }
 void BM_IterationSimplifiedUncoupled(benchmark::State& s) { iteration(s, ik::spine::defaultSimplifiedSpine(), false); }
 
@@ -65,6 +89,10 @@ void BM_BuildFullCoupledModel(benchmark::State& state) {
 
 BENCHMARK(BM_IterationFullCoupled)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_IterationFullUncoupled)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_InContactFullCoupledCold)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_InContactFullUncoupledCold)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_InContactFullCoupledWarm)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_InContactFullUncoupledWarm)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_IterationSimplifiedCoupled)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_IterationSimplifiedUncoupled)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_PriorityPassFullCoupled)->Unit(benchmark::kMicrosecond);

@@ -151,103 +151,99 @@ TaskId ModelBuilder::addTask(TaskDesc task) {
 
 void ModelBuilder::setUp(const Eigen::Vector3d& up) { up_ = up; }
 
-Result<Model> ModelBuilder::build() const {
-  Model m;
-  if (joints_.empty()) return fail("no joints");
-  if (!up_.allFinite() || up_.norm() < 1e-9) return fail("the up axis must be a finite non-zero vector");
-  m.up = up_.normalized();
-  m.ground_axes.col(0) = orthogonalUnit(m.up, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ());
-  m.ground_axes.col(1) = m.up.cross(m.ground_axes.col(0)).normalized();
+namespace {
 
-  // Joints.
-  std::set<std::string> names;
-  for (size_t i = 0; i < joints_.size(); ++i) {
-    Model::Joint j;
-    j.desc = joints_[i];
-    JointDesc& d = j.desc;
-    const std::string who = "joint " + std::to_string(i) + " '" + d.name + "'";
-    if (d.name.empty()) return fail(who + ": empty name");
-    if (!names.insert(d.name).second) return fail(who + ": duplicate name");
-    if (d.parent != kNoParent && (d.parent < 0 || d.parent >= static_cast<JointId>(i)))
-      return fail(who + ": parent " + std::to_string(d.parent) + " must be an earlier joint");
-    if (!finite(d.rest)) return fail(who + ": rest transform is not finite");
-    const Eigen::Matrix3d r = d.rest.linear();
-    if (!(r.transpose() * r).isApprox(Eigen::Matrix3d::Identity(), 1e-6) || r.determinant() < 0)
-      return fail(who + ": rest transform's linear part is not a rotation");
-    if (d.type == JointType::Revolute || d.type == JointType::Swing) {
-      if (!d.axis.allFinite() || d.axis.norm() < 1e-9) return fail(who + ": axis must be finite and non-zero");
-      d.axis.normalize();
-    }
-    j.dof_count = dofCount(d.type);
-    j.first_dof = m.dofs;
-    m.dofs += j.dof_count;
-    const size_t n = static_cast<size_t>(j.dof_count);
-    if (d.lower.empty()) d.lower.assign(n, -kUnbounded);
-    if (d.upper.empty()) d.upper.assign(n, kUnbounded);
-    if (d.lower.size() != n || d.upper.size() != n)
-      return fail(who + ": limits need " + std::to_string(n) + " entries (a limit names a missing dof?)");
-    for (size_t k = 0; k < n; ++k) {
-      if (std::isnan(d.lower[k]) || std::isnan(d.upper[k]) || d.lower[k] > d.upper[k])
-        return fail(who + ": limits of dof " + std::to_string(k) + " are not an interval");
-    }
-    if (d.neutral.empty()) d.neutral.assign(n, 0.0);
-    if (d.neutral.size() != n) return fail(who + ": neutral needs " + std::to_string(n) + " entries");
-    for (size_t k = 0; k < n; ++k)
-      if (!std::isfinite(d.neutral[k])) return fail(who + ": neutral value of dof " + std::to_string(k) + " is not finite");
-    if (!std::isfinite(d.mass) || d.mass < 0) return fail(who + ": mass must be finite and >= 0");
-    if (!d.com.allFinite()) return fail(who + ": centre of mass is not finite");
-    if (d.type == JointType::Swing) {
-      j.swing_basis.col(0) = orthogonalUnit(d.axis, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ());
-      j.swing_basis.col(1) = d.axis.cross(j.swing_basis.col(0));
-    }
-    m.total_mass += d.mass;
-    m.joints.push_back(std::move(j));
+// One joint: validated, its dof range assigned, limits and neutral filled in.
+Status buildJoint(const JointDesc& desc, size_t i, std::set<std::string>& names, Model& m) {
+  Model::Joint j;
+  j.desc = desc;
+  JointDesc& d = j.desc;
+  const std::string who = "joint " + std::to_string(i) + " '" + d.name + "'";
+  if (d.name.empty()) return fail(who + ": empty name");
+  if (!names.insert(d.name).second) return fail(who + ": duplicate name");
+  if (d.parent != kNoParent && (d.parent < 0 || d.parent >= static_cast<JointId>(i)))
+    return fail(who + ": parent " + std::to_string(d.parent) + " must be an earlier joint");
+  if (!finite(d.rest)) return fail(who + ": rest transform is not finite");
+  const Eigen::Matrix3d r = d.rest.linear();
+  if (!(r.transpose() * r).isApprox(Eigen::Matrix3d::Identity(), 1e-6) || r.determinant() < 0)
+    return fail(who + ": rest transform's linear part is not a rotation");
+  if (d.type == JointType::Revolute || d.type == JointType::Swing) {
+    if (!d.axis.allFinite() || d.axis.norm() < 1e-9) return fail(who + ": axis must be finite and non-zero");
+    d.axis.normalize();
   }
-  if (m.dofs == 0) return fail("the model has no dofs");
-  m.neutral.setZero(m.dofs);
-  for (const Model::Joint& j : m.joints)
-    for (int k = 0; k < j.dof_count; ++k) m.neutral(j.first_dof + k) = j.desc.neutral[k];
+  j.dof_count = dofCount(d.type);
+  j.first_dof = m.dofs;
+  m.dofs += j.dof_count;
+  const size_t n = static_cast<size_t>(j.dof_count);
+  if (d.lower.empty()) d.lower.assign(n, -kUnbounded);
+  if (d.upper.empty()) d.upper.assign(n, kUnbounded);
+  if (d.lower.size() != n || d.upper.size() != n)
+    return fail(who + ": limits need " + std::to_string(n) + " entries (a limit names a missing dof?)");
+  for (size_t k = 0; k < n; ++k) {
+    if (std::isnan(d.lower[k]) || std::isnan(d.upper[k]) || d.lower[k] > d.upper[k])
+      return fail(who + ": limits of dof " + std::to_string(k) + " are not an interval");
+  }
+  if (d.neutral.empty()) d.neutral.assign(n, 0.0);
+  if (d.neutral.size() != n) return fail(who + ": neutral needs " + std::to_string(n) + " entries");
+  for (size_t k = 0; k < n; ++k)
+    if (!std::isfinite(d.neutral[k])) return fail(who + ": neutral value of dof " + std::to_string(k) + " is not finite");
+  if (!std::isfinite(d.mass) || d.mass < 0) return fail(who + ": mass must be finite and >= 0");
+  if (!d.com.allFinite()) return fail(who + ": centre of mass is not finite");
+  if (d.type == JointType::Swing) {
+    j.swing_basis.col(0) = orthogonalUnit(d.axis, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ());
+    j.swing_basis.col(1) = d.axis.cross(j.swing_basis.col(0));
+  }
+  m.total_mass += d.mass;
+  m.joints.push_back(std::move(j));
+  return Status::success();
+}
 
-  auto checkTerms = [&](const std::vector<LinearTerm>& terms, const std::string& who,
-                        Eigen::Ref<Eigen::RowVectorXd, 0, Eigen::InnerStride<>> dense) -> Status {
-    if (terms.empty()) return fail(who + ": no terms");
-    dense.setZero();
-    for (const LinearTerm& t : terms) {
-      if (t.dof.joint < 0 || t.dof.joint >= static_cast<JointId>(m.joints.size()))
-        return fail(who + ": joint " + std::to_string(t.dof.joint) + " does not exist");
-      const Model::Joint& j = m.joints[t.dof.joint];
-      if (t.dof.component < 0 || t.dof.component >= j.dof_count)
-        return fail(who + ": joint '" + j.desc.name + "' (" + toString(j.desc.type) + ") has no dof " +
-                    std::to_string(t.dof.component));
-      if (!std::isfinite(t.coefficient)) return fail(who + ": coefficient is not finite");
-      dense(m.dofIndex(t.dof)) += t.coefficient;
-    }
-    if (dense.norm() == 0) return fail(who + ": all coefficients are zero");
-    return Status::success();
-  };
+// A row's terms: joints and dofs exist, coefficients finite and not all zero; written densely.
+Status checkTerms(const Model& m, const std::vector<LinearTerm>& terms, const std::string& who,
+                  Eigen::Ref<Eigen::RowVectorXd, 0, Eigen::InnerStride<>> dense) {
+  if (terms.empty()) return fail(who + ": no terms");
+  dense.setZero();
+  for (const LinearTerm& t : terms) {
+    if (t.dof.joint < 0 || t.dof.joint >= static_cast<JointId>(m.joints.size()))
+      return fail(who + ": joint " + std::to_string(t.dof.joint) + " does not exist");
+    const Model::Joint& j = m.joints[t.dof.joint];
+    if (t.dof.component < 0 || t.dof.component >= j.dof_count)
+      return fail(who + ": joint '" + j.desc.name + "' (" + toString(j.desc.type) + ") has no dof " +
+                  std::to_string(t.dof.component));
+    if (!std::isfinite(t.coefficient)) return fail(who + ": coefficient is not finite");
+    dense(m.dofIndex(t.dof)) += t.coefficient;
+  }
+  if (dense.norm() == 0) return fail(who + ": all coefficients are zero");
+  return Status::success();
+}
 
-  // Equalities, with the corrected Algorithm 1 to find dependent rows (first added wins).
-  const int g = static_cast<int>(equalities_.size());
+// Equalities, with the corrected Algorithm 1 to find dependent rows (first added wins).
+Status addEqualities(const std::vector<EqualityRow>& equalities, Model& m) {
+  const int g = static_cast<int>(equalities.size());
   m.equality_matrix.setZero(g, m.dofs);
   m.equality_rhs.setZero(g);
   for (int i = 0; i < g; ++i) {
-    const EqualityRow& row = equalities_[i];
+    const EqualityRow& row = equalities[i];
     const std::string who = "equality " + std::to_string(i) + " '" + row.name + "'";
-    if (Status s = checkTerms(row.terms, who, m.equality_matrix.row(i)); !s) return Error{s.error()};
+    if (Status s = checkTerms(m, row.terms, who, m.equality_matrix.row(i)); !s) return Error{s.error()};
     if (!std::isfinite(row.rhs)) return fail(who + ": rhs is not finite");
     m.equality_rhs(i) = row.rhs;
     m.equalities.push_back(row);
   }
   (void)incrementalNullspaceProjector(m.equality_matrix, 1e-9, &m.dependent_equalities);
 
-  // Inequalities: user couplings, then joint-limit rows (given, then generated from limits).
+  return Status::success();
+}
+
+// Inequalities: user couplings, then joint-limit rows (given, then generated from limits).
+Status addInequalities(const std::vector<InequalityRow>& inequalities, Model& m) {
   Eigen::RowVectorXd scratch(m.dofs);
   for (InequalityKind kind : {InequalityKind::UserCoupling, InequalityKind::JointLimit}) {
-    for (size_t i = 0; i < inequalities_.size(); ++i) {
-      const InequalityRow& row = inequalities_[i];
+    for (size_t i = 0; i < inequalities.size(); ++i) {
+      const InequalityRow& row = inequalities[i];
       if (row.kind != kind) continue;
       const std::string who = "inequality " + std::to_string(i) + " '" + row.name + "'";
-      if (Status s = checkTerms(row.terms, who, scratch); !s) return Error{s.error()};
+      if (Status s = checkTerms(m, row.terms, who, scratch); !s) return Error{s.error()};
       if (!std::isfinite(row.rhs)) return fail(who + ": rhs is not finite");
       m.inequalities.push_back(row);
     }
@@ -265,8 +261,12 @@ Result<Model> ModelBuilder::build() const {
     }
   }
 
-  // Exp-map joints whose dofs appear in no constraint row and carry no limits may be
-  // re-parameterised near |v| = π (that changes q, which would break a linear row).
+  return Status::success();
+}
+
+// Exp-map joints whose dofs appear in no constraint row and carry no limits may be
+// re-parameterised near |v| = π (that changes q, which would break a linear row).
+void markReparameterizable(Model& m) {
   std::vector<char> constrained(m.dofs, 0);
   for (const EqualityRow& r : m.equalities)
     for (const LinearTerm& t : r.terms) constrained[m.dofIndex(t.dof)] = 1;
@@ -281,67 +281,80 @@ Result<Model> ModelBuilder::build() const {
     j.reparameterize = free;
   }
 
-  // Tasks.
-  std::vector<int> priorities;
-  for (size_t i = 0; i < tasks_.size(); ++i) {
-    const TaskDesc& d = tasks_[i];
-    const std::string who = "task " + std::to_string(i) + " '" + d.name + "'";
-    if (d.name.empty()) return fail(who + ": empty name");
-    for (size_t k = 0; k < i; ++k)
-      if (tasks_[k].name == d.name) return fail(who + ": duplicate name");
-    Model::Task t;
-    t.desc = d;
-    const bool com = d.type == TaskType::CenterOfMass;
-    if (!com && (d.joint < 0 || d.joint >= static_cast<JointId>(m.joints.size())))
-      return fail(who + ": joint " + std::to_string(d.joint) + " does not exist");
-    if (!d.offset.allFinite()) return fail(who + ": offset is not finite");
-    if (!(std::isfinite(d.weight) && d.weight > 0)) return fail(who + ": weight must be finite and > 0");
-    if (!(d.max_position_error > 0 && d.max_rotation_error > 0))
-      return fail(who + ": error clamps must be > 0");
-    if (!(d.position_tolerance >= 0 && d.rotation_tolerance >= 0))
-      return fail(who + ": tolerances must be >= 0");
-    switch (d.type) {
-      case TaskType::Position:
-        if ((d.axes & kAxesXYZ) == 0 || (d.axes & ~kAxesXYZ) != 0) return fail(who + ": axes must be a non-empty subset of xyz");
-        t.rows = ((d.axes & kAxisX) ? 1 : 0) + ((d.axes & kAxisY) ? 1 : 0) + ((d.axes & kAxisZ) ? 1 : 0);
-        break;
-      case TaskType::Orientation: t.rows = 3; break;
-      case TaskType::Pose: t.rows = 6; break;
-      case TaskType::CenterOfMass:
-        t.rows = 2;
-        if (!(m.total_mass > 0)) return fail(who + ": a centre-of-mass task needs segment masses");
-        break;
-    }
-    const size_t nj = m.joints.size();
-    t.ancestors.assign(nj, com ? 1 : 0);
-    std::vector<JointId> chain;  // task joint first, root last
-    if (!com) {
-      for (JointId j = d.joint; j != kNoParent; j = m.joints[j].desc.parent) {
-        t.ancestors[j] = 1;
-        chain.push_back(j);
+}
+
+// Which joints a task recruits (ToRoot, Depth, Explicit), from its ancestor chain.
+Status recruitJoints(const TaskDesc& d, const std::string& who, bool com, const std::vector<JointId>& chain,
+                     const Model& m, Model::Task& t) {
+  t.recruited.assign(m.joints.size(), 0);
+  switch (d.recruit) {
+    case Recruit::ToRoot: t.recruited = t.ancestors; break;
+    case Recruit::Depth:
+      if (d.depth <= 0) return fail(who + ": recruit depth must be > 0");
+      if (com) return fail(who + ": a centre-of-mass task recruits to the root or an explicit list");
+      for (size_t k = 0; k < chain.size() && static_cast<int>(k) < d.depth; ++k) t.recruited[chain[k]] = 1;
+      break;
+    case Recruit::Explicit:
+      for (JointId j : d.joints) {
+        if (j < 0 || j >= static_cast<JointId>(m.joints.size())) return fail(who + ": recruited joint " + std::to_string(j) + " does not exist");
+        if (!t.ancestors[j])
+          return fail(who + ": recruits joint '" + m.joints[j].desc.name + "', which is not an ancestor of '" +
+                      m.joints[d.joint].desc.name + "'");
+        t.recruited[j] = 1;
       }
-    }
-    t.recruited.assign(nj, 0);
-    switch (d.recruit) {
-      case Recruit::ToRoot: t.recruited = t.ancestors; break;
-      case Recruit::Depth:
-        if (d.depth <= 0) return fail(who + ": recruit depth must be > 0");
-        if (com) return fail(who + ": a centre-of-mass task recruits to the root or an explicit list");
-        for (size_t k = 0; k < chain.size() && static_cast<int>(k) < d.depth; ++k) t.recruited[chain[k]] = 1;
-        break;
-      case Recruit::Explicit:
-        for (JointId j : d.joints) {
-          if (j < 0 || j >= static_cast<JointId>(nj)) return fail(who + ": recruited joint " + std::to_string(j) + " does not exist");
-          if (!t.ancestors[j])
-            return fail(who + ": recruits joint '" + m.joints[j].desc.name + "', which is not an ancestor of '" +
-                        m.joints[d.joint].desc.name + "'");
-          t.recruited[j] = 1;
-        }
-        break;
-    }
-    priorities.push_back(d.level);
-    m.tasks.push_back(std::move(t));
+      break;
   }
+  return Status::success();
+}
+
+// One task: validated, its rows counted, its ancestors and recruited joints set.
+Status buildTask(const std::vector<TaskDesc>& tasks, size_t i, Model& m) {
+  const TaskDesc& d = tasks[i];
+  const std::string who = "task " + std::to_string(i) + " '" + d.name + "'";
+  if (d.name.empty()) return fail(who + ": empty name");
+  for (size_t k = 0; k < i; ++k)
+    if (tasks[k].name == d.name) return fail(who + ": duplicate name");
+  Model::Task t;
+  t.desc = d;
+  const bool com = d.type == TaskType::CenterOfMass;
+  if (!com && (d.joint < 0 || d.joint >= static_cast<JointId>(m.joints.size())))
+    return fail(who + ": joint " + std::to_string(d.joint) + " does not exist");
+  if (!d.offset.allFinite()) return fail(who + ": offset is not finite");
+  if (!(std::isfinite(d.weight) && d.weight > 0)) return fail(who + ": weight must be finite and > 0");
+  if (!(d.max_position_error > 0 && d.max_rotation_error > 0))
+    return fail(who + ": error clamps must be > 0");
+  if (!(d.position_tolerance >= 0 && d.rotation_tolerance >= 0))
+    return fail(who + ": tolerances must be >= 0");
+  switch (d.type) {
+    case TaskType::Position:
+      if ((d.axes & kAxesXYZ) == 0 || (d.axes & ~kAxesXYZ) != 0) return fail(who + ": axes must be a non-empty subset of xyz");
+      t.rows = ((d.axes & kAxisX) ? 1 : 0) + ((d.axes & kAxisY) ? 1 : 0) + ((d.axes & kAxisZ) ? 1 : 0);
+      break;
+    case TaskType::Orientation: t.rows = 3; break;
+    case TaskType::Pose: t.rows = 6; break;
+    case TaskType::CenterOfMass:
+      t.rows = 2;
+      if (!(m.total_mass > 0)) return fail(who + ": a centre-of-mass task needs segment masses");
+      break;
+  }
+  const size_t nj = m.joints.size();
+  t.ancestors.assign(nj, com ? 1 : 0);
+  std::vector<JointId> chain;  // task joint first, root last
+  if (!com) {
+    for (JointId j = d.joint; j != kNoParent; j = m.joints[j].desc.parent) {
+      t.ancestors[j] = 1;
+      chain.push_back(j);
+    }
+  }
+  if (Status s = recruitJoints(d, who, com, chain, m, t); !s) return s;
+  m.tasks.push_back(std::move(t));
+  return Status::success();
+}
+
+// Tasks grouped into strict priority levels (smaller level = more important), rows stacked.
+void buildLevels(Model& m) {
+  std::vector<int> priorities;
+  for (const Model::Task& t : m.tasks) priorities.push_back(t.desc.level);
   std::sort(priorities.begin(), priorities.end());
   priorities.erase(std::unique(priorities.begin(), priorities.end()), priorities.end());
   for (int p : priorities) {
@@ -360,6 +373,30 @@ Result<Model> ModelBuilder::build() const {
     m.levels.push_back(std::move(level));
   }
 
+}
+
+}  // namespace
+
+Result<Model> ModelBuilder::build() const {
+  Model m;
+  if (joints_.empty()) return fail("no joints");
+  if (!up_.allFinite() || up_.norm() < 1e-9) return fail("the up axis must be a finite non-zero vector");
+  m.up = up_.normalized();
+  m.ground_axes.col(0) = orthogonalUnit(m.up, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ());
+  m.ground_axes.col(1) = m.up.cross(m.ground_axes.col(0)).normalized();
+  std::set<std::string> names;
+  for (size_t i = 0; i < joints_.size(); ++i)
+    if (Status s = buildJoint(joints_[i], i, names, m); !s) return Error{s.error()};
+  if (m.dofs == 0) return fail("the model has no dofs");
+  m.neutral.setZero(m.dofs);
+  for (const Model::Joint& j : m.joints)
+    for (int k = 0; k < j.dof_count; ++k) m.neutral(j.first_dof + k) = j.desc.neutral[k];
+  if (Status s = addEqualities(equalities_, m); !s) return Error{s.error()};
+  if (Status s = addInequalities(inequalities_, m); !s) return Error{s.error()};
+  markReparameterizable(m);
+  for (size_t i = 0; i < tasks_.size(); ++i)
+    if (Status s = buildTask(tasks_, i, m); !s) return Error{s.error()};
+  buildLevels(m);
   if (Status s = checkRecruiting(m); !s) return Error{s.error()};
   return m;
 }

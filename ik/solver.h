@@ -44,6 +44,11 @@ struct SolveOptions {
   int max_iterations = 100;
   int max_clamp_passes = 16;    // clamping-loop cap per iteration
   bool clamping = true;         // false: inequalities are ignored (tests of the priority loop)
+  // Warm active set: each iteration's clamping loop starts from the rows pinned in the previous
+  // one (kept in Data, across solve() calls) that still hold at their bounds, reusing their
+  // factorisation, and releases those whose multiplier says the tasks now pull them inside.
+  // false: every iteration starts from the equality rows (the textbook loop). docs/ik.md.
+  bool warm_active_set = false;
   // Smooth damping (iTaSC rule), one λ per level from its smallest singular value σ:
   // λ² = (1 - (σ/eps)²) λmax² when σ < eps, else 0. Projectors are never damped.
   double damping_max = 0.1;     // λmax
@@ -109,6 +114,10 @@ class Data {
   // entry is not finite.
   Status setConfiguration(const Eigen::VectorXd& q);
   const Eigen::VectorXd& q() const;
+  // The next iteration's clamping loop starts from the equality rows only (a cold start of the
+  // warm active set). Not needed for correctness: carried rows no longer at their bounds (after
+  // setConfiguration, for example) are dropped by the solver itself.
+  void forgetActiveSet();
 
   // Per-frame task state. Every setter validates (task index, finite numbers, task type) and
   // leaves the state unchanged on error.

@@ -16,6 +16,13 @@ namespace embody::ik {
 struct Workspace {
   explicit Workspace(const Model& model);
 
+  // The constructor's parts (data.cpp), in order.
+  void sizeTaskState(const Model& model);
+  void factorEqualities(const Model& model);
+  void sizeActiveSet();
+  void sizeLevelScratch(const Model& model);
+  void sizeInequalities(const Model& model);
+
   int n = 0;          // dofs
   int task_count = 0;
   int rows = 0;       // stacked task rows
@@ -131,6 +138,19 @@ struct Workspace {
   std::vector<double> ineq_coef;
   std::vector<char> ineq_active;
   std::vector<char> ineq_reported;
+
+  // Warm active set (warm_active_set.cpp): the rows pinned at the end of the last iteration, in
+  // the order they were added; whether basis / factor / null space still hold exactly the
+  // equality rows followed by them (built for carried_path); how many of this iteration's
+  // pinned rows were carried. Scratch for their multipliers.
+  std::vector<int> carried;  // reserved to the inequality count
+  bool carried_structure = false;
+  Path carried_path = Path::Fast;
+  int carried_count = 0;
+  Eigen::VectorXd warm_residual;    // task rows
+  Eigen::VectorXd warm_gradient;    // n
+  Eigen::VectorXd warm_multiplier;  // n (rank used)
+  std::vector<char> warm_released;  // inequality count
 
   SolveReport report;
 };

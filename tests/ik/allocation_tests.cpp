@@ -53,10 +53,11 @@ namespace {
 
 // Solves a sequence of target sets that exercise the clamping loop (joint limits pinned) and
 // unreachable targets; returns the allocations counted during the solves after the first.
-long allocationsDuringSolves(const Model& model, Path path) {
+long allocationsDuringSolves(const Model& model, Path path, bool warm = false) {
   Data data(model);
   SolveOptions o;
   o.path = path;
+  o.warm_active_set = warm;
   o.max_iterations = 20;
   std::vector<Eigen::Vector3d> offsets = {{0.3, 0.2, 0.1}, {-0.4, 0.5, 0.2}, {2.0, 2.0, 2.0}, {0.0, -0.3, 0.4}};
   std::vector<Eigen::Vector3d> base;
@@ -88,6 +89,13 @@ TEST_CASE("solve allocates nothing after the first call (fast path, humanoid and
 TEST_CASE("solve allocates nothing after the first call (reference path)") {
   CHECK(allocationsDuringSolves(test::sampleHumanoid().value(), Path::Reference) == 0);
   CHECK(allocationsDuringSolves(test::sampleSpine(true).value(), Path::Reference) == 0);
+}
+
+TEST_CASE("solve allocates nothing after the first call with the warm active set (both paths)") {
+  for (Path path : {Path::Fast, Path::Reference}) {
+    CHECK(allocationsDuringSolves(test::sampleHumanoid().value(), path, true) == 0);
+    CHECK(allocationsDuringSolves(test::sampleSpine(true).value(), path, true) == 0);
+  }
 }
 
 TEST_CASE("the counting allocator counts (sanity check of the test itself)") {

@@ -3,7 +3,10 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <random>
+#include <stdexcept>
+#include <vector>
 
 #include "ik/expmap.h"
 #include "ik/model.h"
@@ -92,6 +95,62 @@ inline Eigen::VectorXd randomInsideLimits(const Model& model, std::mt19937& rng,
     }
   }
   return q;
+}
+
+// Targets = the task values of a random configuration inside the limits, optionally pushed by
+// `push` metres (normal per axis).
+inline void randomTargets(const Model& model, Data& data, std::mt19937& rng, double spread, double push = 0.0,
+                          double shrink = 1.0) {
+  Data probe(model);
+  if (!probe.setConfiguration(randomInsideLimits(model, rng, spread, shrink))) throw std::runtime_error("configuration");
+  kinematics(model, probe, false);
+  std::normal_distribution<double> g;
+  for (size_t t = 0; t < model.tasks.size(); ++t) {
+    const TaskId id = static_cast<TaskId>(t);
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = probe.taskOrientation(id).toRotationMatrix();
+    pose.translation() = probe.taskPosition(id) + push * Eigen::Vector3d(g(rng), g(rng), g(rng));
+    if (!data.setTarget(id, pose)) throw std::runtime_error("target");
+  }
+}
+
+// max |A q - b| over the equality rows.
+inline double equalityViolation(const Model& model, const Eigen::VectorXd& q) {
+  if (model.equality_matrix.rows() == 0) return 0.0;
+  return (model.equality_matrix * q - model.equality_rhs).cwiseAbs().maxCoeff();
+}
+
+// max (c q - rhs) over the inequality rows not listed in `excused`.
+inline double worstInequality(const Model& model, const Eigen::VectorXd& q, const std::vector<int>& excused) {
+  double worst = -1e300;
+  for (size_t i = 0; i < model.inequalities.size(); ++i) {
+    if (std::find(excused.begin(), excused.end(), static_cast<int>(i)) != excused.end()) continue;
+    double v = -model.inequalities[i].rhs;
+    for (const LinearTerm& t : model.inequalities[i].terms) v += t.coefficient * q(model.dofIndex(t.dof));
+    worst = std::max(worst, v);
+  }
+  return worst;
+}
+
+// Two revolute joints about z on a short chain (links 0.5 m), a point task (x, y) at the tip
+// (position tolerance `tolerance`, the TaskDesc default when negative).
+inline Model twoJointModel(const std::vector<InequalityRow>& inequalities, const std::vector<EqualityRow>& equalities = {},
+                           double tolerance = -1.0) {
+  ModelBuilder b;
+  Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
+  step.translation() = Eigen::Vector3d(0.5, 0, 0);
+  const JointId a = b.addJoint("a", kNoParent, JointType::Revolute);
+  const JointId c = b.addJoint("b", a, JointType::Revolute, step);
+  const JointId tip = b.addJoint("tip", c, JointType::Fixed, step);
+  for (InequalityRow row : inequalities) b.addInequality(row);
+  for (EqualityRow row : equalities) b.addEquality(row);
+  TaskDesc t;
+  t.name = "tip";
+  t.joint = tip;
+  t.axes = kAxisX | kAxisY;
+  if (tolerance >= 0) t.position_tolerance = tolerance;
+  b.addTask(t);
+  return b.build().value();
 }
 
 }  // namespace embody::test

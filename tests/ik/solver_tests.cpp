@@ -11,6 +11,11 @@
 using namespace embody;
 using namespace embody::ik;
 
+using test::equalityViolation;
+using test::randomTargets;
+using test::twoJointModel;
+using test::worstInequality;
+
 namespace {
 
 const Model& humanoid() {
@@ -20,38 +25,6 @@ const Model& humanoid() {
 const Model& coupledSpine() {
   static const Model m = test::sampleSpine(true).value();
   return m;
-}
-
-// Targets = the task values of a random configuration, optionally pushed by `push` metres.
-void randomTargets(const Model& model, Data& data, std::mt19937& rng, double spread, double push = 0.0,
-                   double shrink = 1.0) {
-  Data probe(model);
-  REQUIRE(probe.setConfiguration(test::randomInsideLimits(model, rng, spread, shrink)));
-  kinematics(model, probe, false);
-  std::normal_distribution<double> g;
-  for (size_t t = 0; t < model.tasks.size(); ++t) {
-    const TaskId id = static_cast<TaskId>(t);
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.linear() = probe.taskOrientation(id).toRotationMatrix();
-    pose.translation() = probe.taskPosition(id) + push * Eigen::Vector3d(g(rng), g(rng), g(rng));
-    REQUIRE(data.setTarget(id, pose));
-  }
-}
-
-double equalityViolation(const Model& model, const Eigen::VectorXd& q) {
-  if (model.equality_matrix.rows() == 0) return 0.0;
-  return (model.equality_matrix * q - model.equality_rhs).cwiseAbs().maxCoeff();
-}
-
-double worstInequality(const Model& model, const Eigen::VectorXd& q, const std::vector<int>& excused) {
-  double worst = -1e300;
-  for (size_t i = 0; i < model.inequalities.size(); ++i) {
-    if (std::find(excused.begin(), excused.end(), static_cast<int>(i)) != excused.end()) continue;
-    double v = -model.inequalities[i].rhs;
-    for (const LinearTerm& t : model.inequalities[i].terms) v += t.coefficient * q(model.dofIndex(t.dof));
-    worst = std::max(worst, v);
-  }
-  return worst;
 }
 
 }  // namespace
@@ -189,26 +162,6 @@ TEST_CASE("joint limits are never violated beyond tolerance on the humanoid") {
     CHECK(r.unsatisfiable.empty());
   }
 }
-
-namespace {
-// Two revolute joints about z on a short chain, with a point task at the tip.
-Model twoJointModel(const std::vector<InequalityRow>& inequalities, const std::vector<EqualityRow>& equalities = {}) {
-  ModelBuilder b;
-  Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
-  step.translation() = Eigen::Vector3d(0.5, 0, 0);
-  const JointId a = b.addJoint("a", kNoParent, JointType::Revolute);
-  const JointId c = b.addJoint("b", a, JointType::Revolute, step);
-  const JointId tip = b.addJoint("tip", c, JointType::Fixed, step);
-  for (InequalityRow row : inequalities) b.addInequality(row);
-  for (EqualityRow row : equalities) b.addEquality(row);
-  TaskDesc t;
-  t.name = "tip";
-  t.joint = tip;
-  t.axes = kAxisX | kAxisY;
-  b.addTask(t);
-  return b.build().value();
-}
-}  // namespace
 
 TEST_CASE("a user coupling inequality is honoured and reported as an active clamp") {
   const Model model = twoJointModel({{"a+b <= 0.6", {{{0, 0}, 1.0}, {{1, 0}, 1.0}}, 0.6, InequalityKind::UserCoupling}});
