@@ -239,8 +239,10 @@ ScoredSkeleton scoredSkeleton(const tracking::BvhAvatar& avatar) {
   const int spineRoot = spine.size() > 1 ? spine[1] : -1;  // the first joint above the hips
   const std::array<HumanBone, 2> hands{HumanBone::leftHand, HumanBone::rightHand};
   for (size_t j = 0; j < sk.joints.size(); ++j) {
-    if (avatar.clip.joints[j].endSite) continue;
     const int ji = int(j);
+    // The body is the hips and what hangs below them: a root bone above the hips (Reallusion's
+    // RL_BoneRoot) carries no body part and stays where the rest put it in a solution.
+    if (avatar.clip.joints[j].endSite || !below(hips, ji)) continue;
     s.groups[kAll].push_back(ji);
     const bool inHand = below(joint(hands[0]), ji) || below(joint(hands[1]), ji);
     const bool handItself = ji == joint(hands[0]) || ji == joint(hands[1]);

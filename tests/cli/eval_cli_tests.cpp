@@ -117,10 +117,10 @@ TEST_CASE("embody eval: plots and the contact sheet", "[cli][eval]") {
 }
 
 TEST_CASE("embody eval --trackers full: the clip driven on its own skeleton", "[cli][eval]") {
-  // The marked joints the body can reach land on the clip's: head and feet within 1 cm. The whole
-  // body does NOT reach the 1 cm goal yet (docs/eval.md): CMU's collars turn further than the
-  // body model's clavicle swing (+-20 deg), leaving the upper arms 10-12 cm off; this guards the
-  // figure from getting worse.
+  // The marked joints land on the clip's: head and feet within 1 cm. With the limb limits around
+  // the neutral pose the walk scores 1.13 cm coupled, 0.32 uncoupled (2.49 / 1.78 with limits
+  // around CMU's T-pose); the coupled spine spreading a turn over its vertebrae where the clip
+  // turns one joint is most of the rest (docs/eval.md). This guards the figure from getting worse.
   EMBODY_REQUIRE_SHARED_ASSET(clip, "cmu_12_01_walk.bvh");
   const fs::path out = outDir("eval_walk_full");
   auto r = runEmbody(evalArgs(clip, "full", out), true);
@@ -132,7 +132,7 @@ TEST_CASE("embody eval --trackers full: the clip driven on its own skeleton", "[
     const auto& e = j["methods"][m]["mpjpe_cm"];
     CHECK(e["head"]["mean"].get<double>() <= 1.0);
     CHECK(e["feet"]["mean"].get<double>() <= 1.0);
-    CHECK(e["all"]["mean"].get<double>() <= 3.5);
+    CHECK(e["all"]["mean"].get<double>() <= 1.5);
     CHECK(e["all"]["mean"].get<double>() < j["methods"]["naive"]["mpjpe_cm"]["all"]["mean"].get<double>() / 3.0);
   }
 }
