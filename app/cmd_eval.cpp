@@ -90,9 +90,10 @@ bool evaluateOne(const tracking::BvhAvatar& avatar, const EvalJob& job, eval::Tr
                 e->frames, e->fps, row.trackers.c_str(), o.ikIterations, e->skeleton.groups[eval::kAll].size());
     std::printf("%s", eval::methodTable(*e).c_str());
     for (const auto& n : *notes) std::printf("note: %s\n", n.c_str());
-    std::printf("wrote metrics.json, solved.bvh, frames.csv, joints.csv, errors.png, joints.png, contact_sheet.png to %s "
-                "(%.1f s)\n",
-                dir.c_str(), row.seconds);
+    std::string wrote;  // what is there: the plots need gnuplot, the sheet can be turned off
+    for (const char* f : {"metrics.json", "solved.bvh", "frames.csv", "joints.csv", "errors.png", "joints.png", "contact_sheet.png"})
+      if (fs::exists(dir / f)) wrote += (wrote.empty() ? "" : ", ") + std::string(f);
+    std::printf("wrote %s to %s (%.1f s)\n", wrote.c_str(), dir.c_str(), row.seconds);
   }
   return true;
 }

@@ -77,11 +77,18 @@ Result<JointTrack> runtimeTrack(const tracking::BvhAvatar& avatar, const EvalOpt
   std::vector<glm::mat4> globals;
   std::vector<glm::dvec3> markerPosition;
   std::vector<glm::dquat> markerRotation;
+  // The clip's rotations are world rotations from its zero-channel pose; markers turn joints from
+  // the avatar's rest, which is the clip's first frame when its zero-channel pose does not stand.
+  std::vector<glm::dquat> restInverse;
+  avatar::computeGlobals(avatar.asset.skeleton, avatar::SkeletonPose::rest(avatar.asset.skeleton), globals);
+  for (const auto& g : globals) restInverse.push_back(glm::conjugate(worldRotation(g)));
   for (int f = 0; f < frames; ++f) {
     if (bo.jointMarkers) {
       const auto first = size_t(f) * size_t(truth.joints), last = first + size_t(truth.joints);
       markerPosition.assign(truth.position.begin() + std::ptrdiff_t(first), truth.position.begin() + std::ptrdiff_t(last));
       markerRotation.assign(truth.rotation.begin() + std::ptrdiff_t(first), truth.rotation.begin() + std::ptrdiff_t(last));
+      for (size_t j = 0; j < markerRotation.size() && j < restInverse.size(); ++j)
+        markerRotation[j] = glm::normalize(markerRotation[j] * restInverse[j]);
       (*solver)->setMarkers(markerPosition, markerRotation);
     }
     stage.process(source->sample(double(f) / fps), frame);
@@ -232,8 +239,10 @@ ScoredSkeleton scoredSkeleton(const tracking::BvhAvatar& avatar) {
   const int spineRoot = spine.size() > 1 ? spine[1] : -1;  // the first joint above the hips
   const std::array<HumanBone, 2> hands{HumanBone::leftHand, HumanBone::rightHand};
   for (size_t j = 0; j < sk.joints.size(); ++j) {
-    if (avatar.clip.joints[j].endSite) continue;
     const int ji = int(j);
+    // The body is the hips and what hangs below them: a root bone above the hips (Reallusion's
+    // RL_BoneRoot) carries no body part and stays where the rest put it in a solution.
+    if (avatar.clip.joints[j].endSite || !below(hips, ji)) continue;
     s.groups[kAll].push_back(ji);
     const bool inHand = below(joint(hands[0]), ji) || below(joint(hands[1]), ji);
     const bool handItself = ji == joint(hands[0]) || ji == joint(hands[1]);

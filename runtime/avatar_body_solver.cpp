@@ -73,11 +73,15 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
   if (!model) return Error{"body model with tracker tasks: " + model.error()};
   body_.model = std::move(model).value();
   data_ = std::make_unique<ik::Data>(body_.model);
-  // The configuration a body starts from: the rest pose with knees and elbows bent a little in
-  // their anatomical direction (a straight hinge is singular, body_model.h).
-  restQ_ = Eigen::VectorXd::Zero(body_.model.dofs);
+  // The configuration a body starts from: the rest pose (q = 0 is the neutral pose, body_model.h)
+  // with knees and elbows bent at least a little in their anatomical direction (a straight hinge
+  // is singular).
+  restQ_ = body_.restConfiguration;
   for (size_t k = 0; k < 4; ++k)
-    if (limbHinge_[k] >= 0) restQ_[body_.model.joints[size_t(limbHinge_[k])].first_dof] = k < 2 ? 0.15 : 0.3;
+    if (limbHinge_[k] >= 0) {
+      double& bend = restQ_[body_.model.joints[size_t(limbHinge_[k])].first_dof];
+      bend = std::max(bend, k < 2 ? 0.15 : 0.3);
+    }
   require(data_->setConfiguration(restQ_));
   lastGoodQ_ = restQ_;
   if (options.userHeight > 0.0f && !options.sameBody.enabled) calibrate(options.userHeight);
@@ -127,11 +131,11 @@ void AvatarBodySolver::bindLimbs(ik::JointId leftElbow, ik::JointId rightElbow) 
   }
 }
 
-// Rest geometry from the model without tasks (q = 0 is the rest pose): heights, the eye point,
+// Rest geometry from the model without tasks at the avatar's rest pose: heights, the eye point,
 // the seated legs, the tracker -> joint frames and the foot planner's rest stance.
 void AvatarBodySolver::measureRest(ik::JointId leftElbow, bool legs) {
   ik::Data rest(body_.model);
-  require(rest.setConfiguration(Eigen::VectorXd::Zero(body_.model.dofs)));
+  require(rest.setConfiguration(body_.restConfiguration));
   ik::kinematics(body_.model, rest, false);
   auto pos = [&](ik::JointId j) { return Eigen::Vector3d(rest.jointFrame(j).translation()); };
   for (size_t k = 0; k < 4; ++k)

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <numbers>
 
+#include "avatar/body/neutral_pose.h"
 #include "avatar/glm_eigen.h"
+#include "ik/expmap.h"
 #include "ik/spine/spine_model.h"
 
 namespace embody::avatar {
@@ -94,6 +96,31 @@ const std::vector<LimbSpec>& limbSpecs() {
   return specs;
 }
 
+// The configuration that puts every IK joint at `restWorld` (its world rotation at the avatar's
+// rest pose), per joint of the builder. The neutral turns limb bones only, about their pivots,
+// and the hinges about their axes: Ball joints take the rotation's log, Revolute joints its angle
+// about the axis; the hips (Free), the spine and the clavicles (Swing) rest at 0.
+std::vector<std::vector<double>> restConfiguration(const std::vector<ik::JointDesc>& joints,
+                                                   const std::vector<Eigen::Quaterniond>& restWorld) {
+  std::vector<std::vector<double>> q(joints.size());
+  for (size_t j = 0; j < joints.size(); ++j) {
+    const ik::JointDesc& d = joints[j];
+    const Eigen::Quaterniond parent = d.parent >= 0 ? restWorld[static_cast<size_t>(d.parent)] : Eigen::Quaterniond::Identity();
+    Eigen::Quaterniond rel(d.rest.linear().transpose() * (parent.conjugate() * restWorld[j]).toRotationMatrix());
+    if (rel.w() < 0.0) rel.coeffs() = -rel.coeffs();
+    if (d.type == ik::JointType::Ball) {
+      const Eigen::Vector3d v = ik::rotationLog(rel.toRotationMatrix());
+      q[j] = {v.x(), v.y(), v.z()};
+    } else if (d.type == ik::JointType::Revolute) {
+      q[j] = {2.0 * std::atan2(rel.vec().dot(d.axis.normalized()), rel.w())};
+    }
+    // Below a nano-radian the rest is the neutral (the rounding of the frames' products).
+    for (double& v : q[j])
+      if (std::abs(v) < 1e-9) v = 0.0;
+  }
+  return q;
+}
+
 void setLimits(ik::JointDesc& d, std::vector<double> lo, std::vector<double> hi) {
   d.lower = std::move(lo);
   d.upper = std::move(hi);
@@ -109,11 +136,12 @@ class BodyModelBuilder {
 
   Result<BodyModel> build() {
     if (auto s = checkMapping(); !s) return Error{s.error()};
-    restFrames();
     if (!(options_.scale > 0.05 && options_.scale < 20.0)) return Error{"body scale must be between 0.05 and 20"};
     body_.scale = options_.scale;
+    restFrames();
     chooseSpineSites();
     classifyJoints();
+    neutralFrames();
     b_.setUp(up_);
     body_.ikJointOfAvatar.assign(n_, -1);
     for (size_t a = 0; a < n_; ++a)
@@ -121,9 +149,15 @@ class BodyModelBuilder {
     if (body_.head < 0 || body_.leftHand < 0 || body_.rightHand < 0 || body_.leftFoot < 0 || body_.rightFoot < 0)
       return Error{"the mapped hands, feet or head do not hang below the hips; cannot build the body model"};
     if (options_.addTasks) addTasks();
+    // A fresh ik::Data starts at the avatar's rest pose (JointDesc::neutral), q = 0 is neutral.
+    const auto rest = restConfiguration(b_.joints(), body_.ikRestRotation);
+    for (size_t j = 0; j < rest.size(); ++j)
+      for (size_t k = 0; k < rest[j].size(); ++k)
+        if (rest[j][k] != 0.0) b_.setNeutral({static_cast<ik::JointId>(j), static_cast<int>(k)}, rest[j][k]);
     auto model = b_.build();
     if (!model.ok()) return Error{"body model: " + model.error()};
     body_.model = std::move(model.value());
+    body_.restConfiguration = body_.model.neutral;
     return std::move(body_);
   }
 
@@ -133,7 +167,8 @@ class BodyModelBuilder {
   const BodyModelOptions& options_;
   const size_t n_;
   BodyModel body_;
-  std::vector<Eigen::Vector3d> pivot_;  // per avatar joint, model space at the user's scale
+  std::vector<Eigen::Vector3d> pivot_;  // per avatar joint at the neutral pose, model space at the user's scale
+  NeutralPose neutral_;
   Eigen::Vector3d up_, forward_;
   double height_ = 0.0, massScale_ = 0.0;
   bool perVertebra_ = false;             // one spine bone per vertebral joint
@@ -156,22 +191,42 @@ class BodyModelBuilder {
     return {};
   }
 
-  // Rest global rotations and scales (for retargeting), pivots, up, forward, height, masses.
+  // Rest global rotations and scales (for retargeting), up, forward.
   void restFrames() {
     std::vector<glm::mat4> globals;
     computeGlobals(sk_, SkeletonPose::rest(sk_), globals);
     body_.avatarRestGlobalRotation.resize(n_);
     body_.avatarRestGlobalScale.resize(n_);
-    pivot_.resize(n_);
     for (size_t j = 0; j < n_; ++j) {
       const glm::vec3 c0(globals[j][0]), c1(globals[j][1]), c2(globals[j][2]);
       const glm::vec3 s(glm::length(c0), glm::length(c1), glm::length(c2));
       body_.avatarRestGlobalScale[j] = s;
       body_.avatarRestGlobalRotation[j] = glm::normalize(glm::quat_cast(glm::mat3(c0 / s.x, c1 / s.y, c2 / s.z)));
-      pivot_[j] = options_.scale * toEigen(glm::vec3(globals[j][3]));
     }
     up_ = toEigen(map_.up).normalized();
     forward_ = toEigen(map_.forward).normalized();
+  }
+
+  // The neutral pose the model is built at (neutral_pose.h): pivots, hinge axes, height, masses.
+  void neutralFrames() {
+    auto driven = [&](HumanBone b) { return map_.has(b) && kind_[at(map_.joint(b))] != Kind::None ? map_.joint(b) : -1; };
+    NeutralLimbs limbs;
+    for (size_t k = 0; k < 4; ++k) {
+      const bool left = k % 2 == 0, arm = k < 2;
+      const LimbSpec& upper = *specOf(arm ? Kind::UpperArm : Kind::UpperLeg);
+      const LimbSpec& hinge = *specOf(arm ? Kind::Elbow : Kind::Knee);
+      const LimbSpec& end = *specOf(arm ? Kind::Hand : Kind::Ankle);
+      NeutralLimb& l = limbs[k];
+      l.arm = arm;
+      l.left = left;
+      l.upper = driven(left ? upper.left : upper.right);
+      l.hinge = driven(left ? hinge.left : hinge.right);
+      l.end = driven(left ? end.left : end.right);
+      l.endNext = l.end >= 0 ? nextOf(l.end) : -1;
+    }
+    neutral_ = computeNeutralPose(sk_, limbs, up_, forward_);
+    pivot_.resize(n_);
+    for (size_t j = 0; j < n_; ++j) pivot_[j] = options_.scale * neutral_.position[j];
     const double lowestFoot = std::min(pivot_[at(map_.joint(HumanBone::leftFoot))].dot(up_),
                                        pivot_[at(map_.joint(HumanBone::rightFoot))].dot(up_));
     height_ = std::max(0.5, pivot_[at(map_.joint(HumanBone::head))].dot(up_) - lowestFoot + 0.18);
@@ -282,7 +337,7 @@ class BodyModelBuilder {
     const ik::JointId id = b_.addJoint(desc);
     world_.push_back(w);
     body_.avatarJoint.push_back(avatarJoint);
-    body_.ikRestRotation.push_back(Eigen::Quaterniond(rot));
+    body_.ikRestRotation.push_back(neutral_.restFromNeutral[at(avatarJoint)] * Eigen::Quaterniond(rot));
     body_.ikJointOfAvatar[at(avatarJoint)] = id;
     return id;
   }
@@ -337,20 +392,12 @@ class BodyModelBuilder {
     }
   }
 
-  // World hinge axis of an elbow (upper arm x forward, so + flexes the forearm forward; a bent
-  // rest elbow gives the axis directly) or a knee (upper leg x -forward: + flexes the shank back).
+  // World hinge axis of an elbow (+ flexes the forearm forward) or a knee (+ flexes the shank
+  // back), from the rest geometry at the neutral pose (neutral_pose.h).
   Eigen::Vector3d hingeAxis(int j, const LimbSpec& spec, const Eigen::Matrix3d& rot) const {
-    const bool elbow = spec.kind == Kind::Elbow;
-    const HumanBone upperBone = elbow ? (isLeft(j) ? HumanBone::leftUpperArm : HumanBone::rightUpperArm)
-                                      : (isLeft(j) ? HumanBone::leftUpperLeg : HumanBone::rightUpperLeg);
-    const Eigen::Vector3d dUpper = (pivot_[at(j)] - pivot_[at(map_.joint(upperBone))]).normalized();
-    Eigen::Vector3d axis = dUpper.cross(elbow ? forward_ : Eigen::Vector3d(-forward_));
-    if (elbow) {
-      const Eigen::Vector3d bent = dUpper.cross(direction(j));
-      if (bent.norm() > 0.17) axis = bent.dot(axis) >= 0 ? bent : -bent;
-    }
-    if (axis.norm() < 1e-6) axis = rot.col(0);
-    return axis.normalized();
+    const size_t limb = (spec.kind == Kind::Elbow ? 0 : 2) + (isLeft(j) ? 0 : 1);
+    const Eigen::Vector3d& axis = neutral_.hingeAxis[limb];
+    return axis.norm() > 0.5 ? axis : Eigen::Vector3d(rot.col(0));
   }
 
   // Without the coupled spine: one Ball per site with its vertebrae's summed ranges.
@@ -458,7 +505,7 @@ class BodyModelBuilder {
       }
       world_.push_back(siteWorld[k]);
       body_.avatarJoint.push_back(siteJoint[k]);
-      body_.ikRestRotation.push_back(Eigen::Quaterniond(siteWorld[k].linear()));
+      body_.ikRestRotation.push_back(neutral_.restFromNeutral[at(siteJoint[k])] * Eigen::Quaterniond(siteWorld[k].linear()));
     }
     body_.spineSites.clear();
     for (size_t k = 0; k < desc.sites.size(); ++k) {

@@ -1,23 +1,28 @@
 #pragma once
 // The IK body model built from a mapped avatar skeleton, and retargeting back onto it.
 //
-// Every IK joint sits exactly on an avatar bone's pivot (its rest global position), so IK pivots
-// and render pivots coincide and retargeting is exact: an avatar bone takes the world rotation
+// Every IK joint sits exactly on an avatar bone's pivot, so IK pivots and render pivots coincide and retargeting is exact: an avatar bone takes the world rotation
 // its IK joint made relative to rest, applied to the bone's own rest orientation (whatever its
 // axes: VRM 1.0 rest rotations, Mixamo's arbitrary bone axes). Bones the IK model does not
 // drive (twist helpers, end sites, spine bones standing for no vertebra, the bones of a
 // non-site in the simplified spine) keep their rest local rotation, which is what the rigid IK
 // segment between two IK joints assumes.
 //
-// Joints (frames: +Y along the bone towards its child, +X = +Y x forward, +Z = X x Y; at the
-// rest pose every dof is 0):
+// The model is built at the avatar's canonical neutral pose (neutral_pose.h: arms hanging,
+// forearms, thighs and shanks in line, whatever pose the avatar rests in), so q = 0 is neutral and
+// the limb ranges below are anatomical ranges around it; `restConfiguration` is the q that puts the
+// body in the avatar's rest pose (a solve starts from it). The ranges of a T-pose rig and of an
+// A-pose mannequin are then the same body's.
+//
+// Joints (frames at the neutral pose: +Y along the bone towards its child, +X = +Y x forward,
+// +Z = X x Y):
 //   hips                  Free (6)
 //   each spine site       the coupled spine's swing + torsion joints with the ranges and coupling
 //                         rows of the vertebrae it stands for
 //   head                  Ball, the Occ-C1 range
 //   shoulder (clavicle)   Swing (2) about the bone axis, ±20°
-//   upperArm              Ball; lowerArm: Revolute elbow (axis from the rest geometry, 1.7..150°:
-//                         never straight, never backwards)
+//   upperArm              Ball; lowerArm: Revolute elbow (axis from the rest geometry, 1.7..150°
+//                         from straight: never straight, never backwards)
 //                         then Revolute forearm twist about the forearm (±80°); hand: Ball
 //   upperLeg              Ball; lowerLeg: Revolute knee (1.7..140°); foot: Ball; toes: Revolute
 // Segment masses and centres of mass: de Leva (1996) fractions scaled to the total mass,
@@ -59,9 +64,15 @@ struct BodyModel {
   // Per avatar joint: the IK joint that sets its world rotation (the last one at its pivot), -1
   // when the bone is not driven. Precomputed rest data for retargeting (model space).
   std::vector<int> ikJointOfAvatar;
-  std::vector<Eigen::Quaterniond> ikRestRotation;   // per IK joint: world rotation at q = 0
+  // Per IK joint: world rotation at the avatar's rest pose (q = restConfiguration).
+  std::vector<Eigen::Quaterniond> ikRestRotation;
   std::vector<glm::quat> avatarRestGlobalRotation;  // per avatar joint
   std::vector<glm::vec3> avatarRestGlobalScale;     // per avatar joint (columns' lengths)
+  // The configuration that reproduces the avatar's rest pose (q = 0 is the neutral pose):
+  // limb Ball and hinge joints turned from neutral to rest, everything else 0. It is also the
+  // model's JointDesc::neutral, so a fresh ik::Data starts there. A rest hinge bent backwards or
+  // straight gives a value below its lower limit, as it is.
+  Eigen::VectorXd restConfiguration;
   // The spine sites: avatar joint of each and the vertebral joints it stands for.
   std::vector<SpineBone> spineSites;
   double scale = 1.0;       // BodyModelOptions::scale

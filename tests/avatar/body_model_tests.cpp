@@ -71,10 +71,12 @@ void checkRetargeting(const AvatarAsset& avatar, SpineMode spine = SpineMode::Au
   double worstPos = 0.0, worstRot = 0.0, moved = 0.0;
   std::map<ik::JointId, Eigen::Vector3d> restPos;
   for (int trial = 0; trial < 20; ++trial) {
-    const Eigen::VectorXd q =
-        trial == 0 ? Eigen::VectorXd::Zero(body->model.dofs) : randomPose(body->model, rng);
+    const Eigen::VectorXd q = trial == 0 ? body->restConfiguration : randomPose(body->model, rng);
     REQUIRE(data.setConfiguration(q).ok());
     ik::kinematics(body->model, data, false);
+    if (trial == 0)  // the rest configuration puts every IK frame where the avatar rests
+      for (size_t j = 0; j < body->model.joints.size(); ++j)
+        REQUIRE(Eigen::Quaterniond(data.jointFrame(ik::JointId(j)).rotation()).angularDistance(body->ikRestRotation[j]) < 1e-6);
     retarget(body.value(), avatar, data, pose);
     computeGlobals(avatar.skeleton, pose, globals);
     for (ik::JointId j : {body->head, body->leftHand, body->rightHand, body->leftFoot, body->rightFoot}) {
@@ -95,7 +97,7 @@ void checkRetargeting(const AvatarAsset& avatar, SpineMode spine = SpineMode::Au
       const Eigen::Quaterniond want = delta * Eigen::Quaterniond(rest.w, rest.x, rest.y, rest.z);
       worstRot = std::max(worstRot, want.angularDistance(Eigen::Quaterniond(got.w, got.x, got.y, got.z)));
     }
-    if (trial == 0) {  // q = 0 is the rest pose
+    if (trial == 0) {  // restConfiguration is the rest pose
       std::vector<glm::mat4> rest;
       computeGlobals(avatar.skeleton, SkeletonPose::rest(avatar.skeleton), rest);
       for (size_t i = 0; i < rest.size(); ++i)
@@ -124,6 +126,85 @@ TEST_CASE("body model: the default avatar gets one spine site per vertebra and r
           vertebralJointName(level));
   checkRetargeting(a);
   checkRetargeting(a, SpineMode::Auto, /*coupled=*/false);
+}
+
+namespace {
+
+// The default mannequin with its upper arms raised 80 degrees about the forward axis (a T-pose
+// rest, as CMU's or many rigs'); its forearms bent 30 degrees forward on top, as a rest may be.
+AvatarAsset tPoseMannequin() {
+  AvatarAsset a = buildDefaultAvatar();
+  for (const auto& [bone, sign] : {std::pair{HumanBone::leftUpperArm, 1.0f}, std::pair{HumanBone::rightUpperArm, -1.0f}}) {
+    Transform& t = a.skeleton.joints[static_cast<size_t>(a.humanoid.joint(bone))].rest;
+    t.rotation = glm::angleAxis(sign * glm::radians(80.0f), glm::vec3(0, 0, 1)) * t.rotation;
+  }
+  std::vector<glm::mat4> g;
+  computeGlobals(a.skeleton, SkeletonPose::rest(a.skeleton), g);
+  for (const auto& [bone, sign] : {std::pair{HumanBone::leftLowerArm, -1.0f}, std::pair{HumanBone::rightLowerArm, 1.0f}}) {
+    Joint& j = a.skeleton.joints[static_cast<size_t>(a.humanoid.joint(bone))];
+    const glm::quat parent = glm::normalize(glm::quat_cast(glm::mat3(g[static_cast<size_t>(j.parent)])));
+    const glm::quat forward = glm::angleAxis(sign * glm::radians(30.0f), glm::vec3(0, 1, 0));  // about up, in the world
+    j.rest.rotation = glm::inverse(parent) * forward * parent * j.rest.rotation;
+  }
+  return a;
+}
+
+Eigen::Vector3d jointAt(const BodyModel& body, const AvatarAsset& a, HumanBone bone, const Eigen::VectorXd& q) {
+  ik::Data data(body.model);
+  REQUIRE(data.setConfiguration(q).ok());
+  ik::kinematics(body.model, data, false);
+  return data.jointFrame(body.ikJointOfAvatar[static_cast<size_t>(a.humanoid.joint(bone))]).translation();
+}
+
+}  // namespace
+
+TEST_CASE("body model: a T-pose rest gets its limb ranges around the neutral, as the A-pose mannequin", "[body]") {
+  const AvatarAsset mannequin = buildDefaultAvatar(), tpose = tPoseMannequin();
+  auto a = buildBodyModel(mannequin), t = buildBodyModel(tpose);
+  REQUIRE(a.ok());
+  REQUIRE(t.ok());
+  checkRetargeting(tpose);
+  // The rest is a T-pose: the rest configuration holds the hands out at shoulder height.
+  const Eigen::Vector3d shoulder = jointAt(*t, tpose, HumanBone::leftUpperArm, t->restConfiguration);
+  CHECK(jointAt(*t, tpose, HumanBone::leftHand, t->restConfiguration).y() > shoulder.y() - 0.1);
+  // q = 0 is the same neutral body for both rests (arms hanging 10 degrees out, forearms in
+  // line): every joint of the arms within 1 cm, so the ranges around it are the same body's.
+  const Eigen::VectorXd zt = Eigen::VectorXd::Zero(t->model.dofs), za = Eigen::VectorXd::Zero(a->model.dofs);
+  for (HumanBone b : {HumanBone::leftLowerArm, HumanBone::leftHand, HumanBone::rightLowerArm, HumanBone::rightHand})
+    CHECK((jointAt(*t, tpose, b, zt) - jointAt(*a, mannequin, b, za)).norm() < 0.01);
+  const double armLength = (jointAt(*t, tpose, HumanBone::leftHand, zt) - shoulder).norm();
+  CHECK(shoulder.y() - jointAt(*t, tpose, HumanBone::leftHand, zt).y() > 0.95 * armLength);  // hanging
+  for (HumanBone arm : {HumanBone::leftUpperArm, HumanBone::rightUpperArm}) {
+    INFO(humanBoneName(arm));
+    const ik::JointId upper = t->ikJointOfAvatar[static_cast<size_t>(tpose.humanoid.joint(arm))];
+    const auto& desc = t->model.joints[static_cast<size_t>(upper)].desc;
+    const int dof = t->model.joints[static_cast<size_t>(upper)].first_dof;
+    // The arm reaches forward (90 degrees of flexion is inside the range) ...
+    CHECK(desc.lower[0] < -0.5);
+    CHECK(desc.upper[0] > 2.5);
+    Eigen::VectorXd q = zt;
+    q[dof] = 1.5707963;
+    const HumanBone hand = arm == HumanBone::leftUpperArm ? HumanBone::leftHand : HumanBone::rightHand;
+    CHECK(jointAt(*t, tpose, hand, q).z() - shoulder.z() > 0.95 * armLength);
+  }
+  // ... and the elbow flexes forward, never backwards: its range starts at straight and flexion
+  // brings a hanging forearm's hand forward.
+  const ik::JointId twist = t->ikJointOfAvatar[static_cast<size_t>(tpose.humanoid.joint(HumanBone::leftLowerArm))];
+  const ik::JointId hinge = t->model.joints[static_cast<size_t>(twist)].desc.parent;
+  const auto& elbow = t->model.joints[static_cast<size_t>(hinge)];
+  REQUIRE(elbow.desc.type == ik::JointType::Revolute);
+  CHECK(elbow.desc.lower[0] > 0.0);
+  CHECK(elbow.desc.lower[0] < 0.05);
+  Eigen::VectorXd bent = zt;
+  bent[elbow.first_dof] = 1.5;
+  const Eigen::Vector3d elbowAt = jointAt(*t, tpose, HumanBone::leftLowerArm, bent);
+  CHECK(jointAt(*t, tpose, HumanBone::leftHand, bent).z() - elbowAt.z() > 0.15);
+  // The forearm bent 30 degrees more than the mannequin's at rest: the rest configuration says so.
+  const ik::JointId mannequinElbow =
+      a->model.joints[static_cast<size_t>(a->ikJointOfAvatar[static_cast<size_t>(mannequin.humanoid.joint(HumanBone::leftLowerArm))])].desc.parent;
+  const double mannequinBend = a->restConfiguration[a->model.joints[static_cast<size_t>(mannequinElbow)].first_dof];
+  CHECK(mannequinBend == Approx(0.14).margin(0.02));  // the mannequin's forearm hangs bent 8 degrees
+  CHECK(t->restConfiguration[elbow.first_dof] == Approx(mannequinBend + 0.5236).margin(0.01));
 }
 
 TEST_CASE("body model: --spine simplified groups the default avatar's vertebrae into 8 sites", "[body]") {
