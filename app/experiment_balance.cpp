@@ -34,16 +34,8 @@ TaskAdder balanceTasks(const avatar::AvatarAsset& asset, BalanceTasks& t) {
       return body.ikJointOfAvatar[static_cast<size_t>(asset.humanoid.joint(bone))];
     };
     auto at = [&](ik::JointId j) { return restFrame(m, j); };
-    auto task = [&](const char* name, ik::TaskType type, ik::JointId joint, int level,
-                    const Eigen::Vector3d& offset) {
-      ik::TaskDesc d;
-      d.name = name;
-      d.type = type;
-      d.joint = joint;
-      d.level = level;
-      d.offset = offset;
-      return b.addTask(d);
-    };
+    auto task = [&b](const char* name, ik::TaskType type, ik::JointId joint, int level,
+                     const Eigen::Vector3d& offset) { return addExperimentTask(b, name, type, joint, level, offset); };
     const Eigen::Isometry3d ankle = at(body.leftFoot), toes = at(ik(HumanBone::leftToes));
     // The heel: under the ankle, a little behind it, near the sole.
     const Eigen::Vector3d heel(ankle.translation().x(), std::min(ankle.translation().y(), 0.03),

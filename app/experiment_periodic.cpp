@@ -41,16 +41,8 @@ TaskAdder periodicTasks(const avatar::AvatarAsset& asset, PeriodicTasks& t) {
     auto ik = [&](HumanBone bone) {
       return body.ikJointOfAvatar[static_cast<size_t>(asset.humanoid.joint(bone))];
     };
-    auto task = [&](const char* name, ik::TaskType type, ik::JointId joint, int level,
-                    const Eigen::Vector3d& offset) {
-      ik::TaskDesc d;
-      d.name = name;
-      d.type = type;
-      d.joint = joint;
-      d.level = level;
-      d.offset = offset;
-      return b.addTask(d);
-    };
+    auto task = [&b](const char* name, ik::TaskType type, ik::JointId joint, int level,
+                     const Eigen::Vector3d& offset) { return addExperimentTask(b, name, type, joint, level, offset); };
     const char* names[4] = {"left_heel", "left_toes", "right_heel", "right_toes"};
     const ik::JointId ankles[2] = {body.leftFoot, body.rightFoot};
     const ik::JointId toes[2] = {ik(HumanBone::leftToes), ik(HumanBone::rightToes)};

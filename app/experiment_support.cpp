@@ -94,6 +94,17 @@ ik::JointId ikJointOf(const ExperimentBody& body, const avatar::AvatarAsset& ass
   return a < 0 ? -1 : body.body.ikJointOfAvatar[static_cast<size_t>(a)];
 }
 
+ik::TaskId addExperimentTask(ik::ModelBuilder& builder, const char* name, ik::TaskType type, ik::JointId joint,
+                             int level, const Eigen::Vector3d& offset) {
+  ik::TaskDesc d;
+  d.name = name;
+  d.type = type;
+  d.joint = joint;
+  d.level = level;
+  d.offset = offset;
+  return builder.addTask(d);
+}
+
 Eigen::Isometry3d restFrame(const ik::Model& model, ik::JointId joint) {
   ik::Data data(model);
   ik::kinematics(model, data, false);

@@ -62,6 +62,10 @@ Result<ExperimentBody> buildExperimentBody(const avatar::AvatarAsset& asset, ava
 // The IK joint that drives a humanoid bone of the asset, or -1.
 ik::JointId ikJointOf(const ExperimentBody& body, const avatar::AvatarAsset& asset, avatar::HumanBone bone);
 
+// Adds one task on `joint` at `level` (offset in the joint's frame); its id.
+ik::TaskId addExperimentTask(ik::ModelBuilder& builder, const char* name, ik::TaskType type, ik::JointId joint,
+                             int level, const Eigen::Vector3d& offset = Eigen::Vector3d::Zero());
+
 // World rest frame (q = neutral) of an IK joint.
 Eigen::Isometry3d restFrame(const ik::Model& model, ik::JointId joint);
 
