@@ -123,8 +123,16 @@ void requireNoValidation(const XrRun& r) {
 // The IK budget of the 120-frame runs: generous, as in the runtime's walk tests (see the first
 // test); instrumented builds run the IK several times slower. At most 100 ms, a tenth of what
 // `--ik-budget-ms` accepts.
-std::string ikBudgetMs(double factor = 1.0) {
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kInstrumented = true;  // solves run 5-20x slower: timing figures say nothing here
+#else
+constexpr bool kInstrumented = false;
+#endif
+
+std::string ikBudgetMs(double factor = 1.0) {
+#if defined(__SANITIZE_THREAD__)
+  const double ms = 100.0;  // TSan: a solve of ~4 iterations takes 35 ms on a loaded 2-core machine
+#elif defined(__SANITIZE_ADDRESS__)
   const double ms = 40.0;
 #else
   const double ms = 15.0;  // the IK thread shares the 2 cores with lavapipe's render threads
@@ -399,7 +407,10 @@ TEST_CASE("embody xr solves the body on the IK thread within 1 ms and late-latch
   CHECK(r.stats["ik"]["budget_ms"] == 1.0);
   // Deadline misses are the scheduler's on a loaded CI machine (a preempted solve); on an idle
   // machine there are none (docs/xr.md).
-  CHECK(r.stats["ik"]["deadline_misses"].get<int>() <= 10);  // a broken thread misses all 60; a busy machine a few
+  // Under a sanitizer a 1 ms solve cannot finish in time, so the misses and the latch count (which
+  // waits for the body to reach the hands) are only checked in the plain build.
+  if (!kInstrumented)
+    CHECK(r.stats["ik"]["deadline_misses"].get<int>() <= 10);  // a broken thread misses all 60; a busy machine a few
   CHECK(r.stats["render"]["p50_ms"].get<double>() > 0.0);  // it was always 0 before
   CHECK(ik["body_age_frames"].get<int>() >= 59);
   CHECK(ik["body_age_p50_ms"].get<double>() > 0.0);
@@ -409,7 +420,7 @@ TEST_CASE("embody xr solves the body on the IK thread within 1 ms and late-latch
   // few frames at 1 ms; corrections over 10 cm are left to the solver), each within 1 mm of its
   // located wrist.
   const auto& latch = r.stats["late_latch"];
-  CHECK(latch["hand_frames"].get<int>() >= 60);
+  if (!kInstrumented) CHECK(latch["hand_frames"].get<int>() >= 60);
   CHECK(latch["max_error_mm"].get<double>() < 1.0);
   CHECK(r.stats["tracking"]["non_finite_frames"] == 0);
 }
