@@ -532,7 +532,7 @@ TEST_CASE("embody xr --export writes the body shown, every frame, as BVH and as 
   REQUIRE(clip.ok());
   CHECK(clip->frameCount == 30);
   CHECK(clip->frameTime > 1.0 / 1000.0);
-  CHECK(clip->frameTime < 0.2);
+  CHECK(clip->frameTime < (kInstrumented ? 1.0 : 0.2));  // the period the frames were shown at: TSan's are slow
   const int leftWrist = clip->find("l_wrist"), rightWrist = clip->find("r_wrist");
   REQUIRE(leftWrist >= 0);
   REQUIRE(rightWrist >= 0);
