@@ -197,6 +197,7 @@ Status AvatarRenderer::submitFrame(const avatar::SkeletonPose& pose, std::span<c
   scene.palette = palette_;
   scene.morphWeights = options.morphWeights.empty() ? std::span<const float>(defaultMorphWeights_) : options.morphWeights;
   scene.materialStates = options.materialStates;
+  scene.seconds = options.seconds;
   scene.firstPerson = options.view == ViewKind::FirstPerson;
   scene.grid = options.grid;
   scene.lines = lines_;

@@ -36,6 +36,7 @@ struct FrameOptions {
   // One per the asset's expressions.boundMaterials (avatar::SecondaryMotion::materialStates());
   // empty: the materials as loaded.
   std::span<const avatar::MaterialBindState> materialStates;
+  double seconds = 0.0;  // the frame clock (SceneFrame::seconds)
 };
 
 struct AvatarRendererOptions {

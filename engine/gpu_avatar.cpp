@@ -22,8 +22,10 @@ struct MaterialBlock {
   glm::vec4 params{0.5f, 0.0f, 0.0f, 0.0f};
   glm::vec4 shadeColor{0.0f}, shading{0.0f}, rimColor{0.0f}, mixes{0.0f}, matcapFactor{0.0f}, outlineColor{0.0f};
   glm::vec4 shadeUv[2], shadingShiftUv[2], rimUv[2], outlineWidthUv[2];
+  glm::vec4 uvAnimation{0.0f};  // xy: scroll (UV/s), z: rotation (rad/s), w: 0 none, 1 VRM 1.0, 2 VRM 0.x order and mask
+  glm::vec4 uvAnimationMaskUv[2];
 };
-static_assert(sizeof(MaterialBlock) == 21 * sizeof(glm::vec4), "std140: vec4 members only, no padding");
+static_assert(sizeof(MaterialBlock) == 24 * sizeof(glm::vec4), "std140: vec4 members only, no padding");
 
 // KHR_texture_transform as the two rows of its 2x3 matrix (see avatar::TextureTransform); the
 // first row's w carries the texture coordinate set.
@@ -60,21 +62,24 @@ MaterialBlock materialBlock(const avatar::Material& m, const avatar::MaterialBin
   uvRows(s.transform(t.shadingShiftTransform), b.shadingShiftUv);
   uvRows(s.transform(t.rimTransform), b.rimUv);
   uvRows(s.transform(t.outlineWidthTransform), b.outlineWidthUv);
+  if (m.isMToon && t.hasUvAnimation())
+    b.uvAnimation = glm::vec4(t.uvAnimationScroll, t.uvAnimationRotation, t.uvAnimationVrm0 ? 2.0f : 1.0f);
+  uvRows(t.uvAnimationMaskTransform, b.uvAnimationMaskUv);  // the mask reads the un-animated uv (binds do not move it)
   return b;
 }
 
-// A material's textures in binding order (set 1, bindings 1..7), and whether each holds linear
-// data (shading shift, outline width) rather than sRGB colour.
+// A material's textures in binding order (set 1, bindings 1..8), and whether each holds linear
+// data (shading shift, outline width, UV animation mask) rather than sRGB colour.
 struct MaterialTextures {
   int image[kMaterialTextureCount];
-  static constexpr bool kLinear[kMaterialTextureCount] = {false, false, false, true, false, false, true};
+  static constexpr bool kLinear[kMaterialTextureCount] = {false, false, false, true, false, false, true, true};
 };
 
 MaterialTextures materialTextures(const avatar::Material& m) {
   const avatar::MToon& t = m.mtoon;
-  if (!m.isMToon) return {{m.baseColorImage, m.emissiveImage, -1, -1, -1, -1, -1}};
+  if (!m.isMToon) return {{m.baseColorImage, m.emissiveImage, -1, -1, -1, -1, -1, -1}};
   return {{m.baseColorImage, m.emissiveImage, t.shadeImage, t.shadingShiftImage, t.rimImage, t.matcapImage,
-           t.outlineWidthImage}};
+           t.outlineWidthImage, t.uvAnimationMaskImage}};
 }
 
 // Centroid (bind space) and the joint with the most skin weight over a draw's vertices.
@@ -146,7 +151,7 @@ std::string GpuAvatar::validate(const avatar::AvatarAsset& asset) {
     }
     for (const avatar::TextureTransform* t : {&m.baseColorTransform, &m.emissiveTransform, &m.mtoon.shadeTransform,
                                               &m.mtoon.shadingShiftTransform, &m.mtoon.rimTransform,
-                                              &m.mtoon.outlineWidthTransform})
+                                              &m.mtoon.outlineWidthTransform, &m.mtoon.uvAnimationMaskTransform})
       if (t->texCoord < 0 || t->texCoord > 1)
         return "material '" + m.name + "' reads a texture coordinate set other than 0 or 1";
   }
@@ -261,7 +266,7 @@ void writeMaterialSet(VkDevice dev, VkDescriptorSet set, const VkDescriptorBuffe
   w[0].descriptorCount = 1;
   w[0].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
   w[0].pBufferInfo = &block;
-  w[1].dstBinding = 1;  // bindings 1..7 are consecutive, one descriptor each
+  w[1].dstBinding = 1;  // bindings 1..8 are consecutive, one descriptor each
   w[1].descriptorCount = kMaterialTextureCount;
   w[1].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
   w[1].pImageInfo = images;

@@ -21,9 +21,10 @@ namespace embody::engine {
 
 constexpr uint32_t kFramesInFlight = 2;  // the renderer's frame slots
 
-// Textures a material binds (set 1, bindings 1..7): base colour, emissive, then MToon's shade,
-// shading shift, rim, matcap and outline width (the white texture where a material has none).
-constexpr int kMaterialTextureCount = 7;
+// Textures a material binds (set 1, bindings 1..8): base colour, emissive, then MToon's shade,
+// shading shift, rim, matcap, outline width and UV animation mask (the white texture where a
+// material has none).
+constexpr int kMaterialTextureCount = 8;
 
 struct GpuMaterial {
   avatar::AlphaMode alphaMode = avatar::AlphaMode::Opaque;

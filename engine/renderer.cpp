@@ -1,6 +1,7 @@
 #include "engine/renderer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <string>
 #include <utility>
@@ -16,6 +17,7 @@ struct SceneBlock {
     glm::vec4 eye;
   } views[kMaxViewsPerFrame];
   glm::vec4 lightDirection, lightColor, skyColor, groundColor;
+  glm::vec4 clock;  // x: SceneFrame::seconds
 };
 
 // Mirror of `Push` in shaders/common.glsl.
@@ -217,6 +219,7 @@ Status Renderer::setScene(const SceneFrame& scene) {
   block->lightColor = glm::vec4(scene.lighting.lightColor, 1.0f);
   block->skyColor = glm::vec4(scene.lighting.skyColor, 1.0f);
   block->groundColor = glm::vec4(scene.lighting.groundColor, 1.0f);
+  block->clock = glm::vec4(std::isfinite(scene.seconds) ? float(scene.seconds) : 0.0f, 0.0f, 0.0f, 0.0f);
   f.firstPerson = scene.firstPerson;
   f.grid = scene.grid;
   // Blended draws' centres in this pose, for sorting them per pass (vectors grow once, then reuse).

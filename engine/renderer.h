@@ -48,6 +48,9 @@ struct SceneFrame {
   // One per avatar->boundMaterials() (avatar::SecondaryMotion::materialStates()): expression
   // material colour and texture-transform binds; empty: the materials as loaded.
   std::span<const avatar::MaterialBindState> materialStates;
+  // The frame clock in seconds (MToon UV animation); float precision, so callers count from
+  // their start (1 ms resolution lasts about 2 hours).
+  double seconds = 0.0;
   bool firstPerson = false;            // draw the first-person list (the user's head hidden)
   bool grid = true;                    // the ground grid on y = 0
   std::span<const LineVertex> lines;          // line list, depth-tested (tracking-target gizmos)

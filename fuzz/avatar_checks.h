@@ -49,7 +49,7 @@ inline void checkAvatar(const avatar::AvatarAsset& a) {
   }
   for (const auto& mat : a.materials) {  // MToon: finite, in the specification's ranges, images that exist
     const auto& t = mat.mtoon;
-    for (int image : {t.shadeImage, t.shadingShiftImage, t.matcapImage, t.rimImage, t.outlineWidthImage})
+    for (int image : {t.shadeImage, t.shadingShiftImage, t.matcapImage, t.rimImage, t.outlineWidthImage, t.uvAnimationMaskImage})
       EMBODY_FUZZ_CHECK(image < static_cast<int>(a.images.size()));
     EMBODY_FUZZ_CHECK(finite(t.shadeColor) && finite(t.matcapFactor) && finite(t.rimColor) && finite(t.outlineColor) &&
                       finite(mat.emissiveFactor));
@@ -59,7 +59,10 @@ inline void checkAvatar(const avatar::AvatarAsset& a) {
                       t.outlineLightingMix >= 0.0f && t.outlineLightingMix <= 1.0f);
     EMBODY_FUZZ_CHECK(t.rimFresnelPower >= 0.0f && t.rimFresnelPower <= 100.0f && t.outlineWidth >= 0.0f &&
                       t.outlineWidth <= 1.0f && t.renderQueueOffset >= -9 && t.renderQueueOffset <= 9);
-    for (const auto* tt : {&t.shadeTransform, &t.shadingShiftTransform, &t.rimTransform, &t.outlineWidthTransform})
+    EMBODY_FUZZ_CHECK(std::abs(t.uvAnimationScroll.x) <= 1000.0f && std::abs(t.uvAnimationScroll.y) <= 1000.0f &&
+                      std::abs(t.uvAnimationRotation) <= 2000.0f * 3.1416f);  // 0.x: turns x 2 pi
+    for (const auto* tt : {&t.shadeTransform, &t.shadingShiftTransform, &t.rimTransform, &t.outlineWidthTransform,
+                           &t.uvAnimationMaskTransform})
       EMBODY_FUZZ_CHECK(tt->texCoord == 0 || tt->texCoord == 1);
   }
   for (const auto& img : a.images)

@@ -27,6 +27,7 @@ SecondaryMotion::SecondaryMotion(const AvatarAsset& asset, const SecondaryMotion
 void SecondaryMotion::update(SkeletonPose& pose, double dt, const std::optional<glm::vec3>& lookTarget) {
   if (pose.local.size() != asset_.skeleton.joints.size()) return;
   if (!(dt >= 0.0) || !std::isfinite(dt)) dt = 0.0;
+  seconds_ += dt;
   std::copy(manual_.begin(), manual_.end(), weights_.begin());
   computeGlobals(asset_.skeleton, pose, globals_);
   // Look-at first: its eye rotations are part of the pose the springs see.

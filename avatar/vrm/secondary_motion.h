@@ -44,6 +44,8 @@ class SecondaryMotion {
   // One per asset.expressions.boundMaterials: the colours and texture transforms the
   // expressions' material binds give this frame (engine::SceneFrame::materialStates).
   std::span<const MaterialBindState> materialStates() const { return materialStates_; }
+  // Seconds of motion so far (the sum of update()'s dt): the frame clock of MToon UV animation.
+  double seconds() const { return seconds_; }
   const SpringBoneJob& lastSpringJob() const { return job_; }
   float blinkWeight() const { return blink_; }
   Gaze lastGaze() const { return gaze_; }
@@ -58,6 +60,7 @@ class SecondaryMotion {
   std::vector<float> manual_, weights_, effective_, defaults_, morph_;
   std::vector<MaterialBindState> materialStates_;
   float blink_ = 0.0f;
+  double seconds_ = 0.0;
   Gaze gaze_;
   bool resetSprings_ = false;
 };
