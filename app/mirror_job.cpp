@@ -51,6 +51,8 @@ Status drawFrame(engine::AvatarRenderer& ar, engine::DesktopWindow& win, VkQueue
   scene.avatar = &ar.gpuAvatar();
   scene.palette = ar.palette();
   scene.morphWeights = secondary.morphWeights();
+  scene.materialStates = secondary.materialStates();
+  scene.seconds = secondary.seconds();
   scene.firstPerson = !third;
   scene.grid = job.grid;
   engine::Renderer& r = ar.renderer();

@@ -219,6 +219,8 @@ struct FrameLoop {
       shown = solved.pose;
       secondary.update(shown, 1.0 / job.fps, viewer);
       fo.morphWeights = secondary.morphWeights();
+      fo.materialStates = secondary.materialStates();
+      fo.seconds = secondary.seconds();
       Result<avatar::Image> image = renderView(renderer, shown, job, fo);
       if (!image) return image.error();
       fs.renderSeconds = std::chrono::duration<double>(Clock::now() - t0).count();

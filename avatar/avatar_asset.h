@@ -85,6 +85,16 @@ struct MToon {
   float outlineLightingMix = 1.0f;  // 0..1
   int renderQueueOffset = 0;        // BLEND only: -9..0, or 0..+9 with transparentWithZWrite
   bool transparentWithZWrite = false;
+  // UV animation (1.0 "UV Animation"): every texture but the matcap reads
+  //   uv' = R(rotation x t x mask) (uv - 0.5) + 0.5 + scroll x t x mask   (before its KHR_texture_transform)
+  // with R as KHR_texture_transform's and mask = B of uvAnimationMaskTexture (1 without one). VRM
+  // 0.x (`uvAnimationVrm0`) scrolls before it rotates and reads the mask's R, as its shader does.
+  int uvAnimationMaskImage = -1;  // uvAnimationMaskTexture (linear)
+  TextureTransform uvAnimationMaskTransform;
+  glm::vec2 uvAnimationScroll{0.0f};  // uvAnimationScrollX/YSpeedFactor: UV per second, v down
+  float uvAnimationRotation = 0.0f;   // uvAnimationRotationSpeedFactor: radians per second
+  bool uvAnimationVrm0 = false;
+  bool hasUvAnimation() const { return uvAnimationScroll != glm::vec2(0.0f) || uvAnimationRotation != 0.0f; }
   bool hasOutline() const { return outlineMode != OutlineWidthMode::None && outlineWidth > 0.0f; }
 };
 

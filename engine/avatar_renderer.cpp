@@ -196,6 +196,8 @@ Status AvatarRenderer::submitFrame(const avatar::SkeletonPose& pose, std::span<c
   scene.avatar = avatar_.get();
   scene.palette = palette_;
   scene.morphWeights = options.morphWeights.empty() ? std::span<const float>(defaultMorphWeights_) : options.morphWeights;
+  scene.materialStates = options.materialStates;
+  scene.seconds = options.seconds;
   scene.firstPerson = options.view == ViewKind::FirstPerson;
   scene.grid = options.grid;
   scene.lines = lines_;

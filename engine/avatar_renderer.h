@@ -33,6 +33,10 @@ struct FrameOptions {
   glm::vec4 clearColor{0.30f, 0.33f, 0.38f, 1.0f};
   // One per mesh.morphChannels (avatar::SecondaryMotion::morphWeights()); empty: the file's defaults.
   std::span<const float> morphWeights;
+  // One per the asset's expressions.boundMaterials (avatar::SecondaryMotion::materialStates());
+  // empty: the materials as loaded.
+  std::span<const avatar::MaterialBindState> materialStates;
+  double seconds = 0.0;  // the frame clock (SceneFrame::seconds)
 };
 
 struct AvatarRendererOptions {

@@ -22,8 +22,10 @@ struct MaterialBlock {
   glm::vec4 params{0.5f, 0.0f, 0.0f, 0.0f};
   glm::vec4 shadeColor{0.0f}, shading{0.0f}, rimColor{0.0f}, mixes{0.0f}, matcapFactor{0.0f}, outlineColor{0.0f};
   glm::vec4 shadeUv[2], shadingShiftUv[2], rimUv[2], outlineWidthUv[2];
+  glm::vec4 uvAnimation{0.0f};  // xy: scroll (UV/s), z: rotation (rad/s), w: 0 none, 1 VRM 1.0, 2 VRM 0.x order and mask
+  glm::vec4 uvAnimationMaskUv[2];
 };
-static_assert(sizeof(MaterialBlock) == 21 * sizeof(glm::vec4), "std140: vec4 members only, no padding");
+static_assert(sizeof(MaterialBlock) == 24 * sizeof(glm::vec4), "std140: vec4 members only, no padding");
 
 // KHR_texture_transform as the two rows of its 2x3 matrix (see avatar::TextureTransform); the
 // first row's w carries the texture coordinate set.
@@ -33,43 +35,51 @@ void uvRows(const avatar::TextureTransform& t, glm::vec4 rows[2]) {
   rows[1] = glm::vec4(-s * t.scale.x, c * t.scale.y, t.offset.y, 0.0f);
 }
 
-MaterialBlock materialBlock(const avatar::Material& m) {
+// The block of `m` as loaded, or under this frame's expression binds (`bind`, colours and texture
+// transforms; the rest stays as loaded).
+MaterialBlock materialBlock(const avatar::Material& m, const avatar::MaterialBindState* bind = nullptr) {
+  using C = avatar::MaterialColorType;
+  const avatar::MaterialBindState s = bind ? *bind : avatar::materialBindBase(m);
   MaterialBlock b;
-  b.baseColorFactor = m.baseColorFactor;
-  b.emissive = glm::vec4(m.emissiveFactor * m.emissiveStrength, 0.0f);
-  uvRows(m.baseColorTransform, b.baseColorUv);
-  uvRows(m.emissiveTransform, b.emissiveUv);
+  b.baseColorFactor = glm::vec4(s.color(C::Color), s.alpha);
+  b.emissive = glm::vec4(s.color(C::EmissionColor) * m.emissiveStrength, 0.0f);
+  uvRows(s.transform(m.baseColorTransform), b.baseColorUv);
+  uvRows(s.transform(m.emissiveTransform), b.emissiveUv);
   const avatar::MToon& t = m.mtoon;
   const bool outline = m.isMToon && t.hasOutline();
   b.params = glm::vec4(m.alphaCutoff, m.unlit ? 1.0f : 0.0f, m.isMToon ? 1.0f : 0.0f,
                        outline ? float(static_cast<int>(t.outlineMode)) : 0.0f);
-  b.shadeColor = glm::vec4(t.shadeColor, t.shadingShift);
+  b.shadeColor = glm::vec4(s.color(C::ShadeColor), t.shadingShift);
   // Without a shading-shift texture the white default would shift by its scale: scale 0 instead.
   b.shading = glm::vec4(t.shadingToony, t.giEqualization, t.shadingShiftImage >= 0 ? t.shadingShiftScale : 0.0f,
                         t.rimFresnelPower);
-  b.rimColor = glm::vec4(t.rimColor, t.rimLift);
+  b.rimColor = glm::vec4(s.color(C::RimColor), t.rimLift);
   b.mixes = glm::vec4(t.rimLightingMix, t.outlineWidth, t.outlineLightingMix, 0.0f);
-  b.matcapFactor = glm::vec4(t.matcapImage >= 0 ? t.matcapFactor : glm::vec3(0.0f), 0.0f);  // no texture: no matcap
-  b.outlineColor = glm::vec4(t.outlineColor, 1.0f);
-  uvRows(t.shadeTransform, b.shadeUv);
-  uvRows(t.shadingShiftTransform, b.shadingShiftUv);
-  uvRows(t.rimTransform, b.rimUv);
-  uvRows(t.outlineWidthTransform, b.outlineWidthUv);
+  b.matcapFactor = glm::vec4(t.matcapImage >= 0 ? s.color(C::MatcapColor) : glm::vec3(0.0f), 0.0f);  // no texture: no matcap
+  b.outlineColor = glm::vec4(s.color(C::OutlineColor), 1.0f);
+  // Texture-transform binds move every texture but the matcap (which has no transform).
+  uvRows(s.transform(t.shadeTransform), b.shadeUv);
+  uvRows(s.transform(t.shadingShiftTransform), b.shadingShiftUv);
+  uvRows(s.transform(t.rimTransform), b.rimUv);
+  uvRows(s.transform(t.outlineWidthTransform), b.outlineWidthUv);
+  if (m.isMToon && t.hasUvAnimation())
+    b.uvAnimation = glm::vec4(t.uvAnimationScroll, t.uvAnimationRotation, t.uvAnimationVrm0 ? 2.0f : 1.0f);
+  uvRows(t.uvAnimationMaskTransform, b.uvAnimationMaskUv);  // the mask reads the un-animated uv (binds do not move it)
   return b;
 }
 
-// A material's textures in binding order (set 1, bindings 1..7), and whether each holds linear
-// data (shading shift, outline width) rather than sRGB colour.
+// A material's textures in binding order (set 1, bindings 1..8), and whether each holds linear
+// data (shading shift, outline width, UV animation mask) rather than sRGB colour.
 struct MaterialTextures {
   int image[kMaterialTextureCount];
-  static constexpr bool kLinear[kMaterialTextureCount] = {false, false, false, true, false, false, true};
+  static constexpr bool kLinear[kMaterialTextureCount] = {false, false, false, true, false, false, true, true};
 };
 
 MaterialTextures materialTextures(const avatar::Material& m) {
   const avatar::MToon& t = m.mtoon;
-  if (!m.isMToon) return {{m.baseColorImage, m.emissiveImage, -1, -1, -1, -1, -1}};
+  if (!m.isMToon) return {{m.baseColorImage, m.emissiveImage, -1, -1, -1, -1, -1, -1}};
   return {{m.baseColorImage, m.emissiveImage, t.shadeImage, t.shadingShiftImage, t.rimImage, t.matcapImage,
-           t.outlineWidthImage}};
+           t.outlineWidthImage, t.uvAnimationMaskImage}};
 }
 
 // Centroid (bind space) and the joint with the most skin weight over a draw's vertices.
@@ -128,6 +138,8 @@ std::string GpuAvatar::validate(const avatar::AvatarAsset& asset) {
   }
   if (auto s = checkList(mesh.indices, mesh.primitives, "third-person"); !s.empty()) return s;
   if (auto s = checkList(mesh.firstPersonIndices, mesh.firstPersonPrimitives, "first-person"); !s.empty()) return s;
+  for (int m : asset.expressions.boundMaterials)
+    if (m < 0 || static_cast<size_t>(m) >= asset.materials.size()) return "an expression binds a missing material";
   for (const auto& m : asset.materials) {
     const MaterialTextures textures = materialTextures(m);
     for (int image : textures.image) {
@@ -139,7 +151,7 @@ std::string GpuAvatar::validate(const avatar::AvatarAsset& asset) {
     }
     for (const avatar::TextureTransform* t : {&m.baseColorTransform, &m.emissiveTransform, &m.mtoon.shadeTransform,
                                               &m.mtoon.shadingShiftTransform, &m.mtoon.rimTransform,
-                                              &m.mtoon.outlineWidthTransform})
+                                              &m.mtoon.outlineWidthTransform, &m.mtoon.uvAnimationMaskTransform})
       if (t->texCoord < 0 || t->texCoord > 1)
         return "material '" + m.name + "' reads a texture coordinate set other than 0 or 1";
   }
@@ -243,11 +255,44 @@ Result<GpuAvatar::TextureIndex> GpuAvatar::uploadTextures(const Device& device, 
   return index;
 }
 
+namespace {
+
+// Points `set` at a material's uniform block and its textures (set 1, bindings 0..7).
+void writeMaterialSet(VkDevice dev, VkDescriptorSet set, const VkDescriptorBufferInfo& block,
+                      const VkDescriptorImageInfo (&images)[kMaterialTextureCount]) {
+  VkWriteDescriptorSet w[2] = {{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}, {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}};
+  w[0].dstSet = w[1].dstSet = set;
+  w[0].dstBinding = 0;
+  w[0].descriptorCount = 1;
+  w[0].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+  w[0].pBufferInfo = &block;
+  w[1].dstBinding = 1;  // bindings 1..8 are consecutive, one descriptor each
+  w[1].descriptorCount = kMaterialTextureCount;
+  w[1].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  w[1].pImageInfo = images;
+  vkUpdateDescriptorSets(dev, 2, w, 0, nullptr);
+}
+
+}  // namespace
+
+void GpuAvatar::writeBoundMaterials(uint32_t slot, std::span<const avatar::MaterialBindState> states) const {
+  if (boundBase_.empty()) return;
+  auto* base = static_cast<std::byte*>(boundBlocks_.mapped()) + slot * boundBase_.size() * blockStride_;
+  for (size_t k = 0; k < boundBase_.size(); ++k) {
+    const MaterialBlock b = materialBlock(boundBase_[k], states.empty() ? nullptr : &states[k]);
+    std::memcpy(base + k * blockStride_, &b, sizeof(b));
+  }
+  boundBlocks_.flush();
+}
+
+// Device-local blocks for every material; the bound ones (boundMaterials_) also get a host-visible
+// block and a descriptor set per frame slot.
 Status GpuAvatar::createMaterials(const Device& device, Uploader& up, VkDescriptorSetLayout layout,
                                   const std::vector<avatar::Material>& materials, const TextureIndex& textureOf) {
   const VkDevice dev = device.handle();
   const VkDeviceSize align = std::max<VkDeviceSize>(device.limits().minUniformBufferOffsetAlignment, 16);
   const VkDeviceSize stride = (sizeof(MaterialBlock) + align - 1) / align * align;
+  blockStride_ = stride;
   std::vector<std::byte> blocks(stride * materials.size());
   for (size_t i = 0; i < materials.size(); ++i) {
     const MaterialBlock b = materialBlock(materials[i]);
@@ -257,8 +302,17 @@ Status GpuAvatar::createMaterials(const Device& device, Uploader& up, VkDescript
   if (!buffer) return Error{buffer.error()};
   materialBlocks_ = std::move(buffer).value();
   if (auto s = up.upload(materialBlocks_, blocks); !s) return s;
+  const size_t bound = boundMaterials_.size();
+  for (int m : boundMaterials_) boundBase_.push_back(materials[static_cast<size_t>(m)]);
+  if (bound > 0) {
+    auto hb = Buffer::create(device, stride * bound * kFramesInFlight, VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
+                             MemoryUse::HostUpload);
+    if (!hb) return Error{hb.error()};
+    boundBlocks_ = std::move(hb).value();
+    for (uint32_t slot = 0; slot < kFramesInFlight; ++slot) writeBoundMaterials(slot, {});
+  }
 
-  const uint32_t setCount = static_cast<uint32_t>(materials.size());
+  const uint32_t setCount = static_cast<uint32_t>(materials.size() + bound * (kFramesInFlight - 1));
   const VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, setCount},
                                          {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, kMaterialTextureCount * setCount}};
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
@@ -270,9 +324,6 @@ Status GpuAvatar::createMaterials(const Device& device, Uploader& up, VkDescript
   pool_ = UniqueDescriptorPool(dev, pool);
   for (size_t i = 0; i < materials.size(); ++i) {
     const avatar::Material& m = materials[i];
-    auto set = allocateDescriptorSet(dev, pool, layout);
-    if (!set) return Error{set.error()};
-    const VkDescriptorBufferInfo block{materialBlocks_.handle(), i * stride, sizeof(MaterialBlock)};
     const MaterialTextures mt = materialTextures(m);
     VkDescriptorImageInfo images[kMaterialTextureCount];
     for (int k = 0; k < kMaterialTextureCount; ++k) {
@@ -280,24 +331,23 @@ Status GpuAvatar::createMaterials(const Device& device, Uploader& up, VkDescript
       const int texture = image < 0 ? 0 : (MaterialTextures::kLinear[k] ? textureOf.linear : textureOf.srgb)[image];
       images[k] = {sampler_.get(), textures_[texture].view(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
     }
-    VkWriteDescriptorSet w[2] = {{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}, {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}};
-    w[0].dstSet = w[1].dstSet = *set;
-    w[0].dstBinding = 0;
-    w[0].descriptorCount = 1;
-    w[0].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-    w[0].pBufferInfo = &block;
-    w[1].dstBinding = 1;  // bindings 1..7 are consecutive, one descriptor each
-    w[1].descriptorCount = kMaterialTextureCount;
-    w[1].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-    w[1].pImageInfo = images;
-    vkUpdateDescriptorSets(dev, 2, w, 0, nullptr);
+    const auto b = std::find(boundMaterials_.begin(), boundMaterials_.end(), static_cast<int>(i));
+    const size_t k = static_cast<size_t>(b - boundMaterials_.begin());
     GpuMaterial g;
+    for (uint32_t slot = 0; slot < (k < bound ? kFramesInFlight : 1); ++slot) {
+      auto set = allocateDescriptorSet(dev, pool, layout);
+      if (!set) return Error{set.error()};
+      const VkDescriptorBufferInfo block = k < bound ? VkDescriptorBufferInfo{boundBlocks_.handle(), (slot * bound + k) * stride, sizeof(MaterialBlock)}
+                                                     : VkDescriptorBufferInfo{materialBlocks_.handle(), i * stride, sizeof(MaterialBlock)};
+      writeMaterialSet(dev, *set, block, images);
+      g.descriptorSets[slot] = *set;
+    }
+    if (k >= bound) g.descriptorSets.fill(g.descriptorSets[0]);
     g.alphaMode = m.alphaMode;
     g.doubleSided = m.doubleSided;
     g.outline = m.isMToon && m.mtoon.hasOutline();
     g.zwrite = m.alphaMode != avatar::AlphaMode::Blend || (m.isMToon && m.mtoon.transparentWithZWrite);
     g.queueOffset = m.isMToon && m.alphaMode == avatar::AlphaMode::Blend ? m.mtoon.renderQueueOffset : 0;
-    g.descriptorSet = *set;
     materials_.push_back(g);
   }
   return {};
@@ -339,6 +389,7 @@ Result<std::unique_ptr<GpuAvatar>> Renderer::upload(const avatar::AvatarAsset& a
   // Materials: the asset's, then the glTF default material (white, opaque, single-sided) last.
   std::vector<avatar::Material> materials = asset.materials;
   materials.push_back(avatar::Material{});
+  a->boundMaterials_ = asset.expressions.boundMaterials;
   Uploader up(device_);
   if (auto s = a->uploadMesh(device_, up, mesh); !s) return Error{s.error()};
   auto textureOf = a->uploadTextures(device_, up, materials, asset.images);

@@ -3,17 +3,28 @@
 // buffer holding the third-person and first-person lists back to back, mipmapped textures, a
 // uniform block + descriptor set per material, and the draw lists split by alpha mode. Created by
 // Renderer::upload.
+//
+// Materials that VRM expressions move (material colour and texture-transform binds:
+// asset.expressions.boundMaterials) keep their uniform blocks in a host-visible buffer, one copy
+// per frame in flight, each with its own descriptor set; the renderer rewrites the copy of the
+// frame it records (setScene), after beginFrame has waited for that frame's previous use.
+#include <array>
 #include <glm/glm.hpp>
+#include <span>
 #include <vector>
 
 #include "avatar/avatar_asset.h"
+#include "avatar/vrm/material_binds.h"
 #include "engine/resources.h"
 
 namespace embody::engine {
 
-// Textures a material binds (set 1, bindings 1..7): base colour, emissive, then MToon's shade,
-// shading shift, rim, matcap and outline width (the white texture where a material has none).
-constexpr int kMaterialTextureCount = 7;
+constexpr uint32_t kFramesInFlight = 2;  // the renderer's frame slots
+
+// Textures a material binds (set 1, bindings 1..8): base colour, emissive, then MToon's shade,
+// shading shift, rim, matcap, outline width and UV animation mask (the white texture where a
+// material has none).
+constexpr int kMaterialTextureCount = 8;
 
 struct GpuMaterial {
   avatar::AlphaMode alphaMode = avatar::AlphaMode::Opaque;
@@ -21,8 +32,9 @@ struct GpuMaterial {
   bool outline = false;  // MToon outline: an inverted-hull pass after the surface
   bool zwrite = true;    // BLEND writes depth only with MToon's transparentWithZWrite
   int queueOffset = 0;   // MToon renderQueueOffsetNumber (BLEND): later draws have higher offsets
-  // set 1: the material's uniform block (shaders/material.glsl) and its textures
-  VkDescriptorSet descriptorSet = VK_NULL_HANDLE;
+  // set 1 per frame slot: the material's uniform block (shaders/material.glsl) and its textures;
+  // the same set in every slot unless expressions bind the material (then each slot's own block).
+  std::array<VkDescriptorSet, kFramesInFlight> descriptorSets{};
 };
 
 struct GpuDraw {
@@ -58,6 +70,8 @@ class GpuAvatar {
   VkBuffer morphRanges() const { return morphRanges_.handle(); }
   VkBuffer morphDeltas() const { return morphDeltas_.handle(); }
   uint32_t morphChannelCount() const { return morphChannelCount_; }
+  // The materials with per-frame blocks (asset.expressions.boundMaterials).
+  const std::vector<int>& boundMaterials() const { return boundMaterials_; }
 
   // Checks what the GPU would otherwise read out of bounds: joint indices against the skeleton,
   // vertex indices against the vertex count, primitive ranges, material and image indices.
@@ -77,7 +91,14 @@ class GpuAvatar {
   Status createMaterials(const Device& device, Uploader& up, VkDescriptorSetLayout layout,
                          const std::vector<avatar::Material>& materials, const TextureIndex& textureOf);
   void buildDrawLists(const avatar::AvatarAsset& asset, const std::vector<avatar::Material>& materials);
+  // Writes frame slot `slot`'s blocks of the bound materials: the states (one per bound material)
+  // or, when empty, the materials as loaded. Only the renderer calls it, for the slot it records.
+  void writeBoundMaterials(uint32_t slot, std::span<const avatar::MaterialBindState> states) const;
   Buffer vertices_, indices_, materialBlocks_;
+  Buffer boundBlocks_;  // host-visible: kFramesInFlight x boundMaterials_ blocks
+  VkDeviceSize blockStride_ = 0;
+  std::vector<int> boundMaterials_;
+  std::vector<avatar::Material> boundBase_;  // the bound materials as loaded
   Buffer morphRanges_, morphDeltas_;
   uint32_t morphChannelCount_ = 0;
   std::vector<Image> textures_;

@@ -1,6 +1,7 @@
 #include "engine/renderer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <string>
 #include <utility>
@@ -16,6 +17,7 @@ struct SceneBlock {
     glm::vec4 eye;
   } views[kMaxViewsPerFrame];
   glm::vec4 lightDirection, lightColor, skyColor, groundColor;
+  glm::vec4 clock;  // x: SceneFrame::seconds
 };
 
 // Mirror of `Push` in shaders/common.glsl.
@@ -182,6 +184,9 @@ Status Renderer::setScene(const SceneFrame& scene) {
   if (scene.avatar && !scene.morphWeights.empty() && scene.morphWeights.size() < scene.avatar->morphChannelCount())
     return Error{"the frame has " + std::to_string(scene.morphWeights.size()) + " morph weights; the avatar has " +
                  std::to_string(scene.avatar->morphChannelCount()) + " morph channels"};
+  if (scene.avatar && !scene.materialStates.empty() && scene.materialStates.size() != scene.avatar->boundMaterials().size())
+    return Error{"the frame has " + std::to_string(scene.materialStates.size()) + " material bind states; the avatar binds " +
+                 std::to_string(scene.avatar->boundMaterials().size()) + " materials"};
   const bool paletteGrows = f.palette.size() < scene.palette.size_bytes();
   if (auto s = ensureCapacity(f.palette, scene.palette.size_bytes(), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, f); !s)
     return s;
@@ -189,6 +194,8 @@ Status Renderer::setScene(const SceneFrame& scene) {
   if (auto s = ensureCapacity(f.morphWeights, scene.morphWeights.size_bytes(), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, f); !s)
     return s;
   f.avatar = scene.avatar;
+  // This slot's copy of the expression-bound material blocks (its previous frame has finished).
+  if (f.avatar) f.avatar->writeBoundMaterials(current_, scene.materialStates);
   const VkBuffer ranges = f.avatar && f.avatar->morphRanges() ? f.avatar->morphRanges() : morphPlaceholder_.handle();
   if (paletteGrows || weightsGrow || ranges != f.boundMorphRanges) writeFrameDescriptors(f);
   if (!scene.palette.empty()) std::memcpy(f.palette.mapped(), scene.palette.data(), scene.palette.size_bytes());
@@ -212,6 +219,7 @@ Status Renderer::setScene(const SceneFrame& scene) {
   block->lightColor = glm::vec4(scene.lighting.lightColor, 1.0f);
   block->skyColor = glm::vec4(scene.lighting.skyColor, 1.0f);
   block->groundColor = glm::vec4(scene.lighting.groundColor, 1.0f);
+  block->clock = glm::vec4(std::isfinite(scene.seconds) ? float(scene.seconds) : 0.0f, 0.0f, 0.0f, 0.0f);
   f.firstPerson = scene.firstPerson;
   f.grid = scene.grid;
   // Blended draws' centres in this pose, for sorting them per pass (vectors grow once, then reuse).
@@ -272,7 +280,7 @@ void Renderer::drawAvatarList(VkCommandBuffer cmd, const GpuAvatar& a, const std
     const GpuDraw& d = draws[order.empty() ? i : order[i]];
     const GpuMaterial& m = a.materials()[d.material];
     vkCmdSetCullMode(cmd, m.doubleSided ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout_.get(), 1, 1, &m.descriptorSet, 0,
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout_.get(), 1, 1, &m.descriptorSets[current_], 0,
                             nullptr);
     vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, 0, 0);
     ++stats_.drawCalls;
@@ -290,7 +298,7 @@ void Renderer::drawOutlines(VkCommandBuffer cmd, const GpuAvatar& a, std::span<c
       vkCmdSetCullMode(cmd, VK_CULL_MODE_FRONT_BIT);  // the hull's inside: always, whatever doubleSided says
       bound = true;
     }
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout_.get(), 1, 1, &m.descriptorSet, 0,
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipelineLayout_.get(), 1, 1, &m.descriptorSets[current_], 0,
                             nullptr);
     vkCmdDrawIndexed(cmd, d.indexCount, 1, d.firstIndex, 0, 0);
     ++stats_.drawCalls;

@@ -26,7 +26,6 @@
 namespace embody::engine {
 
 constexpr uint32_t kMaxViewsPerFrame = 8;  // matches kMaxViews in shaders/common.glsl
-constexpr uint32_t kFramesInFlight = 2;
 
 struct LineVertex {
   glm::vec3 position{0.0f};
@@ -46,6 +45,12 @@ struct SceneFrame {
   std::span<const glm::mat4> palette;  // skinning palette, one matrix per skeleton joint
   // Morph target weights, one per mesh.morphChannels (shaders/morphing.glsl); empty: all zero.
   std::span<const float> morphWeights;
+  // One per avatar->boundMaterials() (avatar::SecondaryMotion::materialStates()): expression
+  // material colour and texture-transform binds; empty: the materials as loaded.
+  std::span<const avatar::MaterialBindState> materialStates;
+  // The frame clock in seconds (MToon UV animation); float precision, so callers count from
+  // their start (1 ms resolution lasts about 2 hours).
+  double seconds = 0.0;
   bool firstPerson = false;            // draw the first-person list (the user's head hidden)
   bool grid = true;                    // the ground grid on y = 0
   std::span<const LineVertex> lines;          // line list, depth-tested (tracking-target gizmos)

@@ -49,7 +49,7 @@ inline void checkAvatar(const avatar::AvatarAsset& a) {
   }
   for (const auto& mat : a.materials) {  // MToon: finite, in the specification's ranges, images that exist
     const auto& t = mat.mtoon;
-    for (int image : {t.shadeImage, t.shadingShiftImage, t.matcapImage, t.rimImage, t.outlineWidthImage})
+    for (int image : {t.shadeImage, t.shadingShiftImage, t.matcapImage, t.rimImage, t.outlineWidthImage, t.uvAnimationMaskImage})
       EMBODY_FUZZ_CHECK(image < static_cast<int>(a.images.size()));
     EMBODY_FUZZ_CHECK(finite(t.shadeColor) && finite(t.matcapFactor) && finite(t.rimColor) && finite(t.outlineColor) &&
                       finite(mat.emissiveFactor));
@@ -59,7 +59,10 @@ inline void checkAvatar(const avatar::AvatarAsset& a) {
                       t.outlineLightingMix >= 0.0f && t.outlineLightingMix <= 1.0f);
     EMBODY_FUZZ_CHECK(t.rimFresnelPower >= 0.0f && t.rimFresnelPower <= 100.0f && t.outlineWidth >= 0.0f &&
                       t.outlineWidth <= 1.0f && t.renderQueueOffset >= -9 && t.renderQueueOffset <= 9);
-    for (const auto* tt : {&t.shadeTransform, &t.shadingShiftTransform, &t.rimTransform, &t.outlineWidthTransform})
+    EMBODY_FUZZ_CHECK(std::abs(t.uvAnimationScroll.x) <= 1000.0f && std::abs(t.uvAnimationScroll.y) <= 1000.0f &&
+                      std::abs(t.uvAnimationRotation) <= 2000.0f * 3.1416f);  // 0.x: turns x 2 pi
+    for (const auto* tt : {&t.shadeTransform, &t.shadingShiftTransform, &t.rimTransform, &t.outlineWidthTransform,
+                           &t.uvAnimationMaskTransform})
       EMBODY_FUZZ_CHECK(tt->texCoord == 0 || tt->texCoord == 1);
   }
   for (const auto& img : a.images)
@@ -70,15 +73,17 @@ inline void checkAvatar(const avatar::AvatarAsset& a) {
 }
 
 // Spring bones, expressions and look-at of a loaded avatar: valid references, and a few frames
-// of motion (a head turn, a teleport of the root, a look target) leave the pose and the morph
-// weights finite.
+// of motion (a head turn, a teleport of the root, a look target, every expression half on) leave
+// the pose, the morph weights and the material bind states finite.
 inline void checkSecondaryMotion(const avatar::AvatarAsset& a) {
   const int joints = static_cast<int>(a.skeleton.joints.size());
   for (const auto& c : a.springBones.chains)
     for (const auto& j : c.joints) EMBODY_FUZZ_CHECK(j.joint >= 0 && j.joint < joints && j.child < joints);
   for (const auto& e : a.expressions.expressions)
     for (const auto& b : e.morphBinds) EMBODY_FUZZ_CHECK(b.channel < a.mesh.morphChannels.size());
+  for (int m : a.expressions.boundMaterials) EMBODY_FUZZ_CHECK(m >= 0 && static_cast<size_t>(m) < a.materials.size());
   avatar::SecondaryMotion motion(a);
+  for (float& w : motion.expressionWeights()) w = 0.5f;
   const int head = a.humanoid.joint(avatar::HumanBone::head);
   for (int frame = 0; frame < 4; ++frame) {
     avatar::SkeletonPose pose = avatar::SkeletonPose::rest(a.skeleton);
@@ -87,6 +92,11 @@ inline void checkSecondaryMotion(const avatar::AvatarAsset& a) {
     motion.update(pose, frame == 3 ? 5.0 : 1.0 / 90.0, glm::vec3(0.5f, 1.6f, 1.0f));
     for (const auto& t : pose.local) EMBODY_FUZZ_CHECK(std::isfinite(t.rotation.w + t.rotation.x + t.rotation.y + t.rotation.z));
     for (float w : motion.morphWeights()) EMBODY_FUZZ_CHECK(std::isfinite(w) && w >= 0.0f && w <= 1.0f);
+    EMBODY_FUZZ_CHECK(motion.materialStates().size() == a.expressions.boundMaterials.size());
+    for (const auto& s : motion.materialStates()) {
+      for (const glm::vec3& c : s.colors) EMBODY_FUZZ_CHECK(std::isfinite(c.x + c.y + c.z) && glm::all(glm::greaterThanEqual(c, glm::vec3(0.0f))));
+      EMBODY_FUZZ_CHECK(std::isfinite(s.alpha + s.uvWeight + s.uvScale.x + s.uvScale.y + s.uvOffset.x + s.uvOffset.y));
+    }
   }
 }
 

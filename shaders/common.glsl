@@ -15,6 +15,7 @@ layout(set = 0, binding = 0, std140) uniform Scene {
   vec4 lightColor;      // rgb: linear radiance of the directional light
   vec4 skyColor;        // hemisphere ambient from above
   vec4 groundColor;     // hemisphere ambient from below
+  vec4 clock;           // x: seconds of the frame clock (MToon UV animation)
 } scene;
 
 layout(push_constant) uniform Push {

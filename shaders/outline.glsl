@@ -8,7 +8,7 @@
 vec4 outlineClipPosition(vec3 world, vec3 normal, vec4 uvs) {
   const mat4 viewProj = scene.views[viewIndex()].viewProj;
   const float width =
-      material.mixes.y * textureLod(outlineWidthTexture, textureUv(material.outlineWidthUv[0], material.outlineWidthUv[1], uvs), 0.0).g;
+      material.mixes.y * textureLod(outlineWidthTexture, textureUv(material.outlineWidthUv[0], material.outlineWidthUv[1], animatedUvs(uvs)), 0.0).g;
   const float len = length(normal);
   if (len < 1e-8) return viewProj * vec4(world, 1.0);
   const vec3 n = normal / len;

@@ -17,18 +17,19 @@ layout(location = 2) in vec3 inWorld;
 layout(location = 0) out vec4 outColor;
 
 void main() {
+  const vec4 uvs = animatedUvs(inUvs);
   const vec4 base = material.baseColorFactor *
-                    texture(baseColorTexture, textureUv(material.baseColorUv[0], material.baseColorUv[1], inUvs));
+                    texture(baseColorTexture, textureUv(material.baseColorUv[0], material.baseColorUv[1], uvs));
   if (kAlphaMode == 1 && base.a < material.params.x) discard;
   const vec3 emissive =
-      material.emissive.rgb * texture(emissiveTexture, textureUv(material.emissiveUv[0], material.emissiveUv[1], inUvs)).rgb;
+      material.emissive.rgb * texture(emissiveTexture, textureUv(material.emissiveUv[0], material.emissiveUv[1], uvs)).rgb;
   vec3 n = normalize(inNormal);
   // Double-sided materials light their back faces too; the outline hull is seen from inside but
   // stands for the outward surface.
   if (!gl_FrontFacing && !kOutline) n = -n;
   vec3 color = base.rgb;
   if (material.params.z > 0.5) {
-    color = mtoonColor(base.rgb, n, normalize(scene.views[viewIndex()].eye.xyz - inWorld), inUvs);
+    color = mtoonColor(base.rgb, n, normalize(scene.views[viewIndex()].eye.xyz - inWorld), uvs);
   } else if (material.params.y < 0.5) {
     const vec3 ambient = mix(scene.groundColor.rgb, scene.skyColor.rgb, n.y * 0.5 + 0.5);
     const float diffuse = max(dot(n, scene.lightDirection.xyz), 0.0);

@@ -513,6 +513,8 @@ Status HeadsetLoop::render(FrameWork& f) {
   scene.avatar = &renderer_->gpuAvatar();
   scene.palette = renderer_->palette();
   scene.morphWeights = secondary_->morphWeights();
+  scene.materialStates = secondary_->materialStates();
+  scene.seconds = secondary_->seconds();
   scene.firstPerson = true;  // the user's own head is hidden
   scene.lines = lines_;
   scene.overlayLines = overlay_;  // hand gizmos stay visible through the avatar's hands

@@ -131,7 +131,10 @@ json mtoonJson(const MToon& t, const std::function<bool(int)>& hasImage, std::se
             {"outlineWidthMode", kModes[static_cast<int>(t.outlineMode)]},
             {"outlineWidthFactor", t.outlineWidth},
             {"outlineColorFactor", rgb(t.outlineColor)},
-            {"outlineLightingMixFactor", t.outlineLightingMix}};
+            {"outlineLightingMixFactor", t.outlineLightingMix},
+            {"uvAnimationScrollXSpeedFactor", t.uvAnimationScroll.x},
+            {"uvAnimationScrollYSpeedFactor", t.uvAnimationScroll.y},
+            {"uvAnimationRotationSpeedFactor", t.uvAnimationRotation}};
   if (hasImage(t.shadeImage)) e["shadeMultiplyTexture"] = textureInfo(t.shadeImage, t.shadeTransform, extensionsUsed);
   if (hasImage(t.shadingShiftImage)) {
     e["shadingShiftTexture"] = textureInfo(t.shadingShiftImage, t.shadingShiftTransform, extensionsUsed);
@@ -141,6 +144,8 @@ json mtoonJson(const MToon& t, const std::function<bool(int)>& hasImage, std::se
   if (hasImage(t.rimImage)) e["rimMultiplyTexture"] = textureInfo(t.rimImage, t.rimTransform, extensionsUsed);
   if (hasImage(t.outlineWidthImage))
     e["outlineWidthMultiplyTexture"] = textureInfo(t.outlineWidthImage, t.outlineWidthTransform, extensionsUsed);
+  if (hasImage(t.uvAnimationMaskImage))
+    e["uvAnimationMaskTexture"] = textureInfo(t.uvAnimationMaskImage, t.uvAnimationMaskTransform, extensionsUsed);
   extensionsUsed.insert("VRMC_materials_mtoon");
   return e;
 }
@@ -219,7 +224,8 @@ json vertexAttributes(const AvatarAsset& asset, BinBuilder& bin, json& doc) {
   for (const auto& m : asset.materials)
     secondUv |= m.baseColorTransform.texCoord == 1 || m.emissiveTransform.texCoord == 1 ||
                 (m.isMToon && (m.mtoon.shadeTransform.texCoord == 1 || m.mtoon.shadingShiftTransform.texCoord == 1 ||
-                               m.mtoon.rimTransform.texCoord == 1 || m.mtoon.outlineWidthTransform.texCoord == 1));
+                               m.mtoon.rimTransform.texCoord == 1 || m.mtoon.outlineWidthTransform.texCoord == 1 ||
+                               m.mtoon.uvAnimationMaskTransform.texCoord == 1));
   for (const auto& v : mesh.vertices) {
     positions.insert(positions.end(), {v.position.x, v.position.y, v.position.z});
     lo = glm::min(lo, v.position);

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <glm/gtc/constants.hpp>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -171,6 +172,9 @@ int clampQueueOffset(float offset, const Material& m, const PropertyReader& r) {
   return std::clamp(n, lo, hi);
 }
 
+// UV animation speeds are clamped to this (UV or radians per second; 0.x: turns per second).
+constexpr float kMaxUvSpeed = 1000.0f;
+
 void readMToon1(const json& ext, Material& mat, const PropertyReader& r) {
   if (!ext.is_object()) {
     r.warn("", "not an object; drawn as its glTF material");
@@ -203,6 +207,10 @@ void readMToon1(const json& ext, Material& mat, const PropertyReader& r) {
   t.outlineWidthImage = r.texture(ext, "outlineWidthMultiplyTexture", t.outlineWidthTransform);
   t.outlineColor = r.color(ext, "outlineColorFactor", glm::vec3(0.0f));
   t.outlineLightingMix = r.number(ext, "outlineLightingMixFactor", 1.0f, 0.0f, 1.0f);
+  t.uvAnimationMaskImage = r.texture(ext, "uvAnimationMaskTexture", t.uvAnimationMaskTransform);
+  t.uvAnimationScroll = {r.number(ext, "uvAnimationScrollXSpeedFactor", 0.0f, -kMaxUvSpeed, kMaxUvSpeed),
+                         r.number(ext, "uvAnimationScrollYSpeedFactor", 0.0f, -kMaxUvSpeed, kMaxUvSpeed)};
+  t.uvAnimationRotation = r.number(ext, "uvAnimationRotationSpeedFactor", 0.0f, -kMaxUvSpeed, kMaxUvSpeed);
 }
 
 // VRM 0.x: render queues of transparent materials become 1.0 offsets in the same order (as
@@ -359,6 +367,13 @@ void readMToon0(const json& props, Material& mat, const PropertyReader& r, const
   t.outlineColor = r.color(v, "_OutlineColor", glm::vec3(0.0f), true);
   const bool mixed = r.number(f, "_OutlineColorMode", 0.0f, 0.0f, 1.0f) == 1.0f;
   t.outlineLightingMix = mixed ? r.number(f, "_OutlineLightingMix", 1.0f, 0.0f, 1.0f) : 0.0f;
+  // 0.x's shader works in Unity's bottom-up v: its scroll y is negated; its rotation (turns per
+  // second, counter-clockwise there) is the same turn in glTF's top-down v with the 1.0 matrix.
+  t.uvAnimationVrm0 = true;
+  t.uvAnimationMaskImage = image("_UvAnimMaskTexture", &t.uvAnimationMaskTransform);
+  t.uvAnimationScroll = {r.number(f, "_UvAnimScrollX", 0.0f, -kMaxUvSpeed, kMaxUvSpeed),
+                         -r.number(f, "_UvAnimScrollY", 0.0f, -kMaxUvSpeed, kMaxUvSpeed)};
+  t.uvAnimationRotation = 2.0f * glm::pi<float>() * r.number(f, "_UvAnimRotation", 0.0f, -kMaxUvSpeed, kMaxUvSpeed);
 }
 
 void readVrm0Materials(const json& doc, const json& list, AvatarAsset& asset, std::vector<std::string>& warnings) {

@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "avatar/avatar_asset.h"
+#include "avatar/gltf/mtoon_json.h"
 
 namespace embody::avatar {
 
@@ -38,6 +40,67 @@ ExpressionPreset presetFromVrm0(std::string name) {
   for (const auto& [n, p] : table)
     if (name == n) return p;
   return ExpressionPreset::Custom;
+}
+
+constexpr std::array<std::string_view, kMaterialColorTypeCount> kColorTypeNames = {"color",      "emissionColor", "shadeColor",
+                                                             "matcapColor", "rimColor",      "outlineColor"};
+
+std::optional<MaterialColorType> colorTypeFromVrm1(std::string_view name) {
+  for (size_t i = 0; i < kColorTypeNames.size(); ++i)
+    if (kColorTypeNames[i] == name) return static_cast<MaterialColorType>(i);
+  return std::nullopt;
+}
+
+// 0.x property names (three-vrm's v0ExpressionMaterialColorMap; 0.x has no matcap colour).
+std::optional<MaterialColorType> colorTypeFromVrm0(std::string_view name) {
+  using T = MaterialColorType;
+  static const std::pair<const char*, T> table[] = {{"_Color", T::Color},           {"_EmissionColor", T::EmissionColor},
+                                                    {"_ShadeColor", T::ShadeColor}, {"_RimColor", T::RimColor},
+                                                    {"_OutlineColor", T::OutlineColor}};
+  for (const auto& [n, t] : table)
+    if (name == n) return t;
+  return std::nullopt;
+}
+
+// An array of minCount..maxCount finite numbers, or none.
+std::optional<std::vector<float>> finiteNumbers(const Json& v, size_t minCount, size_t maxCount) {
+  if (!v.is_array() || v.size() < minCount || v.size() > maxCount) return std::nullopt;
+  std::vector<float> out;
+  for (const Json& x : v) {
+    if (!x.is_number() || !std::isfinite(x.get<double>()) || std::abs(x.get<double>()) > 1e6) return std::nullopt;
+    out.push_back(x.get<float>());
+  }
+  return out;
+}
+
+// One 0.x materialValue: a colour property (sRGB-decoded like the 0.x base colours; alpha linear)
+// or `_MainTex_ST` (Unity's [scale.x, scale.y, offset.x, offset.y], v from the bottom). Other
+// properties (floats such as _OutlineWidth) are not supported: dropped with a warning.
+void readVrm0MaterialValue(const Json& mv, const Json& materials, size_t materialCount, const std::string& what,
+                           Expression& e, std::vector<std::string>& w) {
+  const std::string mname = vrm::stringOr(member(mv, "materialName"), "");
+  const std::string prop = vrm::stringOr(member(mv, "propertyName"), "");
+  int material = -1;
+  for (size_t m = 0; m < std::min(materials.size(), materialCount) && material < 0; ++m)
+    if (vrm::stringOr(member(materials[m], "name"), "") == mname) material = static_cast<int>(m);
+  const auto v = finiteNumbers(member(mv, "targetValue"), 4, 4);
+  const auto type = colorTypeFromVrm0(prop);
+  if (material < 0 || !v || (!type && prop != "_MainTex_ST")) {
+    w.push_back(what + ": materialValue '" + prop.substr(0, 30) + "' of '" + mname.substr(0, 40) +
+                "' names no material, has no 4 finite numbers or is not a supported property; dropped");
+    return;
+  }
+  if (type) {
+    glm::vec4 c((*v)[0], (*v)[1], (*v)[2], (*v)[3]);
+    for (int k = 0; k < 3; ++k) c[k] = srgbToLinear(std::max(c[k], 0.0f));
+    e.colorBinds.push_back({material, *type, c});
+    return;
+  }
+  TextureTransformBind t;
+  t.material = material;
+  t.scale = {(*v)[0], (*v)[1]};
+  t.offset = {(*v)[2], 1.0f - (*v)[3] - (*v)[1]};
+  e.textureTransformBinds.push_back(t);
 }
 
 ExpressionOverride overrideOf(const Json& v, const std::string& what, std::vector<std::string>& w) {
@@ -79,20 +142,31 @@ Expression readVrm1(const Json& x, const std::string& name, ExpressionPreset pre
   for (const Json& b : vrm::arrayOf(member(x, "materialColorBinds"))) {
     MaterialColorBind c;
     c.material = vrm::indexBelow(member(b, "material"), materialCount, what + " material", w);
-    c.property = vrm::stringOr(member(b, "type"), "color");
-    const Json& t = member(b, "targetValue");
-    if (t.is_array() && t.size() == 4 && std::all_of(t.begin(), t.end(), [](const Json& v) { return v.is_number(); }))
-      c.target = glm::vec4(t[0].get<float>(), t[1].get<float>(), t[2].get<float>(), t[3].get<float>());
-    if (c.material >= 0) e.colorBinds.push_back(c);
+    const std::string type = vrm::stringOr(member(b, "type"), "?");
+    const auto t = colorTypeFromVrm1(type);
+    const auto v = finiteNumbers(member(b, "targetValue"), 3, 4);
+    if (c.material < 0 || !t || !v) {
+      w.push_back(what + ": a materialColorBind (type '" + type.substr(0, 20) +
+                  "') lacks a material, a known type or a targetValue of 3-4 finite numbers; dropped");
+      continue;
+    }
+    c.type = *t;
+    c.target = glm::vec4((*v)[0], (*v)[1], (*v)[2], v->size() > 3 ? (*v)[3] : 1.0f);
+    e.colorBinds.push_back(c);
   }
   for (const Json& b : vrm::arrayOf(member(x, "textureTransformBinds"))) {
     TextureTransformBind t;
     t.material = vrm::indexBelow(member(b, "material"), materialCount, what + " material", w);
     const Json& sc = member(b, "scale");
     const Json& of = member(b, "offset");
-    if (sc.is_array() && sc.size() == 2 && sc[0].is_number() && sc[1].is_number()) t.scale = {sc[0].get<float>(), sc[1].get<float>()};
-    if (of.is_array() && of.size() == 2 && of[0].is_number() && of[1].is_number()) t.offset = {of[0].get<float>(), of[1].get<float>()};
-    if (t.material >= 0) e.textureTransformBinds.push_back(t);
+    const auto scale = finiteNumbers(sc, 2, 2), offset = finiteNumbers(of, 2, 2);
+    if (t.material < 0 || (!sc.is_null() && !scale) || (!of.is_null() && !offset)) {
+      w.push_back(what + ": a textureTransformBind lacks a material or has a scale/offset that is not 2 finite numbers; dropped");
+      continue;
+    }
+    if (scale) t.scale = {(*scale)[0], (*scale)[1]};
+    if (offset) t.offset = {(*offset)[0], (*offset)[1]};
+    e.textureTransformBinds.push_back(t);
   }
   return e;
 }
@@ -132,20 +206,7 @@ void parseVrm0(const Json& master, const Json& doc, const AvatarAsset& asset, Ex
       if (mesh >= 0 && index >= 0) addMorphBinds(asset, -1, mesh, index, weight, e);
       if (e.morphBinds.size() == before) w.push_back(what + ": a bind names no morph target of the file; dropped");
     }
-    for (const Json& mv : vrm::arrayOf(member(g, "materialValues"))) {
-      MaterialColorBind c;
-      const std::string mname = vrm::stringOr(member(mv, "materialName"), "");
-      for (size_t m = 0; m < materials.size(); ++m)
-        if (vrm::stringOr(member(materials[m], "name"), "") == mname) c.material = static_cast<int>(m);
-      c.property = vrm::stringOr(member(mv, "propertyName"), "");
-      const Json& t = member(mv, "targetValue");
-      for (size_t k = 0; k < 4 && t.is_array() && k < t.size(); ++k)
-        if (t[k].is_number()) c.target[static_cast<int>(k)] = t[k].get<float>();
-      if (c.material >= 0 && std::isfinite(c.target.x + c.target.y + c.target.z + c.target.w))
-        e.colorBinds.push_back(c);
-      else
-        w.push_back(what + ": materialValue for '" + mname.substr(0, 40) + "' names no material; dropped");
-    }
+    for (const Json& mv : vrm::arrayOf(member(g, "materialValues"))) readVrm0MaterialValue(mv, materials, asset.materials.size(), what, e, w);
     // 0.x has no override flags: every override stays none.
     set.expressions.push_back(std::move(e));
   }
@@ -164,6 +225,8 @@ bool inCategory(ExpressionPreset p, int category) {  // 0 blink, 1 lookAt, 2 mou
 
 std::string_view expressionPresetName(ExpressionPreset p) { return kPresetNames[static_cast<size_t>(p)]; }
 
+std::string_view materialColorTypeName(MaterialColorType t) { return kColorTypeNames[static_cast<size_t>(t)]; }
+
 int ExpressionSet::find(std::string_view name) const {
   for (size_t i = 0; i < expressions.size(); ++i)
     if (expressions[i].name == name) return static_cast<int>(i);
@@ -180,6 +243,12 @@ ExpressionSet parseExpressions(const Json& doc, const AvatarAsset& asset, std::v
     parseVrm1(ex, asset, materialCount, set, warnings);
   else if (const Json& master = member(member(ext, "VRM"), "blendShapeMaster"); master.is_object())
     parseVrm0(master, doc, asset, set, warnings);
+  for (const Expression& e : set.expressions) {
+    for (const MaterialColorBind& c : e.colorBinds) set.boundMaterials.push_back(c.material);
+    for (const TextureTransformBind& t : e.textureTransformBinds) set.boundMaterials.push_back(t.material);
+  }
+  std::sort(set.boundMaterials.begin(), set.boundMaterials.end());
+  set.boundMaterials.erase(std::unique(set.boundMaterials.begin(), set.boundMaterials.end()), set.boundMaterials.end());
   for (size_t i = 0; i < set.expressions.size(); ++i) {
     const ExpressionPreset p = set.expressions[i].preset;
     if (p != ExpressionPreset::Custom && set.byPreset[static_cast<size_t>(p)] < 0)

@@ -29,13 +29,22 @@ struct MorphBind {
   float weight = 1.0f;   // 0..1 (VRM 0.x's 0..100 divided by 100)
 };
 
-// materialColorBinds (1.0) / materialValues (0.x): a material property moved towards a target.
+// What a material colour bind moves: VRM 1.0 `materialColorBinds[].type`; VRM 0.x
+// `materialValues[].propertyName` _Color, _EmissionColor, _ShadeColor, _RimColor, _OutlineColor
+// (0.x has no matcap colour).
+enum class MaterialColorType { Color, EmissionColor, ShadeColor, MatcapColor, RimColor, OutlineColor };
+constexpr size_t kMaterialColorTypeCount = 6;
+std::string_view materialColorTypeName(MaterialColorType t);  // "color", ..., "outlineColor"
+
+// materialColorBinds (1.0) / materialValues (0.x): a material colour moved towards a target.
 struct MaterialColorBind {
-  int material = -1;
-  std::string property;  // 1.0 type ("color", "emissionColor", "shadeColor", "matcapColor", "rimColor", "outlineColor") or 0.x property name
-  glm::vec4 target{0.0f};
+  int material = -1;  // into AvatarAsset::materials
+  MaterialColorType type = MaterialColorType::Color;
+  glm::vec4 target{0.0f};  // linear rgb (0.x values sRGB-decoded, as its base colours are); a: alpha, `color` only
 };
 
+// textureTransformBinds (1.0) / materialValues `_MainTex_ST` (0.x, converted from Unity's
+// bottom-up v: offset.y = 1 - offset.y - scale.y): KHR_texture_transform scale and offset.
 struct TextureTransformBind {
   int material = -1;
   glm::vec2 scale{1.0f}, offset{0.0f};
@@ -56,6 +65,9 @@ struct Expression {
 struct ExpressionSet {
   std::vector<Expression> expressions;
   std::array<int, kExpressionPresetCount> byPreset{};  // preset -> expression index, -1 when absent
+  // The materials some colour or texture-transform bind moves, ascending (MaterialBindEvaluateJob
+  // writes one state per entry).
+  std::vector<int> boundMaterials;
   ExpressionSet() { byPreset.fill(-1); }
   int find(ExpressionPreset p) const { return p == ExpressionPreset::Custom ? -1 : byPreset[static_cast<size_t>(p)]; }
   int find(std::string_view name) const;  // by expression name (custom) or preset name
@@ -67,8 +79,8 @@ struct ExpressionSet {
 //   2. override: every expression with weight w > 0 that blocks a category (blink, lookAt,
 //      mouth) zeroes the presets of that category, one that blends scales them by (1 - w);
 //   3. morph weight = the channel's glTF default + sum of w x bind weight, clamped to [0, 1].
-// effectiveWeights (after steps 1 and 2) are what a renderer applying the material colour and
-// texture transform binds would use.
+// effectiveWeights (after steps 1 and 2) drive the material colour and texture transform binds
+// (MaterialBindEvaluateJob, avatar/vrm/material_binds.h).
 struct ExpressionEvaluateJob {
   const ExpressionSet* set = nullptr;
   std::span<const float> defaultMorphWeights;  // one per morph channel

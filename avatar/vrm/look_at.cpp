@@ -29,6 +29,29 @@ LookAtRangeMap readRange(const Json& r, const char* inName, const char* outName,
   return m;
 }
 
+// A VRM 0.x curve ([time, value, inTangent, outTangent] x n): a positive multiple of four finite
+// numbers with strictly increasing times, else empty (linear) with a warning.
+std::vector<float> readCurve0(const Json& c, const std::string& what, std::vector<std::string>& w) {
+  if (c.is_null()) return {};
+  std::vector<float> keys;
+  bool ok = c.is_array() && !c.empty() && c.size() % 4 == 0 && c.size() <= 4096;
+  for (size_t i = 0; ok && i < c.size(); ++i) {
+    ok = c[i].is_number() && std::isfinite(c[i].get<double>()) && std::abs(c[i].get<double>()) < 1e6;
+    if (ok) keys.push_back(c[i].get<float>());
+    if (ok && i % 4 == 0 && i >= 4) ok = keys[i] > keys[i - 4];
+  }
+  if (ok) return keys;
+  w.push_back(what + " curve: " + c.dump().substr(0, 60) +
+              " is not [time, value, inTangent, outTangent] x n with finite numbers and increasing times; read as linear");
+  return {};
+}
+
+LookAtRangeMap readRange0(const Json& r, float outputDefault, const std::string& what, std::vector<std::string>& w) {
+  LookAtRangeMap m = readRange(r, "xRange", "yRange", outputDefault, what, w);
+  m.curve = readCurve0(member(r, "curve"), what, w);
+  return m;
+}
+
 // Model-space axes of the face: forward, up, left (= up x forward).
 struct FaceAxes {
   glm::vec3 f, u, l;
@@ -40,9 +63,22 @@ FaceAxes faceAxes(const LookAtSetup& s) {
 
 }  // namespace
 
+float evaluateUnityCurve(std::span<const float> keys, float x) {
+  const size_t n = keys.size() / 4;
+  if (n == 0) return x;
+  if (x <= keys[0]) return keys[1];
+  if (x >= keys[4 * (n - 1)]) return keys[4 * (n - 1) + 1];
+  size_t k = 0;
+  while (x > keys[4 * (k + 1)]) ++k;  // keys[4k] < x <= keys[4(k+1)]
+  const float* a = &keys[4 * k];
+  const float* b = a + 4;
+  const float dt = b[0] - a[0], t = (x - a[0]) / dt, t2 = t * t, t3 = t2 * t;
+  return (2 * t3 - 3 * t2 + 1) * a[1] + (t3 - 2 * t2 + t) * dt * a[3] + (t3 - t2) * dt * b[2] + (-2 * t3 + 3 * t2) * b[1];
+}
+
 float LookAtRangeMap::map(float degrees) const {
-  const float x = std::clamp(degrees, 0.0f, inputMaxValue);
-  return outputScale * x / inputMaxValue;
+  const float x = std::clamp(degrees, 0.0f, inputMaxValue) / inputMaxValue;
+  return outputScale * (curve.empty() ? x : evaluateUnityCurve(curve, x));
 }
 
 LookAtSetup parseLookAt(const Json& doc, const AvatarAsset& asset, std::vector<std::string>& w) {
@@ -69,11 +105,10 @@ LookAtSetup parseLookAt(const Json& doc, const AvatarAsset& asset, std::vector<s
     const float out = type == "expression" ? 1.0f : 10.0f;
     s.offsetFromHead = vrm::vec3Of(member(fp0, "firstPersonBoneOffset"), glm::vec3(0.0f), "firstPersonBoneOffset", w);
     s.offsetFromHead.z = -s.offsetFromHead.z;  // Unity's left-handed z
-    // 0.x curves (xRange -> yRange) are read as linear maps; the curve's shape is not used.
-    s.horizontalInner = readRange(member(fp0, "lookAtHorizontalInner"), "xRange", "yRange", out, "lookAtHorizontalInner", w);
-    s.horizontalOuter = readRange(member(fp0, "lookAtHorizontalOuter"), "xRange", "yRange", out, "lookAtHorizontalOuter", w);
-    s.verticalDown = readRange(member(fp0, "lookAtVerticalDown"), "xRange", "yRange", out, "lookAtVerticalDown", w);
-    s.verticalUp = readRange(member(fp0, "lookAtVerticalUp"), "xRange", "yRange", out, "lookAtVerticalUp", w);
+    s.horizontalInner = readRange0(member(fp0, "lookAtHorizontalInner"), out, "lookAtHorizontalInner", w);
+    s.horizontalOuter = readRange0(member(fp0, "lookAtHorizontalOuter"), out, "lookAtHorizontalOuter", w);
+    s.verticalDown = readRange0(member(fp0, "lookAtVerticalDown"), out, "lookAtVerticalDown", w);
+    s.verticalUp = readRange0(member(fp0, "lookAtVerticalUp"), out, "lookAtVerticalUp", w);
   } else {
     return s;
   }

@@ -1,8 +1,8 @@
 #pragma once
 // VRM look-at: where the eyes point. VRM 1.0 `VRMC_vrm.lookAt` (type bone or expression,
 // offsetFromHeadBone, range maps) and VRM 0.x `VRM.firstPerson` (lookAtTypeName Bone/BlendShape,
-// firstPersonBoneOffset, lookAtHorizontalInner/Outer, lookAtVerticalDown/Up curves read as
-// linear maps xRange -> yRange). The gaze is yaw (+ towards the avatar's left) and pitch (+ up) in
+// firstPersonBoneOffset, lookAtHorizontalInner/Outer, lookAtVerticalDown/Up: xRange -> yRange
+// through the curve's shape). The gaze is yaw (+ towards the avatar's left) and pitch (+ up) in
 // degrees, measured in the head's frame against the avatar's facing direction.
 #include <span>
 #include <string>
@@ -14,12 +14,22 @@ namespace embody::avatar {
 
 struct ExpressionSet;
 
-// output = outputScale * min(input, inputMaxValue) / inputMaxValue, input in degrees (>= 0).
+// output = outputScale * f(min(input, inputMaxValue) / inputMaxValue), input in degrees (>= 0):
+// f(x) = x for VRM 1.0 range maps; for VRM 0.x, f is the curve (UniVRM's CurveMapper: 0.x
+// `xRange`, `yRange` and `curve`).
 struct LookAtRangeMap {
   float inputMaxValue = 90.0f;
   float outputScale = 10.0f;
+  // VRM 0.x: Unity AnimationCurve keyframes flattened as [time, value, inTangent, outTangent] x n,
+  // times strictly increasing (checked at load); empty: linear.
+  std::vector<float> curve;
   float map(float degrees) const;
 };
+
+// A Unity AnimationCurve at x: cubic Hermite between the two keys around x (tangents are slopes
+// dvalue/dtime, scaled by the key interval as Unity does), the end values outside the keys
+// (Unity's clamp). `keys` as LookAtRangeMap::curve, at least one key.
+float evaluateUnityCurve(std::span<const float> keys, float x);
 
 struct LookAtSetup {
   enum class Type { None, Bone, Expression };

@@ -10,6 +10,10 @@ SecondaryMotion::SecondaryMotion(const AvatarAsset& asset, const SecondaryMotion
   effective_.assign(n, 0.0f);
   defaults_ = defaultMorphWeights(asset.mesh);
   morph_ = defaults_;
+  for (int m : asset.expressions.boundMaterials)  // (a hand-built set naming no material: the job refuses it)
+    materialStates_.push_back(m >= 0 && static_cast<size_t>(m) < asset.materials.size()
+                                  ? materialBindBase(asset.materials[static_cast<size_t>(m)])
+                                  : MaterialBindState{});
   globals_.resize(asset.skeleton.joints.size());
   springState_.resize(asset.springBones, asset.skeleton.joints.size());
   job_.setup = &asset.springBones;
@@ -23,6 +27,7 @@ SecondaryMotion::SecondaryMotion(const AvatarAsset& asset, const SecondaryMotion
 void SecondaryMotion::update(SkeletonPose& pose, double dt, const std::optional<glm::vec3>& lookTarget) {
   if (pose.local.size() != asset_.skeleton.joints.size()) return;
   if (!(dt >= 0.0) || !std::isfinite(dt)) dt = 0.0;
+  seconds_ += dt;
   std::copy(manual_.begin(), manual_.end(), weights_.begin());
   computeGlobals(asset_.skeleton, pose, globals_);
   // Look-at first: its eye rotations are part of the pose the springs see.
@@ -41,6 +46,12 @@ void SecondaryMotion::update(SkeletonPose& pose, double dt, const std::optional<
   ej.effectiveWeights = effective_;
   ej.morphWeights = morph_;
   ej.Run();
+  MaterialBindEvaluateJob mj;
+  mj.set = &asset_.expressions;
+  mj.materials = asset_.materials;
+  mj.effectiveWeights = effective_;
+  mj.states = materialStates_;
+  mj.Run();
   if (options_.springBones && !asset_.springBones.empty()) {
     if (asset_.lookAt.type == LookAtSetup::Type::Bone) computeGlobals(asset_.skeleton, pose, globals_);
     job_.pose = &pose;

@@ -1,7 +1,8 @@
 #pragma once
 // What a VRM avatar does on its own each frame, after IK and before skinning:
 //   look-at (eye bones or look expressions, towards a target) -> automatic blinking ->
-//   expressions (weights, overrides) -> morph weights; spring bones (hair, skirts).
+//   expressions (weights, overrides) -> morph weights and material bind states; spring bones
+//   (hair, skirts).
 // One per avatar instance; update() is allocation-free after construction. For a glTF without VRM
 // data it only hands out the file's default morph weights.
 #include <optional>
@@ -11,6 +12,7 @@
 #include "avatar/avatar_asset.h"
 #include "avatar/vrm/blink.h"
 #include "avatar/vrm/look_at.h"
+#include "avatar/vrm/material_binds.h"
 #include "avatar/vrm/spring_bone.h"
 
 namespace embody::avatar {
@@ -39,6 +41,11 @@ class SecondaryMotion {
   std::span<float> expressionWeights() { return manual_; }
   std::span<const float> morphWeights() const { return morph_; }  // one per mesh.morphChannels
   std::span<const float> effectiveExpressionWeights() const { return effective_; }
+  // One per asset.expressions.boundMaterials: the colours and texture transforms the
+  // expressions' material binds give this frame (engine::SceneFrame::materialStates).
+  std::span<const MaterialBindState> materialStates() const { return materialStates_; }
+  // Seconds of motion so far (the sum of update()'s dt): the frame clock of MToon UV animation.
+  double seconds() const { return seconds_; }
   const SpringBoneJob& lastSpringJob() const { return job_; }
   float blinkWeight() const { return blink_; }
   Gaze lastGaze() const { return gaze_; }
@@ -51,7 +58,9 @@ class SecondaryMotion {
   SpringBoneJob job_;
   std::vector<glm::mat4> globals_;
   std::vector<float> manual_, weights_, effective_, defaults_, morph_;
+  std::vector<MaterialBindState> materialStates_;
   float blink_ = 0.0f;
+  double seconds_ = 0.0;
   Gaze gaze_;
   bool resetSprings_ = false;
 };

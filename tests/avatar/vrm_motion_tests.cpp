@@ -95,7 +95,7 @@ TEST_CASE("vrm 1.0: spring bones, expressions, look-at and morph targets are rea
   REQUIRE(a.mesh.morphChannels.size() == 6);
   CHECK(a.mesh.morphChannels[0].name == "blink");
   CHECK_FALSE(a.mesh.morphDeltas.empty());
-  CHECK(a.expressions.expressions.size() == 8);
+  CHECK(a.expressions.expressions.size() == 9);
   CHECK(a.expressions.find(ExpressionPreset::Blink) >= 0);
   CHECK(a.expressions.find(ExpressionPreset::LookLeft) >= 0);
   CHECK(a.expressions.find("wink") >= 0);
@@ -454,4 +454,204 @@ TEST_CASE("first person: spring hair stays out of the HMD's draw list", "[vrm]")
         for (int j : s) CHECK((v.joints0[0] != static_cast<uint32_t>(j) || v.weights0[0] == 0.0f));
     }
   }
+}
+
+TEST_CASE("material binds: the test avatar's angry expression is read in 1.0 and 0.x alike", "[vrm]") {
+  for (bool vrm0 : {false, true}) {
+    INFO((vrm0 ? "VRM 0.x" : "VRM 1.0"));
+    test::VrmTestAvatarOptions o;
+    o.vrm0 = vrm0;
+    const AvatarAsset a = loadTestVrm(o);
+    INFO((a.vrmWarnings.empty() ? std::string() : a.vrmWarnings.front()));
+    CHECK(a.vrmWarnings.empty());
+    CHECK(a.expressions.boundMaterials == std::vector<int>{0, 4});  // skin, shirt
+    const int angry = a.expressions.find(ExpressionPreset::Angry);
+    REQUIRE(angry >= 0);
+    const Expression& e = a.expressions.expressions[static_cast<size_t>(angry)];
+    REQUIRE(e.colorBinds.size() == 1);
+    CHECK(e.colorBinds[0].material == 0);
+    CHECK(e.colorBinds[0].type == MaterialColorType::Color);
+    // 0.x: written sRGB-encoded, decoded back to the linear target.
+    CHECK(glm::length(glm::vec3(e.colorBinds[0].target) - test::kAngrySkin) < 1e-4f);
+    CHECK(e.colorBinds[0].target.a == 1.0f);
+    REQUIRE(e.textureTransformBinds.size() == 1);
+    CHECK(e.textureTransformBinds[0].material == 4);
+    // 0.x: Unity's _MainTex_ST [2, 1, 0, 0] -> scale (2, 1), offset (0, 1 - 0 - 1).
+    CHECK(e.textureTransformBinds[0].scale == glm::vec2(2.0f, 1.0f));
+    CHECK(glm::length(e.textureTransformBinds[0].offset) < 1e-6f);
+  }
+}
+
+TEST_CASE("material binds: value = base + sum of weight x (target - base), per type", "[vrm]") {
+  // Material 1: MToon-like values; expression A moves every colour type and the texture
+  // transform, B moves the base colour and the transform the other way. Material 0 is unbound.
+  std::vector<Material> mats(2);
+  Material& m = mats[1];
+  m.baseColorFactor = {0.5f, 0.5f, 0.5f, 1.0f};
+  m.emissiveFactor = glm::vec3(0.0f);
+  m.mtoon.shadeColor = glm::vec3(0.2f);
+  m.mtoon.matcapFactor = glm::vec3(1.0f);
+  m.mtoon.rimColor = glm::vec3(0.0f);
+  m.mtoon.outlineColor = glm::vec3(0.0f);
+  ExpressionSet set;
+  Expression a, b;
+  using T = MaterialColorType;
+  a.colorBinds = {{1, T::Color, {1, 0, 0, 0.5f}},  {1, T::EmissionColor, {0, 1, 0, 1}}, {1, T::ShadeColor, {0, 0, 1, 1}},
+                  {1, T::MatcapColor, {0, 0, 0, 1}}, {1, T::RimColor, {1, 1, 0, 1}},     {1, T::OutlineColor, {0, 1, 1, 1}}};
+  a.textureTransformBinds = {{1, {2.0f, 2.0f}, {0.5f, 0.0f}}};
+  b.colorBinds = {{1, T::Color, {0, 0, 0, 1}}};
+  b.textureTransformBinds = {{1, {1.0f, 1.0f}, {0.0f, 0.5f}}};
+  set.expressions = {a, b};
+  set.boundMaterials = {1};
+  std::vector<float> w = {0.5f, 0.25f};
+  std::vector<MaterialBindState> states(1);
+  MaterialBindEvaluateJob job{&set, mats, w, states};
+  REQUIRE(job.Run());
+  const MaterialBindState& s = states[0];
+  // r: 0.5 + 0.5 (1 - 0.5) + 0.25 (0 - 0.5); g, b: 0.5 + 0.5 (0 - 0.5) + 0.25 (0 - 0.5)
+  CHECK(glm::length(s.color(T::Color) - glm::vec3(0.625f, 0.125f, 0.125f)) < 1e-6f);
+  CHECK(s.alpha == Approx(0.75f));  // 1 + 0.5 (0.5 - 1) + 0.25 (1 - 1)
+  CHECK(glm::length(s.color(T::EmissionColor) - glm::vec3(0.0f, 0.5f, 0.0f)) < 1e-6f);
+  CHECK(glm::length(s.color(T::ShadeColor) - glm::vec3(0.1f, 0.1f, 0.6f)) < 1e-6f);
+  CHECK(glm::length(s.color(T::MatcapColor) - glm::vec3(0.5f)) < 1e-6f);
+  CHECK(glm::length(s.color(T::RimColor) - glm::vec3(0.5f, 0.5f, 0.0f)) < 1e-6f);
+  CHECK(glm::length(s.color(T::OutlineColor) - glm::vec3(0.0f, 0.5f, 0.5f)) < 1e-6f);
+  // Texture transforms: each texture moves from its own base. Identity base:
+  // scale 1 + 0.5 (2 - 1) + 0.25 (1 - 1) = 1.5, offset (0.5 x 0.5, 0.25 x 0.5).
+  const TextureTransform t = s.transform(TextureTransform{});
+  CHECK(glm::length(t.scale - glm::vec2(1.5f)) < 1e-6f);
+  CHECK(glm::length(t.offset - glm::vec2(0.25f, 0.125f)) < 1e-6f);
+  // A base with its own scale, rotation and set: 0.25 + 0.5 (2 - 0.25) + 0.25 (1 - 0.25) = 1.3125.
+  TextureTransform base;
+  base.scale = {0.25f, 0.25f};
+  base.offset = {0.125f, 0.0f};
+  base.rotation = 0.3f;
+  base.texCoord = 1;
+  const TextureTransform moved = s.transform(base);
+  CHECK(moved.scale.x == Approx(1.3125f));
+  CHECK(moved.offset.x == Approx(0.125f + 0.5f * (0.5f - 0.125f) + 0.25f * (0.0f - 0.125f)));
+  CHECK(moved.rotation == 0.3f);
+  CHECK(moved.texCoord == 1);
+  // Off: exactly the material (the renderer's blocks are then the loaded ones, bit for bit).
+  w = {0.0f, 0.0f};
+  REQUIRE(job.Run());
+  CHECK(states[0].color(T::Color) == glm::vec3(0.5f));
+  CHECK(states[0].transform(base).scale == base.scale);
+  CHECK(states[0].transform(base).offset == base.offset);
+  // Both at 1: the deltas add; green would go to -0.5 and is clamped to 0.
+  w = {1.0f, 1.0f};
+  REQUIRE(job.Run());
+  CHECK(states[0].color(T::Color).r == Approx(0.5f));
+  CHECK(states[0].color(T::Color).g == 0.0f);
+  // Malformed jobs are refused.
+  std::vector<float> shortWeights(1);
+  job.effectiveWeights = shortWeights;
+  CHECK_FALSE(job.Validate());
+  job.effectiveWeights = w;
+  set.boundMaterials = {7};
+  CHECK_FALSE(job.Validate());
+  set.boundMaterials = {0};  // bound list without material 1 that the binds name
+  CHECK_FALSE(job.Validate());
+}
+
+TEST_CASE("material binds: SecondaryMotion hands out the angry expression's states", "[vrm]") {
+  const AvatarAsset a = loadTestVrm();
+  SecondaryMotion motion(a, {.springBones = false, .blink = false, .lookAt = false});
+  SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+  REQUIRE(motion.materialStates().size() == 2);
+  motion.update(pose, 0.01, std::nullopt);
+  CHECK(glm::length(motion.materialStates()[0].color(MaterialColorType::Color) - glm::vec3(a.materials[0].baseColorFactor)) < 1e-7f);
+  motion.expressionWeights()[static_cast<size_t>(a.expressions.find(ExpressionPreset::Angry))] = 0.5f;
+  motion.update(pose, 0.01, std::nullopt);
+  const glm::vec3 half = 0.5f * (glm::vec3(a.materials[0].baseColorFactor) + test::kAngrySkin);
+  CHECK(glm::length(motion.materialStates()[0].color(MaterialColorType::Color) - half) < 1e-6f);
+  const TextureTransform shirt = motion.materialStates()[1].transform(a.materials[4].baseColorTransform);
+  CHECK(shirt.scale.x == Approx(0.5f * 0.25f + 0.5f * 2.0f));  // 1.125
+  CHECK(shirt.offset.x == Approx(0.5f * 0.125f));
+}
+
+TEST_CASE("material binds: hostile binds are dropped with warnings", "[vrm]") {
+  test::VrmTestAvatar t = test::buildVrmTestAvatar();
+  auto ext = nlohmann::json::parse(t.extensionsJson);
+  auto& angry = ext["VRMC_vrm"]["expressions"]["preset"]["angry"];
+  angry["materialColorBinds"].push_back({{"material", 1}, {"type", "glow"}, {"targetValue", {1, 0, 0, 1}}});
+  angry["materialColorBinds"].push_back({{"material", 1}, {"type", "rimColor"}, {"targetValue", {1, 0}}});
+  angry["materialColorBinds"].push_back({{"material", 99}, {"type", "color"}, {"targetValue", {1, 0, 0, 1}}});
+  angry["textureTransformBinds"].push_back({{"material", 2}, {"scale", "big"}});
+  const AvatarAsset a = loadTestVrm({}, ext.dump());
+  CHECK(a.vrmWarnings.size() >= 4);
+  const Expression& e = a.expressions.expressions[static_cast<size_t>(a.expressions.find(ExpressionPreset::Angry))];
+  CHECK(e.colorBinds.size() == 1);
+  CHECK(e.textureTransformBinds.size() == 1);
+  CHECK(a.expressions.boundMaterials == std::vector<int>{0, 4});
+  // 0.x: a Unity _MainTex_ST with offsets, an unsupported float property, an unknown material.
+  test::VrmTestAvatarOptions o;
+  o.vrm0 = true;
+  test::VrmTestAvatar t0 = test::buildVrmTestAvatar(o);
+  auto ext0 = nlohmann::json::parse(t0.extensionsJson);
+  auto& groups = ext0["VRM"]["blendShapeMaster"]["blendShapeGroups"];
+  auto& values = groups.back()["materialValues"];
+  values[1]["targetValue"] = {1.0, 0.5, 0.2, 0.1};
+  values.push_back({{"materialName", "shirt"}, {"propertyName", "_OutlineWidth"}, {"targetValue", {1, 0, 0, 0}}});
+  values.push_back({{"materialName", "nobody"}, {"propertyName", "_Color"}, {"targetValue", {1, 0, 0, 1}}});
+  const AvatarAsset a0 = loadTestVrm(o, ext0.dump());
+  CHECK(a0.vrmWarnings.size() == 2);
+  const Expression& e0 = a0.expressions.expressions[static_cast<size_t>(a0.expressions.find(ExpressionPreset::Angry))];
+  REQUIRE(e0.textureTransformBinds.size() == 1);
+  CHECK(e0.textureTransformBinds[0].scale == glm::vec2(1.0f, 0.5f));
+  CHECK(e0.textureTransformBinds[0].offset.x == Approx(0.2f));
+  CHECK(e0.textureTransformBinds[0].offset.y == Approx(1.0f - 0.1f - 0.5f));  // v from the top
+}
+
+TEST_CASE("look-at 0.x curves: Unity's cubic Hermite between keys", "[vrm]") {
+  const std::vector<float> ease = {0, 0, 0, 0, 1, 1, 0, 0};  // flat tangents: smoothstep
+  CHECK(evaluateUnityCurve(ease, 0.5f) == Approx(0.5f));
+  CHECK(evaluateUnityCurve(ease, 0.25f) == Approx(0.15625f));  // 3 t^2 - 2 t^3
+  CHECK(evaluateUnityCurve(ease, -0.1f) == 0.0f);              // clamped to the end keys
+  CHECK(evaluateUnityCurve(ease, 1.5f) == 1.0f);
+  // Tangents are slopes, scaled by the key interval: keys 2 apart, out tangent 1 at the first.
+  const std::vector<float> wide = {0, 0, 1, 1, 2, 1, 0, 0};
+  CHECK(evaluateUnityCurve(wide, 1.0f) == Approx(0.75f));  // h10 (0.5) x 2 x 1 + h01 (0.5) x 1 = 0.25 + 0.5
+  const std::vector<float> linear = {0, 0, 1, 1, 1, 1, 1, 1};
+  CHECK(evaluateUnityCurve(linear, 0.3f) == Approx(0.3f));
+  const std::vector<float> bump = {0, 0, 0, 0, 0.5f, 1, 0, 0, 1, 0, 0, 0};
+  CHECK(evaluateUnityCurve(bump, 0.5f) == 1.0f);
+  CHECK(evaluateUnityCurve(bump, 0.75f) == Approx(0.5f));
+  CHECK(evaluateUnityCurve(bump, 0.625f) == Approx(1.0f - 0.15625f));
+  LookAtRangeMap m;
+  m.inputMaxValue = 30.0f;
+  m.outputScale = 10.0f;
+  m.curve = ease;
+  CHECK(m.map(15.0f) == Approx(5.0f));
+  CHECK(m.map(7.5f) == Approx(1.5625f));
+  CHECK(m.map(60.0f) == Approx(10.0f));
+  m.curve.clear();
+  CHECK(m.map(7.5f) == Approx(2.5f));  // no curve: linear
+}
+
+TEST_CASE("look-at 0.x curves: read from the file, bad ones fall back to linear", "[vrm]") {
+  test::VrmTestAvatarOptions o;
+  o.vrm0 = true;
+  auto ext = nlohmann::json::parse(test::buildVrmTestAvatar(o).extensionsJson);
+  auto& fp = ext["VRM"]["firstPerson"];
+  fp["lookAtHorizontalOuter"]["curve"] = {0, 0, 0, 0, 1, 1, 0, 0};  // ease in-out
+  fp["lookAtHorizontalInner"]["curve"] = {0, 0, 0, 0, 1, 1};        // not a multiple of four
+  fp["lookAtVerticalDown"]["curve"] = {0, 0, 0, 0, 0, 1, 0, 0};     // times not increasing
+  fp["lookAtVerticalUp"]["curve"] = {0, 0, 0, "x", 1, 1, 0, 0};     // not a number
+  const AvatarAsset a = loadTestVrm(o, ext.dump());
+  CHECK(a.vrmWarnings.size() == 3);
+  CHECK(a.lookAt.horizontalOuter.curve.size() == 8);
+  CHECK(a.lookAt.horizontalInner.curve.empty());
+  CHECK(a.lookAt.verticalDown.curve.empty());
+  CHECK(a.lookAt.verticalUp.curve.empty());
+  CHECK(a.lookAt.horizontalInner.map(22.5f) == Approx(0.5f));  // linear: half of xRange 45 -> half of yRange 1
+  // Through the whole look-at: 11.31 degrees to the avatar's left, x = 0.2513 of xRange, gives
+  // smoothstep(0.2513) = 0.1577 (the linear map gave 0.2513). (The test bust faces +Z in 0.x too.)
+  SecondaryMotion motion(a, {.springBones = false, .blink = false});
+  SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+  motion.update(pose, 0.01, glm::vec3(0, 1.66f, 0.07f) + glm::vec3(0.2f, 0.0f, 1.0f));
+  CHECK(motion.lastGaze().yawDegrees == Approx(11.31f).margin(0.01));
+  const float x = 11.3099f / 45.0f;
+  CHECK(motion.effectiveExpressionWeights()[static_cast<size_t>(a.expressions.find(ExpressionPreset::LookLeft))] ==
+        Approx(3 * x * x - 2 * x * x * x).margin(1e-3));
 }

@@ -21,10 +21,12 @@
 #include "avatar/avatar_loader.h"
 #include "avatar/gltf/gltf_loader.h"
 #include "avatar/gltf/mtoon_json.h"
+#include "avatar/vrm/secondary_motion.h"
 #include "engine/avatar_renderer.h"
 #include "engine_test_support.h"
 #include "tests/support/gltf_validator.h"
 #include "tests/support/mtoon_test_avatar.h"
+#include "tests/support/vrm_test_avatar.h"
 
 using namespace embody;
 using nlohmann::json;
@@ -589,4 +591,187 @@ TEST_CASE("MToon outline width: metres in world mode, a share of the height at a
   }
   const auto none = radii(avatar::OutlineWidthMode::None, 0.08f, 4.0f);
   CHECK(none.second == none.first);
+}
+
+namespace {
+
+// The avatar at rest from shoot()'s view, with per-frame material bind states (empty: as loaded).
+avatar::Image shootWithStates(test::GpuContext& ctx, const avatar::AvatarAsset& asset,
+                              std::span<const avatar::MaterialBindState> states, double seconds = 0.0) {
+  auto r = engine::AvatarRenderer::create(*ctx.device, asset);
+  REQUIRE(r);
+  const auto pose = avatar::SkeletonPose::rest(asset.skeleton);
+  engine::FrameOptions fo;
+  fo.grid = false;
+  fo.clearColor = kBackground;
+  fo.materialStates = states;
+  fo.seconds = seconds;
+  auto img = (*r)->render(pose, (*r)->orbitAround(pose, 0.6f, 0.1f), fo);
+  REQUIRE(img);
+  return std::move(img).value();
+}
+
+int maxChannelDifference(const avatar::Image& a, const avatar::Image& b) {
+  int d = 0;
+  for (size_t i = 0; i < a.rgba.size(); ++i) d = std::max(d, std::abs(int(a.rgba[i]) - int(b.rgba[i])));
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("MToon expression binds on the GPU: every colour type and the texture transform, as if authored",
+          "[gpu][materials]") {
+  // An expression moving every MToon colour and the texture transforms of both MToon materials
+  // (cloth, skin with a matcap), drawn at weight 1 through the per-frame blocks, must look like
+  // the same avatar whose materials were authored with the targets (drawn from the static blocks).
+  auto asset = loadBytes(test::mtoonVrm1File());
+  REQUIRE(asset.materials.size() >= 2);
+  using T = avatar::MaterialColorType;
+  const std::pair<T, glm::vec4> targets[] = {{T::Color, {0.2f, 0.7f, 0.3f, 1.0f}},      {T::EmissionColor, {0.1f, 0.0f, 0.2f, 1.0f}},
+                                             {T::ShadeColor, {0.0f, 0.0f, 0.6f, 1.0f}}, {T::MatcapColor, {0.3f, 0.3f, 0.0f, 1.0f}},
+                                             {T::RimColor, {0.0f, 0.8f, 0.8f, 1.0f}},   {T::OutlineColor, {0.9f, 0.1f, 0.1f, 1.0f}}};
+  avatar::Expression e;
+  e.name = "everything";
+  for (int m : {0, 1}) {
+    for (const auto& [type, value] : targets) e.colorBinds.push_back({m, type, value});
+    e.textureTransformBinds.push_back({m, {1.5f, 0.75f}, {0.1f, 0.2f}});
+  }
+  asset.expressions.expressions.push_back(e);
+  asset.expressions.boundMaterials = {0, 1};
+  auto authored = asset;
+  for (int m : {0, 1}) {
+    avatar::Material& x = authored.materials[static_cast<size_t>(m)];
+    x.baseColorFactor = targets[0].second;
+    x.emissiveFactor = glm::vec3(targets[1].second);
+    x.mtoon.shadeColor = glm::vec3(targets[2].second);
+    x.mtoon.matcapFactor = glm::vec3(targets[3].second);
+    x.mtoon.rimColor = glm::vec3(targets[4].second);
+    x.mtoon.outlineColor = glm::vec3(targets[5].second);
+    for (avatar::TextureTransform* t : {&x.baseColorTransform, &x.emissiveTransform, &x.mtoon.shadeTransform,
+                                        &x.mtoon.shadingShiftTransform, &x.mtoon.rimTransform, &x.mtoon.outlineWidthTransform}) {
+      t->scale = {1.5f, 0.75f};
+      t->offset = {0.1f, 0.2f};
+    }
+  }
+  avatar::SecondaryMotion motion(asset, {.springBones = false, .blink = false, .lookAt = false});
+  avatar::SkeletonPose pose = avatar::SkeletonPose::rest(asset.skeleton);
+  motion.expressionWeights().back() = 1.0f;
+  motion.update(pose, 0.01, std::nullopt);
+  test::GpuContext ctx;
+  const avatar::Image bound = shootWithStates(ctx, asset, motion.materialStates());
+  const avatar::Image asAuthored = shootWithStates(ctx, authored, {});
+  const avatar::Image loaded = shootWithStates(ctx, asset, {});
+  // Equal up to a rounding step (base + (target - base) is the target to within an ulp).
+  CHECK(maxChannelDifference(bound, asAuthored) <= 1);
+  size_t changed = 0;
+  for (size_t i = 0; i < bound.rgba.size(); i += 4)
+    changed += std::abs(int(bound.rgba[i]) - int(loaded.rgba[i])) + std::abs(int(bound.rgba[i + 1]) - int(loaded.rgba[i + 1])) > 30;
+  INFO("pixels the expression changes: " << changed);
+  CHECK(changed > 2000);
+}
+
+TEST_CASE("MToon UV animation: read from VRM 1.0 and 0.x into the 1.0 model", "[materials]") {
+  auto bytes = test::mtoonVrm1File();
+  REQUIRE(bytes.ok());
+  auto edited = test::editGlbJson(*bytes, [](json& doc) {
+    json& t = doc["materials"][0]["extensions"]["VRMC_materials_mtoon"];
+    t["uvAnimationScrollXSpeedFactor"] = 0.25;
+    t["uvAnimationScrollYSpeedFactor"] = -0.5;
+    t["uvAnimationRotationSpeedFactor"] = 1.5;
+    t["uvAnimationMaskTexture"] = doc["materials"][1]["extensions"]["VRMC_materials_mtoon"]["matcapTexture"];
+    json& u = doc["materials"][1]["extensions"]["VRMC_materials_mtoon"];
+    u["uvAnimationScrollXSpeedFactor"] = 1e9;  // hostile: clamped to 1000 UV/s
+    u["uvAnimationRotationSpeedFactor"] = "fast";
+  });
+  std::vector<std::string> warnings;
+  const auto a = loadBytes(edited, &warnings);
+  for (const auto& w : warnings) INFO(w);
+  CHECK(warnings.size() == 2);
+  const auto& t = a.materials[0].mtoon;
+  CHECK(t.uvAnimationScroll == glm::vec2(0.25f, -0.5f));
+  CHECK(t.uvAnimationRotation == 1.5f);
+  CHECK(t.uvAnimationMaskImage >= 0);
+  CHECK_FALSE(t.uvAnimationVrm0);
+  CHECK(t.hasUvAnimation());
+  CHECK(a.materials[1].mtoon.uvAnimationScroll.x == 1000.0f);
+  CHECK(a.materials[1].mtoon.uvAnimationRotation == 0.0f);
+  // 0.x: Unity's bottom-up v negates the scroll's y; rotation is in turns per second.
+  auto vrm0 = test::mtoonVrm0File();
+  REQUIRE(vrm0.ok());
+  auto edited0 = test::editGlbJson(*vrm0, [](json& doc) {
+    json& f = doc["extensions"]["VRM"]["materialProperties"][0]["floatProperties"];
+    f["_UvAnimScrollX"] = 0.25;
+    f["_UvAnimScrollY"] = 0.5;
+    f["_UvAnimRotation"] = 0.25;
+  });
+  warnings.clear();
+  const auto b = loadBytes(edited0, &warnings);
+  CHECK(warnings.empty());
+  const auto& t0 = b.materials[0].mtoon;
+  CHECK(t0.uvAnimationScroll == glm::vec2(0.25f, -0.5f));
+  CHECK(t0.uvAnimationRotation == Approx(glm::half_pi<float>()));
+  CHECK(t0.uvAnimationVrm0);
+}
+
+namespace {
+
+// The VRM test bust with its shirt drawn as MToon (lit colour = shade colour, so only the texture
+// matters) reading the whole 8x1 stripe texture (four white texels, four dark) untransformed.
+avatar::AvatarAsset stripedMToonBust() {
+  avatar::AvatarAsset a = test::buildVrmTestAvatar().asset;
+  avatar::Material& shirt = a.materials[4];
+  shirt.isMToon = true;
+  shirt.mtoon.shadeColor = glm::vec3(shirt.baseColorFactor);
+  shirt.baseColorTransform = {};
+  return a;
+}
+
+// KHR_texture_transform with the rotation and offset that `rotate about (0.5, 0.5) by angle, then
+// add scroll` amounts to (scrollFirst: add scroll first, as VRM 0.x does): offset + R(uv).
+avatar::TextureTransform equivalentTransform(float angle, glm::vec2 scroll, bool scrollFirst) {
+  const float c = std::cos(angle), s = std::sin(angle);
+  const auto rotate = [&](glm::vec2 p) { return glm::vec2(c * p.x + s * p.y, -s * p.x + c * p.y); };
+  avatar::TextureTransform t;
+  t.rotation = angle;
+  t.offset = glm::vec2(0.5f) - rotate(glm::vec2(0.5f)) + (scrollFirst ? rotate(scroll) : scroll);
+  return t;
+}
+
+}  // namespace
+
+TEST_CASE("MToon UV animation on the GPU: equals the texture transform it amounts to; the mask stops it",
+          "[gpu][materials]") {
+  const avatar::AvatarAsset still = stripedMToonBust();
+  const glm::vec2 scrollSpeed(0.3f, -0.2f);
+  const float rotationSpeed = 0.7f, seconds = 1.5f;
+  auto animated = still;
+  animated.materials[4].mtoon.uvAnimationScroll = scrollSpeed;
+  animated.materials[4].mtoon.uvAnimationRotation = rotationSpeed;
+  test::GpuContext ctx;
+  const avatar::Image atRest = shootWithStates(ctx, still, {});
+  const avatar::Image atZero = shootWithStates(ctx, animated, {}, 0.0);
+  const avatar::Image moving = shootWithStates(ctx, animated, {}, seconds);
+  for (bool vrm0 : {false, true}) {
+    INFO((vrm0 ? "VRM 0.x order (scroll, then rotate)" : "VRM 1.0 order (rotate, then scroll)"));
+    auto a = animated, authored = still;
+    a.materials[4].mtoon.uvAnimationVrm0 = vrm0;
+    authored.materials[4].baseColorTransform = equivalentTransform(rotationSpeed * seconds, scrollSpeed * seconds, vrm0);
+    const avatar::Image img = shootWithStates(ctx, a, {}, seconds), expected = shootWithStates(ctx, authored, {});
+    CHECK(maxChannelDifference(img, expected) <= 2);
+  }
+  CHECK(atZero.rgba == atRest.rgba);  // time 0: no motion
+  size_t changed = 0;
+  for (size_t i = 0; i < moving.rgba.size(); i += 4) changed += std::abs(int(moving.rgba[i]) - int(atRest.rgba[i])) > 40;
+  INFO("pixels the animation changes at 1.5 s: " << changed);
+  CHECK(changed > 500);
+  // A mask with B = 0 (and R = 1) stops the 1.0 animation; VRM 0.x reads R and still moves.
+  auto masked = animated;
+  avatar::Image mask;
+  mask.width = mask.height = 1;
+  mask.rgba = {255, 255, 0, 255};
+  masked.images.push_back(mask);
+  masked.materials[4].mtoon.uvAnimationMaskImage = static_cast<int>(masked.images.size() - 1);
+  CHECK(shootWithStates(ctx, masked, {}, seconds).rgba == atRest.rgba);
+  masked.materials[4].mtoon.uvAnimationVrm0 = true;
+  CHECK(shootWithStates(ctx, masked, {}, seconds).rgba != atRest.rgba);
 }

@@ -183,3 +183,55 @@ TEST_CASE("golden: VRM eyes looking left (expression look-at)", "[gpu][golden]")
   CHECK(brightness(rgb(*img, moved)) < 0.45f);
   test::checkGolden("vrm_look_left", *img, ctx.device->driverString());
 }
+
+TEST_CASE("golden: VRM expression material binds (angry: red skin, striped shirt)", "[gpu][golden]") {
+  test::GpuContext ctx;
+  const avatar::AvatarAsset a = loadBust();
+  auto r = engine::AvatarRenderer::create(*ctx.device, a, small());
+  REQUIRE(r);
+  avatar::SecondaryMotion motion(a, {.springBones = false, .blink = false, .lookAt = false});
+  const size_t angry = static_cast<size_t>(a.expressions.find(avatar::ExpressionPreset::Angry));
+  const engine::Camera cam = faceCamera(1.3f, 1.45f);
+  const avatar::SkeletonPose pose = avatar::SkeletonPose::rest(a.skeleton);
+  engine::FrameOptions fo;
+  fo.grid = false;
+  fo.morphWeights = motion.morphWeights();
+  auto shownAt = [&](float weight) {
+    motion.expressionWeights()[angry] = weight;
+    avatar::SkeletonPose p = pose;
+    motion.update(p, 1.0 / 90.0, std::nullopt);
+    fo.materialStates = motion.materialStates();
+    auto img = (*r)->render(p, cam, fo);
+    REQUIRE(img);
+    return std::move(img).value();
+  };
+  fo.materialStates = {};
+  auto loaded = (*r)->render(pose, cam, fo);  // no states: the materials as loaded
+  REQUIRE(loaded);
+  const avatar::Image off = shownAt(0.0f), on = shownAt(1.0f), half = shownAt(0.5f), offAgain = shownAt(0.0f);
+  // Off is the loaded look, bit for bit, before and after the expression was on (both frame slots).
+  CHECK(off.rgba == loaded->rgba);
+  CHECK(offAgain.rgba == off.rgba);
+  // The forehead: skin (green high) when off, red when on, in between at half weight.
+  const glm::ivec2 forehead = pixelOf(cam, {0.0f, 1.71f, 0.075f});
+  const glm::vec3 skinOff = rgb(off, forehead), skinOn = rgb(on, forehead), skinHalf = rgb(half, forehead);
+  INFO("forehead off " << skinOff.r << " " << skinOff.g << " on " << skinOn.r << " " << skinOn.g << " half " << skinHalf.g);
+  CHECK(skinOff.g > 0.7f * skinOff.r);
+  CHECK(skinOn.g < 0.45f * skinOn.r);
+  CHECK(skinHalf.g < skinOff.g - 0.05f);
+  CHECK(skinHalf.g > skinOn.g + 0.05f);
+  // The shirt: the texture transform (scale 2) shows the dark half of the texture on the
+  // avatar's right front (u 0.75..1 -> 1.5..2), the white half on its left front (u 0..0.25).
+  for (float side : {-1.0f, 1.0f}) {
+    const float ph = glm::radians(30.0f * side);
+    const glm::ivec2 p = pixelOf(cam, {0.17f * std::sin(ph), 1.25f, 0.1f * std::cos(ph)});
+    const float b0 = brightness(rgb(off, p)), b1 = brightness(rgb(on, p));
+    INFO("shirt side " << side << " off " << b0 << " on " << b1);
+    CHECK(b0 > 0.2f);
+    if (side < 0)
+      CHECK(b1 < 0.35f * b0);
+    else
+      CHECK(std::abs(b1 - b0) < 0.02f);
+  }
+  test::checkGolden("vrm_expression_material_binds", on, ctx.device->driverString());
+}

@@ -9,7 +9,12 @@
 // Morph targets (channels on the mesh node, in this order): blink (eyes squashed shut),
 // lookLeft / lookRight / lookUp / lookDown (pupils moved), aa (mouth opened). Expressions:
 // blink, lookLeft, lookRight, lookUp, lookDown, aa, happy (half blink + a little aa, blocks
-// blinking), custom "wink" (binary). lookAt: expression type (or bone, on request).
+// blinking), custom "wink" (binary), and angry: material binds only (a colour bind turning the
+// skin red, a texture-transform bind that puts dark stripes on the shirt). The shirt carries an
+// 8x1 texture, four white texels then four dark ones; its own KHR_texture_transform (scale 0.25,
+// offset 0.125) reads only the white half, so the shirt looks untextured until `angry` moves the
+// transform to scale 2, offset 0 (two white/dark periods around the torso).
+// lookAt: expression type (or bone, on request).
 // Springs: one per strand (four swinging joints, the fifth is the tail), colliders: a head
 // sphere and a chest capsule in one group.
 #include <cmath>
@@ -30,6 +35,9 @@ struct VrmTestAvatarOptions {
   float gravityPower = 0.2f;
   bool vrm0 = false;  // write VRM 0.x extensions (secondaryAnimation, blendShapeMaster, firstPerson) instead
 };
+
+// The skin colour (linear) the `angry` expression's colour bind moves to.
+constexpr glm::vec3 kAngrySkin{0.9f, 0.12f, 0.1f};
 
 struct VrmTestAvatar {
   avatar::AvatarAsset asset;   // skeleton, mesh (with morph channels), materials; not prepared
@@ -53,9 +61,10 @@ inline int addJoint(avatar::Skeleton& s, const std::string& name, int parent, gl
 
 struct MeshBuilder {
   avatar::SkinnedMesh& mesh;
-  uint32_t vertex(glm::vec3 p, glm::vec3 n, int joint) {
+  uint32_t vertex(glm::vec3 p, glm::vec3 n, int joint, glm::vec2 uv = glm::vec2(0.0f)) {
     avatar::SkinnedVertex v;
     v.position = p;
+    v.uv = uv;
     v.normal = glm::normalize(n);
     v.joints0 = glm::uvec4(static_cast<uint32_t>(joint), 0, 0, 0);
     v.weights0 = glm::vec4(1, 0, 0, 0);
@@ -77,7 +86,7 @@ struct MeshBuilder {
       for (int k = 0; k <= segments; ++k) {
         const float th = glm::pi<float>() * float(i) / float(rings), ph = 2.0f * glm::pi<float>() * float(k) / float(segments);
         const glm::vec3 d(std::sin(th) * std::sin(ph), std::cos(th), std::sin(th) * std::cos(ph));
-        vertex(c + d * r, d / r, joint);
+        vertex(c + d * r, d / r, joint, {float(k) / float(segments), float(i) / float(rings)});  // u: around from +Z
       }
     for (int i = 0; i < rings; ++i)
       for (int k = 0; k < segments; ++k) {
@@ -171,6 +180,15 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
   a.materials = {material("skin", {0.93f, 0.78f, 0.68f, 1}), material("eyeWhite", {0.97f, 0.97f, 0.97f, 1}),
                  material("pupil", {0.08f, 0.1f, 0.25f, 1}), material("hair", {0.45f, 0.22f, 0.1f, 1}, true),
                  material("shirt", {0.2f, 0.45f, 0.7f, 1}), material("mouth", {0.55f, 0.12f, 0.15f, 1})};
+  // The shirt's stripes (see the header comment).
+  avatar::Image stripes;
+  stripes.width = 8;
+  stripes.height = 1;
+  for (int x = 0; x < 8; ++x) stripes.rgba.insert(stripes.rgba.end(), {uint8_t(x < 4 ? 255 : 40), uint8_t(x < 4 ? 255 : 40), uint8_t(x < 4 ? 255 : 40), 255});
+  a.images.push_back(stripes);
+  a.materials[4].baseColorImage = 0;
+  a.materials[4].baseColorTransform.scale = {0.25f, 1.0f};
+  a.materials[4].baseColorTransform.offset = {0.125f, 0.0f};
   MeshBuilder mb{a.mesh};
   uint32_t first = 0;
   mb.sphere(headCentre, {0.09f, 0.105f, 0.095f}, t.head);
@@ -279,6 +297,9 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
           {"happy", {{"morphTargetBinds", {{{"node", mesh}, {"index", 0}, {"weight", 0.5}}, {{"node", mesh}, {"index", 5}, {"weight", 0.3}}}},
                      {"overrideBlink", "block"}}}}},
         {"custom", {{"wink", {{"morphTargetBinds", bind(0, 0.8)}, {"isBinary", true}}}}}}}};
+  vrm["expressions"]["preset"]["angry"] = {
+      {"materialColorBinds", {{{"material", 0}, {"type", "color"}, {"targetValue", {kAngrySkin.r, kAngrySkin.g, kAngrySkin.b, 1.0}}}}},
+      {"textureTransformBinds", {{{"material", 4}, {"scale", {2.0, 1.0}}, {"offset", {0.0, 0.0}}}}}};
   json headSphere = {{"node", t.head}, {"shape", {{"sphere", {{"offset", {0, 0.1, 0}}, {"radius", 0.095}}}}}};
   json chestCapsule = {{"node", 3}, {"shape", {{"capsule", {{"offset", {0, 0, 0}}, {"tail", {0, 0.2, 0}}, {"radius", 0.14}}}}}};
   json colliderGroup = {{"name", "body"}, {"colliders", {0, 1}}};
@@ -301,6 +322,13 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
   auto group = [&](const char* preset, int channel, double w) {
     return json{{"name", preset}, {"presetName", preset}, {"binds", {{{"mesh", 0}, {"index", channel}, {"weight", w * 100}}}}};
   };
+  // angry: _Color is sRGB-encoded in 0.x (Unity's colour), _MainTex_ST is Unity's
+  // [scale.x, scale.y, offset.x, offset.y] with v from the bottom (offset.y = 1 - 0 - 1 = 0).
+  auto encode = [](float c) { return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f; };
+  const json angry0 = {{"name", "angry"}, {"presetName", "angry"}, {"binds", json::array()},
+                       {"materialValues", {{{"materialName", "skin"}, {"propertyName", "_Color"},
+                                            {"targetValue", {encode(kAngrySkin.r), encode(kAngrySkin.g), encode(kAngrySkin.b), 1.0}}},
+                                           {{"materialName", "shirt"}, {"propertyName", "_MainTex_ST"}, {"targetValue", {2.0, 1.0, 0.0, 0.0}}}}}};
   auto group0 = [](int node, float y, float radius) {
     const json collider = {{"offset", {{"x", 0}, {"y", y}, {"z", 0}}}, {"radius", radius}};
     return json{{"node", node}, {"colliders", json::array({collider})}};
@@ -313,7 +341,7 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
                        {"lookAtTypeName", o.boneLookAt ? "Bone" : "BlendShape"}, {"lookAtHorizontalInner", curve},
                        {"lookAtHorizontalOuter", curve}, {"lookAtVerticalDown", curve}, {"lookAtVerticalUp", curve}}},
       {"blendShapeMaster", {{"blendShapeGroups", {group("blink", 0, 1), group("lookleft", 1, 1), group("lookright", 2, 1),
-                                                  group("lookup", 3, 1), group("lookdown", 4, 1), group("a", 5, 1)}}}},
+                                                  group("lookup", 3, 1), group("lookdown", 4, 1), group("a", 5, 1), angry0}}}},
       {"secondaryAnimation",
        {{"boneGroups", {{{"comment", "hair"}, {"stiffiness", o.stiffness}, {"gravityPower", o.gravityPower},
                          {"gravityDir", {{"x", 0}, {"y", -1}, {"z", 0}}}, {"dragForce", o.dragForce}, {"center", -1},
