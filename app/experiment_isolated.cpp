@@ -12,11 +12,9 @@ namespace {
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 // Figures 6, 7 and 8 of the paper, from the CSV files written beside the script.
-const char* const kIsolatedSpinePlots =
-    R"gp(# Plots of `embody experiment isolated-spine` (run: gnuplot plots.gp in this folder).
-set datafile separator ','
-set terminal pngcairo size 1500,520 font 'Sans,11'
-clip(x) = (x > 1e-12 ? x : 1e-12)
+std::string isolatedSpinePlots() {
+  return gnuplotHeader("isolated-spine", "size 1500,520") +
+         R"gp(clip(x) = (x > 1e-12 ? x : 1e-12)
 
 # Figure 7: task errors and joint variation per iteration.
 set output 'fig7_convergence.png'
@@ -26,19 +24,11 @@ set key top right
 set logscale y
 set format y '10^{%L}'
 set xlabel 'iteration'
-set ylabel 'neck position error (m)'
-set title 'position task (priority 1)'
-plot 'coupled_iterations.csv' skip 1 using 1:(clip($3)) with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_iterations.csv' skip 1 using 1:(clip($3)) with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-set ylabel 'head orientation error (deg)'
-set title 'orientation task (priority 0)'
-plot 'coupled_iterations.csv' skip 1 using 1:(clip($4)) with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_iterations.csv' skip 1 using 1:(clip($4)) with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-set ylabel '|{/Symbol D}q| (rad)'
-set title 'joint variation norm'
-plot 'coupled_iterations.csv' skip 1 using 1:(clip($5)) with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_iterations.csv' skip 1 using 1:(clip($5)) with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-unset multiplot
+)gp" +
+         runsPanels({{"neck position error (m)", "position task (priority 1)", "iterations", "1:(clip($3))", "lines lw 2"},
+                     {"head orientation error (deg)", "orientation task (priority 0)", "iterations", "1:(clip($4))", "lines lw 2"},
+                     {"|{/Symbol D}q| (rad)", "joint variation norm", "iterations", "1:(clip($5))", "lines lw 2"}}) +
+         R"gp(unset multiplot
 unset logscale y
 set format y '%g'
 
@@ -113,6 +103,7 @@ set ylabel 'neck position error (m)'
 set key top right
 plot 'band_slack_sweep.csv' skip 1 using 1:2 with linespoints pt 7 lw 2 lc rgb '#1f77b4' title 'coupled'
 )gp";
+}
 
 void writeRun(const fs::path& dir, const ik::spine::ExperimentRun& run, std::string& error) {
   std::string it = "iteration,time_us,position_error_m,orientation_error_deg,dq_norm_rad\n";
@@ -205,7 +196,7 @@ int runIsolatedSpine(const IsolatedOptions& o, nlohmann::json& summary) {
     std::printf("wrote CSV and summary.json to %s (plots skipped)\n", o.common.out.string().c_str());
     return 0;
   }
-  if (auto e = runGnuplot(o.common.out, "plots.gp", kIsolatedSpinePlots); !e.empty()) return fail(e);
+  if (auto e = runGnuplot(o.common.out, "plots.gp", isolatedSpinePlots()); !e.empty()) return fail(e);
   std::printf(
       "wrote CSV, summary.json and fig6_shapes.png, fig7_convergence.png, fig8_swing.png, fig_band_slack.png "
       "to %s\n",
