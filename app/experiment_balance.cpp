@@ -132,9 +132,8 @@ Result<BalanceRun> solveBalance(const avatar::AvatarAsset& asset, avatar::SpineM
 
 std::string balancePlots() {
   return gnuplotHeader("balance", "noenhanced size 1100,820") +
-         R"gp(set output 'fig10_torsion.png'
-set multiplot layout 2,1 title 'Balance: torsion along the spine (the paper''s fig. 10), + = front turning to the left'
-set style fill solid 0.8 border -1
+         multiplotFigure("fig10_torsion.png", "2,1", "Balance: torsion along the spine (the paper''s fig. 10), + = front turning to the left") +
+         R"gp(set style fill solid 0.8 border -1
 set boxwidth 0.38
 set grid y
 set key top left

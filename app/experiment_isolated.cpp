@@ -17,9 +17,9 @@ std::string isolatedSpinePlots() {
          R"gp(clip(x) = (x > 1e-12 ? x : 1e-12)
 
 # Figure 7: task errors and joint variation per iteration.
-set output 'fig7_convergence.png'
-set multiplot layout 1,3 title 'Isolated spine: convergence, coupled (9 free dofs) vs uncoupled (72 dofs)'
-set grid
+)gp" +
+         multiplotFigure("fig7_convergence.png", "1,3", "Isolated spine: convergence, coupled (9 free dofs) vs uncoupled (72 dofs)") +
+         R"gp(set grid
 set key top right
 set logscale y
 set format y '10^{%L}'
@@ -33,9 +33,9 @@ unset logscale y
 set format y '%g'
 
 # Figure 8: how the swing is distributed over the vertebrae.
-set output 'fig8_swing.png'
-set multiplot layout 1,3 title 'Isolated spine: swing and torsion per vertebra (swing: s_x flexion, s_y lateral bending)'
-set title 'swing components (deg)'
+)gp" +
+         multiplotFigure("fig8_swing.png", "1,3", "Isolated spine: swing and torsion per vertebra (swing: s_x flexion, s_y lateral bending)") +
+         R"gp(set title 'swing components (deg)'
 set xlabel 's_x (flexion +forward)'
 set ylabel 's_y (lateral bending +left)'
 set key top left
@@ -63,9 +63,9 @@ set xtics norotate font ''
 
 # Figure 6: the final spine shapes, front and side views (same scale on both axes).
 set terminal pngcairo size 1200,820 font 'Sans,11'
-set output 'fig6_shapes.png'
-set multiplot layout 1,2 title 'Isolated spine: final shapes (neck pulled to the left, head orientation kept)'
-set size ratio -1
+)gp" +
+         multiplotFigure("fig6_shapes.png", "1,2", "Isolated spine: final shapes (neck pulled to the left, head orientation kept)") +
+         R"gp(set size ratio -1
 set key bottom right box opaque
 set xtics 0.05
 set ytics 0.05

@@ -250,9 +250,8 @@ Result<MocapRun> solveMocap(const avatar::AvatarAsset& asset, const tracking::Bv
 
 std::string mocapPlots() {
   return gnuplotHeader("mocap", "size 1200,480") +
-         R"gp(set output 'fig_mocap.png'
-set multiplot layout 1,3 title 'Motion-capture markers driving the mannequin: coupled vs uncoupled spine'
-set grid
+         multiplotFigure("fig_mocap.png", "1,3", "Motion-capture markers driving the mannequin: coupled vs uncoupled spine") +
+         R"gp(set grid
 set xlabel 'frame'
 set key top left
 )gp" +

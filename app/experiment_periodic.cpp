@@ -178,9 +178,8 @@ Result<PeriodicRun> solvePeriodic(const avatar::AvatarAsset& asset, avatar::Spin
 
 std::string periodicPlots() {
   return gnuplotHeader("periodic", "size 1200,480") +
-         R"gp(set output 'fig11_drift.png'
-set multiplot layout 1,2 title 'Periodic figure-eight: drift of the configuration at the same phase from cycle 1'
-set grid
+         multiplotFigure("fig11_drift.png", "1,2", "Periodic figure-eight: drift of the configuration at the same phase from cycle 1") +
+         R"gp(set grid
 set logscale x
 set xlabel 'cycle'
 set key top left
@@ -189,9 +188,8 @@ set key top left
                      {"spine distance from cycle 1 (rad)", "spine dofs", "cycles", "1:4", "lines lw 2"}}) +
          R"gp(unset multiplot
 
-set output 'fig_periodic_spine.png'
-set multiplot layout 1,3 title 'Periodic figure-eight: spine shape at phase 0 per cycle'
 )gp" +
+         multiplotFigure("fig_periodic_spine.png", "1,3", "Periodic figure-eight: spine shape at phase 0 per cycle") +
          runsPanels({{"swing spread", "swing spread (0 = proportional)", "cycles", "1:7", "lines lw 2"},
                      {"|swing| / limit", "largest swing over its limit", "cycles", "1:8", "lines lw 2"},
                      {"count", "torsion sign changes within regions", "cycles", "1:9", "steps lw 2"}}) +

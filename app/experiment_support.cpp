@@ -199,6 +199,10 @@ std::string gnuplotHeader(const std::string& experiment, const std::string& term
          "set datafile separator ','\nset terminal pngcairo " + terminal + " font 'Sans,11'\n";
 }
 
+std::string multiplotFigure(const std::string& png, const std::string& layout, const std::string& title) {
+  return "set output '" + png + "'\nset multiplot layout " + layout + " title '" + title + "'\n";
+}
+
 std::string runsPlot(const std::string& table, const std::string& columns, const std::string& style) {
   const auto curve = [&](const char* run, const char* color) {
     return "'" + std::string(run) + "_" + table + ".csv' skip 1 using " + columns + " with " + style + " lc rgb '" +

@@ -97,6 +97,8 @@ bool writeFile(const fs::path& path, const std::string& text);
 // The parts of an experiment's plots.gp that every one repeats. The header: what wrote it, CSV
 // input, a PNG terminal (`terminal`: e.g. "size 1200,480").
 std::string gnuplotHeader(const std::string& experiment, const std::string& terminal);
+// A figure's first lines: its PNG, and a multiplot of `layout` ("rows,columns") under `title`.
+std::string multiplotFigure(const std::string& png, const std::string& layout, const std::string& title);
 // One `plot` of the coupled and the uncoupled run's <table>.csv (blue, red) with the same columns
 // and style: runsPlot("frames", "1:2", "linespoints lw 2").
 std::string runsPlot(const std::string& table, const std::string& columns, const std::string& style);
