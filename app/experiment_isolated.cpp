@@ -11,10 +11,9 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// Figures 6, 7 and 8 of the paper, from the CSV files written beside the script.
-std::string isolatedSpinePlots() {
-  return gnuplotHeader("isolated-spine", "size 1500,520") +
-         R"gp(clip(x) = (x > 1e-12 ? x : 1e-12)
+// Figure 7 of the paper: task errors and joint variation per iteration (log scale).
+std::string convergencePlots() {
+  return R"gp(clip(x) = (x > 1e-12 ? x : 1e-12)
 
 # Figure 7: task errors and joint variation per iteration.
 )gp" +
@@ -31,7 +30,12 @@ set xlabel 'iteration'
          R"gp(unset multiplot
 unset logscale y
 set format y '%g'
+)gp";
+}
 
+// Figure 8: how the swing is distributed over the vertebrae.
+std::string swingPlots() {
+  return R"gp(
 # Figure 8: how the swing is distributed over the vertebrae.
 )gp" +
          multiplotFigure("fig8_swing.png", "1,3", "Isolated spine: swing and torsion per vertebra (swing: s_x flexion, s_y lateral bending)") +
@@ -61,7 +65,12 @@ plot 'coupled_vertebrae.csv' skip 1 using 1:6:xtic(2) with linespoints pt 7 lw 2
 unset multiplot
 set xtics norotate font ''
 
-# Figure 6: the final spine shapes, front and side views (same scale on both axes).
+)gp";
+}
+
+// Figure 6 (the final spine shapes) and the band slack sweep.
+std::string shapeAndSlackPlots() {
+  return R"gp(# Figure 6: the final spine shapes, front and side views (same scale on both axes).
 set terminal pngcairo size 1200,820 font 'Sans,11'
 )gp" +
          multiplotFigure("fig6_shapes.png", "1,2", "Isolated spine: final shapes (neck pulled to the left, head orientation kept)") +
@@ -103,6 +112,11 @@ set ylabel 'neck position error (m)'
 set key top right
 plot 'band_slack_sweep.csv' skip 1 using 1:2 with linespoints pt 7 lw 2 lc rgb '#1f77b4' title 'coupled'
 )gp";
+}
+
+// Figures 6, 7 and 8 of the paper, from the CSV files written beside the script.
+std::string isolatedSpinePlots() {
+  return gnuplotHeader("isolated-spine", "size 1500,520") + convergencePlots() + swingPlots() + shapeAndSlackPlots();
 }
 
 void writeRun(const fs::path& dir, const ik::spine::ExperimentRun& run, std::string& error) {
