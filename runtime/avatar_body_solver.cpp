@@ -145,15 +145,15 @@ void AvatarBodySolver::measureRest(ik::JointId leftElbow, bool legs) {
   for (auto id : tracking::kAllTrackers)
     restRotation_[size_t(tracking::index(id))] = Eigen::Quaterniond(rest.jointFrame(joint_[size_t(tracking::index(id))]).rotation());
   armReach_ = (pos(leftElbow) - pos(leftShoulder_)).norm() + (pos(body_.leftHand) - pos(leftElbow)).norm();
-  const avatar::RestStature stature = avatar::restStature(avatar_, glm::dvec3(up_.x(), up_.y(), up_.z()));
-  floor_ = stature.floor;
-  avatarHeight_ = stature.height;
-  for (auto id : tracking::kAllTrackers)
-    restHeight_[size_t(tracking::index(id))] = up_.dot(pos(joint_[size_t(tracking::index(id))])) - floor_;
-  // The eyes: the avatar's one eye point (avatar/body/eye_point.h), the renderer's camera too.
-  const Eigen::Vector3d head = pos(body_.head);
+  // The eyes: the avatar's one eye point (avatar/body/eye_point.h), the renderer's camera too;
+  // floor and stature (avatar::restStature along the humanoid's up, up_) come with it.
   const avatar::EyePoint restEye =
       avatar::restEyePoint(avatar_, avatar_.humanoid.joint(avatar::HumanBone::head), toGlm(forward_));
+  floor_ = restEye.stature.floor;
+  avatarHeight_ = restEye.stature.height;
+  for (auto id : tracking::kAllTrackers)
+    restHeight_[size_t(tracking::index(id))] = up_.dot(pos(joint_[size_t(tracking::index(id))])) - floor_;
+  const Eigen::Vector3d head = pos(body_.head);
   avatarEyeHeight_ = restEye.aboveFloor;
   const Eigen::Vector3d eye(restEye.position.x, restEye.position.y, restEye.position.z);
   eyeInHead_ = restRotation_[0].conjugate() * (eye - head);

@@ -53,8 +53,9 @@ RestStature restStature(const AvatarAsset& asset, const glm::dvec3& up) {
 EyePoint restEyePoint(const AvatarAsset& asset, int head, const glm::vec3& forward) {
   const RestShape r = restShape(asset);
   const glm::dvec3 up = glm::normalize(glm::dvec3(asset.humanoid.up));
-  const RestStature stature = statureOf(asset, r, up);
   EyePoint eye;
+  eye.stature = statureOf(asset, r, up);
+  const RestStature& stature = eye.stature;
   glm::vec3 lo(1e30f), hi(-1e30f);
   if (head >= 0)
     for (size_t i = 0; i < asset.mesh.vertices.size() && i < r.positions.size(); ++i) {

@@ -20,8 +20,9 @@ RestStature restStature(const AvatarAsset& asset, const glm::dvec3& up);
 
 struct EyePoint {
   glm::dvec3 position{0.0};  // rest pose, model space (metres)
-  double aboveFloor = 0.0;   // its height over restStature's floor along humanoid.up
+  double aboveFloor = 0.0;   // its height over the stature's floor along humanoid.up
   bool fromMesh = false;     // false: the proportion rule
+  RestStature stature;       // restStature(asset, humanoid.up), measured on the way
 };
 
 // The eye point at the rest pose of head joint `head`, the avatar facing `forward` (unit):
