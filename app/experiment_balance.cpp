@@ -130,13 +130,10 @@ Result<BalanceRun> solveBalance(const avatar::AvatarAsset& asset, avatar::SpineM
   return run;
 }
 
-const char* const kBalancePlots =
-    R"gp(# Plots of `embody experiment balance` (run: gnuplot plots.gp in this folder).
-set datafile separator ','
-set terminal pngcairo noenhanced size 1100,820 font 'Sans,11'
-set output 'fig10_torsion.png'
-set multiplot layout 2,1 title 'Balance: torsion along the spine (the paper''s fig. 10), + = front turning to the left'
-set style fill solid 0.8 border -1
+std::string balancePlots() {
+  return gnuplotHeader("balance", "noenhanced size 1100,820") +
+         multiplotFigure("fig10_torsion.png", "2,1", "Balance: torsion along the spine (the paper''s fig. 10), + = front turning to the left") +
+         R"gp(set style fill solid 0.8 border -1
 set boxwidth 0.38
 set grid y
 set key top left
@@ -175,6 +172,7 @@ plot 'coupled_iterations.csv' skip 1 using 1:4 with lines lw 2 lc rgb '#1f77b4' 
      'uncoupled_iterations.csv' skip 1 using 1:5 with lines dt 2 lw 2 lc rgb '#d62728' title 'hands, uncoupled'
 unset multiplot
 )gp";
+}
 
 }  // namespace
 
@@ -209,7 +207,7 @@ int runBalance(const BalanceOptions& o, nlohmann::json& summary) {
   }
   summary["setup"] = {{"iterations", o.iterations}, {"spine", o.spine}, {"avatar", "default"}};
   if (o.common.plots)
-    if (auto e = runGnuplot(o.common.out, "plots.gp", kBalancePlots); !e.empty()) return fail(e);
+    if (auto e = runGnuplot(o.common.out, "plots.gp", balancePlots()); !e.empty()) return fail(e);
   if (o.common.frames) {
     auto renderer = PostureRenderer::create(asset, o.common.frameSize, o.common.frameSize);
     if (!renderer) return fail("balance: rendering: " + renderer.error());

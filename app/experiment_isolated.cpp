@@ -11,41 +11,35 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// Figures 6, 7 and 8 of the paper, from the CSV files written beside the script.
-const char* const kIsolatedSpinePlots =
-    R"gp(# Plots of `embody experiment isolated-spine` (run: gnuplot plots.gp in this folder).
-set datafile separator ','
-set terminal pngcairo size 1500,520 font 'Sans,11'
-clip(x) = (x > 1e-12 ? x : 1e-12)
+// Figure 7 of the paper: task errors and joint variation per iteration (log scale).
+std::string convergencePlots() {
+  return R"gp(clip(x) = (x > 1e-12 ? x : 1e-12)
 
 # Figure 7: task errors and joint variation per iteration.
-set output 'fig7_convergence.png'
-set multiplot layout 1,3 title 'Isolated spine: convergence, coupled (9 free dofs) vs uncoupled (72 dofs)'
-set grid
+)gp" +
+         multiplotFigure("fig7_convergence.png", "1,3", "Isolated spine: convergence, coupled (9 free dofs) vs uncoupled (72 dofs)") +
+         R"gp(set grid
 set key top right
 set logscale y
 set format y '10^{%L}'
 set xlabel 'iteration'
-set ylabel 'neck position error (m)'
-set title 'position task (priority 1)'
-plot 'coupled_iterations.csv' skip 1 using 1:(clip($3)) with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_iterations.csv' skip 1 using 1:(clip($3)) with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-set ylabel 'head orientation error (deg)'
-set title 'orientation task (priority 0)'
-plot 'coupled_iterations.csv' skip 1 using 1:(clip($4)) with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_iterations.csv' skip 1 using 1:(clip($4)) with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-set ylabel '|{/Symbol D}q| (rad)'
-set title 'joint variation norm'
-plot 'coupled_iterations.csv' skip 1 using 1:(clip($5)) with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_iterations.csv' skip 1 using 1:(clip($5)) with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-unset multiplot
+)gp" +
+         runsPanels({{"neck position error (m)", "position task (priority 1)", "iterations", "1:(clip($3))", "lines lw 2"},
+                     {"head orientation error (deg)", "orientation task (priority 0)", "iterations", "1:(clip($4))", "lines lw 2"},
+                     {"|{/Symbol D}q| (rad)", "joint variation norm", "iterations", "1:(clip($5))", "lines lw 2"}}) +
+         R"gp(unset multiplot
 unset logscale y
 set format y '%g'
+)gp";
+}
 
+// Figure 8: how the swing is distributed over the vertebrae.
+std::string swingPlots() {
+  return R"gp(
 # Figure 8: how the swing is distributed over the vertebrae.
-set output 'fig8_swing.png'
-set multiplot layout 1,3 title 'Isolated spine: swing and torsion per vertebra (swing: s_x flexion, s_y lateral bending)'
-set title 'swing components (deg)'
+)gp" +
+         multiplotFigure("fig8_swing.png", "1,3", "Isolated spine: swing and torsion per vertebra (swing: s_x flexion, s_y lateral bending)") +
+         R"gp(set title 'swing components (deg)'
 set xlabel 's_x (flexion +forward)'
 set ylabel 's_y (lateral bending +left)'
 set key top left
@@ -71,11 +65,16 @@ plot 'coupled_vertebrae.csv' skip 1 using 1:6:xtic(2) with linespoints pt 7 lw 2
 unset multiplot
 set xtics norotate font ''
 
-# Figure 6: the final spine shapes, front and side views (same scale on both axes).
+)gp";
+}
+
+// Figure 6 (the final spine shapes) and the band slack sweep.
+std::string shapeAndSlackPlots() {
+  return R"gp(# Figure 6: the final spine shapes, front and side views (same scale on both axes).
 set terminal pngcairo size 1200,820 font 'Sans,11'
-set output 'fig6_shapes.png'
-set multiplot layout 1,2 title 'Isolated spine: final shapes (neck pulled to the left, head orientation kept)'
-set size ratio -1
+)gp" +
+         multiplotFigure("fig6_shapes.png", "1,2", "Isolated spine: final shapes (neck pulled to the left, head orientation kept)") +
+         R"gp(set size ratio -1
 set key bottom right box opaque
 set xtics 0.05
 set ytics 0.05
@@ -113,6 +112,12 @@ set ylabel 'neck position error (m)'
 set key top right
 plot 'band_slack_sweep.csv' skip 1 using 1:2 with linespoints pt 7 lw 2 lc rgb '#1f77b4' title 'coupled'
 )gp";
+}
+
+// Figures 6, 7 and 8 of the paper, from the CSV files written beside the script.
+std::string isolatedSpinePlots() {
+  return gnuplotHeader("isolated-spine", "size 1500,520") + convergencePlots() + swingPlots() + shapeAndSlackPlots();
+}
 
 void writeRun(const fs::path& dir, const ik::spine::ExperimentRun& run, std::string& error) {
   std::string it = "iteration,time_us,position_error_m,orientation_error_deg,dq_norm_rad\n";
@@ -205,7 +210,7 @@ int runIsolatedSpine(const IsolatedOptions& o, nlohmann::json& summary) {
     std::printf("wrote CSV and summary.json to %s (plots skipped)\n", o.common.out.string().c_str());
     return 0;
   }
-  if (auto e = runGnuplot(o.common.out, "plots.gp", kIsolatedSpinePlots); !e.empty()) return fail(e);
+  if (auto e = runGnuplot(o.common.out, "plots.gp", isolatedSpinePlots()); !e.empty()) return fail(e);
   std::printf(
       "wrote CSV, summary.json and fig6_shapes.png, fig7_convergence.png, fig8_swing.png, fig_band_slack.png "
       "to %s\n",

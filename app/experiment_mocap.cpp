@@ -248,29 +248,19 @@ Result<MocapRun> solveMocap(const avatar::AvatarAsset& asset, const tracking::Bv
   return run;
 }
 
-const char* const kMocapPlots =
-    R"gp(# Plots of `embody experiment mocap` (run: gnuplot plots.gp in this folder).
-set datafile separator ','
-set terminal pngcairo size 1200,480 font 'Sans,11'
-set output 'fig_mocap.png'
-set multiplot layout 1,3 title 'Motion-capture markers driving the mannequin: coupled vs uncoupled spine'
-set grid
+std::string mocapPlots() {
+  return gnuplotHeader("mocap", "size 1200,480") +
+         multiplotFigure("fig_mocap.png", "1,3", "Motion-capture markers driving the mannequin: coupled vs uncoupled spine") +
+         R"gp(set grid
 set xlabel 'frame'
 set key top left
-set ylabel 'metres'
-set title 'mean marker error'
-plot 'coupled_frames.csv' skip 1 using 1:2 with linespoints lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_frames.csv' skip 1 using 1:2 with linespoints lw 2 lc rgb '#d62728' title 'uncoupled'
-set ylabel 'swing spread'
-set title 'spine swing spread (0 = proportional)'
-plot 'coupled_frames.csv' skip 1 using 1:5 with linespoints lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_frames.csv' skip 1 using 1:5 with linespoints lw 2 lc rgb '#d62728' title 'uncoupled'
-set ylabel 'count'
-set title 'torsion sign changes within regions'
-plot 'coupled_frames.csv' skip 1 using 1:7 with steps lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_frames.csv' skip 1 using 1:7 with steps lw 2 lc rgb '#d62728' title 'uncoupled'
-unset multiplot
+)gp" +
+         runsPanels({{"metres", "mean marker error", "frames", "1:2", "linespoints lw 2"},
+                     {"swing spread", "spine swing spread (0 = proportional)", "frames", "1:5", "linespoints lw 2"},
+                     {"count", "torsion sign changes within regions", "frames", "1:7", "steps lw 2"}}) +
+         R"gp(unset multiplot
 )gp";
+}
 
 // The clip turned to face the mannequin's way, its first frame's hips over the mannequin's hips.
 ClipSpace clipSpace(const avatar::AvatarAsset& asset, const tracking::BvhAvatar& clip) {
@@ -324,7 +314,7 @@ int runMocap(const MocapOptions& o, nlohmann::json& summary) {
                       {"spine", o.spine},
                       {"avatar", "default"}};
   if (o.common.plots)
-    if (auto e = runGnuplot(o.common.out, "plots.gp", kMocapPlots); !e.empty()) return fail(e);
+    if (auto e = runGnuplot(o.common.out, "plots.gp", mocapPlots()); !e.empty()) return fail(e);
   if (o.common.frames) {
     auto renderer = PostureRenderer::create(asset, o.common.frameSize, o.common.frameSize);
     if (!renderer) return fail("mocap: rendering: " + renderer.error());

@@ -176,42 +176,26 @@ Result<PeriodicRun> solvePeriodic(const avatar::AvatarAsset& asset, avatar::Spin
   return run;
 }
 
-const char* const kPeriodicPlots =
-    R"gp(# Plots of `embody experiment periodic` (run: gnuplot plots.gp in this folder).
-set datafile separator ','
-set terminal pngcairo size 1200,480 font 'Sans,11'
-set output 'fig11_drift.png'
-set multiplot layout 1,2 title 'Periodic figure-eight: drift of the configuration at the same phase from cycle 1'
-set grid
+std::string periodicPlots() {
+  return gnuplotHeader("periodic", "size 1200,480") +
+         multiplotFigure("fig11_drift.png", "1,2", "Periodic figure-eight: drift of the configuration at the same phase from cycle 1") +
+         R"gp(set grid
 set logscale x
 set xlabel 'cycle'
 set key top left
-set ylabel 'RMS joint-angle distance from cycle 1 (rad)'
-set title 'whole body (angle dofs)'
-plot 'coupled_cycles.csv' skip 1 using 1:3 with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_cycles.csv' skip 1 using 1:3 with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-set ylabel 'spine distance from cycle 1 (rad)'
-set title 'spine dofs'
-plot 'coupled_cycles.csv' skip 1 using 1:4 with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_cycles.csv' skip 1 using 1:4 with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-unset multiplot
+)gp" +
+         runsPanels({{"RMS joint-angle distance from cycle 1 (rad)", "whole body (angle dofs)", "cycles", "1:3", "lines lw 2"},
+                     {"spine distance from cycle 1 (rad)", "spine dofs", "cycles", "1:4", "lines lw 2"}}) +
+         R"gp(unset multiplot
 
-set output 'fig_periodic_spine.png'
-set multiplot layout 1,3 title 'Periodic figure-eight: spine shape at phase 0 per cycle'
-set ylabel 'swing spread'
-set title 'swing spread (0 = proportional)'
-plot 'coupled_cycles.csv' skip 1 using 1:7 with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_cycles.csv' skip 1 using 1:7 with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-set ylabel '|swing| / limit'
-set title 'largest swing over its limit'
-plot 'coupled_cycles.csv' skip 1 using 1:8 with lines lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_cycles.csv' skip 1 using 1:8 with lines lw 2 lc rgb '#d62728' title 'uncoupled'
-set ylabel 'count'
-set title 'torsion sign changes within regions'
-plot 'coupled_cycles.csv' skip 1 using 1:9 with steps lw 2 lc rgb '#1f77b4' title 'coupled', \
-     'uncoupled_cycles.csv' skip 1 using 1:9 with steps lw 2 lc rgb '#d62728' title 'uncoupled'
-unset multiplot
+)gp" +
+         multiplotFigure("fig_periodic_spine.png", "1,3", "Periodic figure-eight: spine shape at phase 0 per cycle") +
+         runsPanels({{"swing spread", "swing spread (0 = proportional)", "cycles", "1:7", "lines lw 2"},
+                     {"|swing| / limit", "largest swing over its limit", "cycles", "1:8", "lines lw 2"},
+                     {"count", "torsion sign changes within regions", "cycles", "1:9", "steps lw 2"}}) +
+         R"gp(unset multiplot
 )gp";
+}
 
 }  // namespace
 
@@ -245,7 +229,7 @@ int runPeriodic(const PeriodicOptions& o, nlohmann::json& summary) {
                       {"avatar", "default"},
                       {"path", "fast"}};
   if (o.common.plots)
-    if (auto e = runGnuplot(o.common.out, "plots.gp", kPeriodicPlots); !e.empty()) return fail(e);
+    if (auto e = runGnuplot(o.common.out, "plots.gp", periodicPlots()); !e.empty()) return fail(e);
   if (o.common.frames) {
     auto renderer = PostureRenderer::create(asset, o.common.frameSize, o.common.frameSize);
     if (!renderer) return fail("periodic: rendering: " + renderer.error());

@@ -194,6 +194,30 @@ bool writeFile(const fs::path& path, const std::string& text) {
   return static_cast<bool>(out);
 }
 
+std::string gnuplotHeader(const std::string& experiment, const std::string& terminal) {
+  return "# Plots of `embody experiment " + experiment + "` (run: gnuplot plots.gp in this folder).\n" +
+         "set datafile separator ','\nset terminal pngcairo " + terminal + " font 'Sans,11'\n";
+}
+
+std::string multiplotFigure(const std::string& png, const std::string& layout, const std::string& title) {
+  return "set output '" + png + "'\nset multiplot layout " + layout + " title '" + title + "'\n";
+}
+
+std::string runsPlot(const std::string& table, const std::string& columns, const std::string& style) {
+  const auto curve = [&](const char* run, const char* color) {
+    return "'" + std::string(run) + "_" + table + ".csv' skip 1 using " + columns + " with " + style + " lc rgb '" +
+           color + "' title '" + run + "'";
+  };
+  return "plot " + curve("coupled", "#1f77b4") + ", \\\n     " + curve("uncoupled", "#d62728") + "\n";
+}
+
+std::string runsPanels(std::initializer_list<RunsPanel> panels) {
+  std::string out;
+  for (const RunsPanel& p : panels)
+    out += std::string("set ylabel '") + p.ylabel + "'\nset title '" + p.title + "'\n" + runsPlot(p.table, p.columns, p.style);
+  return out;
+}
+
 std::string runGnuplot(const fs::path& dir, const std::string& name, const std::string& script) {
   if (!writeFile(dir / name, script)) return "cannot write " + (dir / name).string();
   if (std::system("command -v gnuplot > /dev/null 2>&1") != 0)

@@ -3,6 +3,7 @@
 // the default mannequin's body model with an experiment's own tasks, the spine read back from it,
 // output files, gnuplot, and rendered postures through the project's offscreen renderer.
 #include <Eigen/Core>
+#include <initializer_list>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -92,6 +93,24 @@ std::string vertebraCsv(const ExperimentBody& body, const SpineShape& shape);
 nlohmann::json bodySummary(const ExperimentBody& body, const SpineShape& shape, const Eigen::VectorXd& q);
 
 bool writeFile(const fs::path& path, const std::string& text);
+
+// The parts of an experiment's plots.gp that every one repeats. The header: what wrote it, CSV
+// input, a PNG terminal (`terminal`: e.g. "size 1200,480").
+std::string gnuplotHeader(const std::string& experiment, const std::string& terminal);
+// A figure's first lines: its PNG, and a multiplot of `layout` ("rows,columns") under `title`.
+std::string multiplotFigure(const std::string& png, const std::string& layout, const std::string& title);
+// One `plot` of the coupled and the uncoupled run's <table>.csv (blue, red) with the same columns
+// and style: runsPlot("frames", "1:2", "linespoints lw 2").
+std::string runsPlot(const std::string& table, const std::string& columns, const std::string& style);
+// Panels of a multiplot, each its y label and title, then runsPlot(table, columns, style).
+struct RunsPanel {
+  const char* ylabel;
+  const char* title;
+  const char* table;
+  const char* columns;
+  const char* style;
+};
+std::string runsPanels(std::initializer_list<RunsPanel> panels);
 // Writes `script` as DIR/NAME and runs gnuplot on it in DIR; "" on success, else the error.
 std::string runGnuplot(const fs::path& dir, const std::string& name, const std::string& script);
 

@@ -5,6 +5,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <string>
 
+#include "avatar/body/eye_point.h"
+
 namespace embody::engine {
 
 namespace {
@@ -84,30 +86,12 @@ Result<std::unique_ptr<AvatarRenderer>> AvatarRenderer::create(const Device& dev
   r->anchors_ = findAnchors(asset);
   r->defaultMorphWeights_ = avatar::defaultMorphWeights(asset.mesh);
 
-  // Eye position from the rest pose: inside the head's geometry (vertices mostly on the head joint
-  // or its descendants), a little above its middle and towards the front (+Z).
-  // Vertex positions are in bind space, which need not be the rest pose's world space (CesiumMan's
-  // mesh is Z-up under a rotated node): measure on the rest pose skinned on the CPU.
+  // The eye point the body solver uses too (avatar/body/eye_point.h), kept in the head joint's
+  // rest frame so that it turns with the head.
   avatar::computeGlobals(asset.skeleton, avatar::SkeletonPose::rest(asset.skeleton), r->restGlobals_);
-  avatar::computeSkinningPalette(asset, r->restGlobals_, r->palette_);
-  avatar::skinOnCpu(asset.mesh, r->palette_, r->skinnedPositions_, r->skinnedNormals_);
   const int head = r->anchors_.head;
-  Bounds headBounds;
   if (head >= 0) {
-    for (size_t i = 0; i < asset.mesh.vertices.size(); ++i) {
-      const auto& v = asset.mesh.vertices[i];
-      int dominant = int(v.joints0[0]);
-      float w = v.weights0[0];
-      for (int k = 1; k < 4; ++k)
-        if (v.weights0[k] > w) w = v.weights0[k], dominant = int(v.joints0[k]);
-      if (asset.skeleton.isAncestor(head, dominant)) headBounds.add(r->skinnedPositions_[i]);
-    }
-    const glm::vec3 headPos(r->restGlobals_[head][3]);
-    glm::vec3 eye = headPos + glm::vec3(0.0f, 0.08f, 0.0f) + r->anchors_.forward * 0.06f;
-    if (!headBounds.empty()) {
-      const glm::vec3 c = headBounds.center(), e = headBounds.max - headBounds.min;
-      eye = glm::vec3(c.x, headBounds.min.y + 0.6f * e.y, c.z) + r->anchors_.forward * (0.25f * glm::dot(glm::abs(r->anchors_.forward), e));
-    }
+    const glm::vec3 eye(avatar::restEyePoint(asset, head, r->anchors_.forward).position);
     r->eyeOffsetInHead_ = glm::vec3(glm::inverse(r->restGlobals_[head]) * glm::vec4(eye, 1.0f));
   }
   if (auto s = r->computePose(avatar::SkeletonPose::rest(asset.skeleton)); !s) return Error{s.error()};

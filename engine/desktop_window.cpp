@@ -15,6 +15,23 @@ void keyCallback(GLFWwindow* w, int key, int, int action, int) {
   if (key == GLFW_KEY_C) keys->calibrate = true;
   if (key == GLFW_KEY_ESCAPE) glfwSetWindowShouldClose(w, GLFW_TRUE);
 }
+
+// The acquired swapchain image, from whatever it held, to a colour attachment.
+void toColorAttachment(VkCommandBuffer cmd, VkImage image) {
+  VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
+  b.srcStageMask = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
+  b.dstStageMask = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
+  b.dstAccessMask = VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
+  b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  b.newLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.image = image;
+  b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  dep.imageMemoryBarrierCount = 1;
+  dep.pImageMemoryBarriers = &b;
+  vkCmdPipelineBarrier2(cmd, &dep);
+}
 }  // namespace
 
 Result<std::vector<std::string>> DesktopWindow::requiredInstanceExtensions() {
@@ -193,6 +210,32 @@ bool DesktopWindow::closeRequested() const {
   return glfwWindowShouldClose(window_) == GLFW_TRUE;
 }
 
+// Copies the finished image out in the same command buffer, then hands it back for presenting.
+Status DesktopWindow::copyForScreenshot(VkCommandBuffer cmd) {
+  const VkDeviceSize bytes = VkDeviceSize(extent_.width) * extent_.height * 4;
+  if (!screenshot_ || screenshot_.size() < bytes) {
+    auto buf = Buffer::create(*device_, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::HostReadback);
+    if (!buf) return Error{buf.error()};
+    screenshot_ = std::move(buf).value();
+  }
+  transitionImage(cmd, images_[imageIndex_], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
+                  VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+  VkBufferImageCopy region{};
+  region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  region.imageExtent = {extent_.width, extent_.height, 1};
+  vkCmdCopyImageToBuffer(cmd, images_[imageIndex_], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                         screenshot_.handle(), 1, &region);
+  memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
+  transitionImage(cmd, images_[imageIndex_], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                  VK_IMAGE_LAYOUT_PRESENT_SRC_KHR);
+  screenshotRequested_ = false;
+  screenshotPending_ = true;
+  screenshotExtent_ = extent_;
+  screenshotFormat_ = format_;
+  return {};
+}
+
 Result<bool> DesktopWindow::draw(Renderer& renderer, uint64_t frameNumber, const Camera& camera,
                                 SubmitSync& sync) {
   pending_ = false;
@@ -217,19 +260,7 @@ Result<bool> DesktopWindow::draw(Renderer& renderer, uint64_t frameNumber, const
   if (r == VK_SUBOPTIMAL_KHR) needsRecreate_ = true;
   acquiredUsedAt_[slot] = frameNumber;
   // Transition after the acquire semaphore's wait stage, then draw without another transition.
-  VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
-  b.srcStageMask = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
-  b.dstStageMask = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
-  b.dstAccessMask = VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
-  b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-  b.newLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-  b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  b.image = images_[imageIndex_];
-  b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-  VkDependencyInfo dep{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-  dep.imageMemoryBarrierCount = 1;
-  dep.pImageMemoryBarriers = &b;
-  vkCmdPipelineBarrier2(renderer.commandBuffer(), &dep);
+  toColorAttachment(renderer.commandBuffer(), images_[imageIndex_]);
   PassTarget target;
   target.color = {images_[imageIndex_],
                   views_[imageIndex_],
@@ -241,31 +272,8 @@ Result<bool> DesktopWindow::draw(Renderer& renderer, uint64_t frameNumber, const
                   VK_IMAGE_LAYOUT_PRESENT_SRC_KHR};
   if (auto s = renderer.drawPass(std::span<const Camera>(&camera, 1), target); !s)
     return Error{s.error()};
-  if (screenshotRequested_ && readable_) {
-    // Copy the finished image out in the same command buffer, then hand it back for presenting.
-    const VkDeviceSize bytes = VkDeviceSize(extent_.width) * extent_.height * 4;
-    if (!screenshot_ || screenshot_.size() < bytes) {
-      auto buf = Buffer::create(*device_, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUse::HostReadback);
-      if (!buf) return Error{buf.error()};
-      screenshot_ = std::move(buf).value();
-    }
-    const VkCommandBuffer cmd = renderer.commandBuffer();
-    transitionImage(cmd, images_[imageIndex_], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
-                    VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
-    VkBufferImageCopy region{};
-    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-    region.imageExtent = {extent_.width, extent_.height, 1};
-    vkCmdCopyImageToBuffer(cmd, images_[imageIndex_], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, screenshot_.handle(), 1,
-                           &region);
-    memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
-                  VK_ACCESS_2_HOST_READ_BIT);
-    transitionImage(cmd, images_[imageIndex_], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                    VK_IMAGE_LAYOUT_PRESENT_SRC_KHR);
-    screenshotRequested_ = false;
-    screenshotPending_ = true;
-    screenshotExtent_ = extent_;
-    screenshotFormat_ = format_;
-  }
+  if (screenshotRequested_ && readable_)
+    if (auto s = copyForScreenshot(renderer.commandBuffer()); !s) return Error{s.error()};
   VkSemaphoreSubmitInfo wait{VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO};
   wait.semaphore = acquired;
   wait.stageMask = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;

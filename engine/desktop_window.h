@@ -91,6 +91,7 @@ class DesktopWindow {
   DesktopWindow() = default;
   Status createSwapchain();
   void destroySwapchain();
+  Status copyForScreenshot(VkCommandBuffer cmd);
 
   const Device* device_ = nullptr;
   GLFWwindow* window_ = nullptr;

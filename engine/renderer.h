@@ -90,12 +90,12 @@ struct RendererStats {
   uint64_t drawCalls = 0;  // of the last frame
 };
 
+// Neither copyable nor movable (its RAII handle members and the Device reference see to that):
+// created once, held by unique_ptr, and referenced by the GpuAvatars it uploads.
 class Renderer {
  public:
   static Result<std::unique_ptr<Renderer>> create(const Device& device);
   ~Renderer();
-  Renderer(const Renderer&) = delete;
-  Renderer& operator=(const Renderer&) = delete;
 
   const Device& device() const { return device_; }
 

@@ -3,6 +3,7 @@
 // hull (a second constant), and one line pipeline, per target format / sample count / view mask. Cull mode, depth test and depth write are dynamic state.
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include "engine/renderer.h"
 #include "shaders/lines_frag.spv.h"
@@ -26,6 +27,122 @@ struct SkinnedSpec {
   int32_t alphaMode = 0;
   VkBool32 outline = VK_FALSE;
 };
+
+// The render target a pipeline draws into (the fields of Renderer::PipelineKey).
+struct PipelineTarget {
+  VkFormat colorFormat, depthFormat;
+  VkSampleCountFlagBits samples;
+  uint32_t viewMask;
+};
+
+// The vertex buffer's layout: LineVertex for the line pipeline, avatar::SkinnedVertex otherwise.
+struct VertexInput {
+  VkVertexInputBindingDescription binding{0, 0, VK_VERTEX_INPUT_RATE_VERTEX};
+  std::vector<VkVertexInputAttributeDescription> attrs;
+
+  explicit VertexInput(bool lines) {
+    if (lines) {
+      binding.stride = sizeof(LineVertex);
+      attrs = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(LineVertex, position)},
+               {1, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(LineVertex, color)}};
+    } else {
+      using V = avatar::SkinnedVertex;
+      binding.stride = sizeof(V);
+      attrs = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(V, position)},
+               {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(V, normal)},
+               {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(V, uv)},
+               {3, 0, VK_FORMAT_R32G32B32A32_UINT, offsetof(V, joints0)},
+               {4, 0, VK_FORMAT_R32G32B32A32_UINT, offsetof(V, joints1)},
+               {5, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(V, weights0)},
+               {6, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(V, weights1)},
+               {7, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(V, uv1)}};
+    }
+  }
+
+  VkPipelineVertexInputStateCreateInfo info() const {
+    VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    vi.vertexBindingDescriptionCount = 1;
+    vi.pVertexBindingDescriptions = &binding;
+    vi.vertexAttributeDescriptionCount = static_cast<uint32_t>(attrs.size());
+    vi.pVertexAttributeDescriptions = attrs.data();
+    return vi;
+  }
+};
+
+VkPipelineColorBlendAttachmentState blendAttachment(bool blendOn) {
+  constexpr VkColorComponentFlags kRgba =
+      VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+  if (!blendOn) return {.colorWriteMask = kRgba};
+  // Premultiplied by the shader's alpha, classic "over": colour src, dst, op; alpha src, dst, op.
+  return {VK_TRUE, VK_BLEND_FACTOR_SRC_ALPHA, VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA, VK_BLEND_OP_ADD,
+          VK_BLEND_FACTOR_ONE, VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA, VK_BLEND_OP_ADD, kRgba};
+}
+
+// One graphics pipeline for dynamic rendering into `t`; viewport, scissor, cull mode and depth
+// test/write are dynamic state.
+Result<UniquePipeline> createPipeline(VkDevice dev, VkPipelineLayout layout, const PipelineTarget& t,
+                                      const PipelineDesc& d) {
+  VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},
+                                               {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};
+  stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
+  stages[0].module = d.vert;
+  stages[0].pName = "main";
+  stages[0].pSpecializationInfo = d.spec;
+  stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
+  stages[1].module = d.frag;
+  stages[1].pName = "main";
+  stages[1].pSpecializationInfo = d.spec;
+
+  const VertexInput input(d.lines);
+  const VkPipelineVertexInputStateCreateInfo vi = input.info();
+  VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+  ia.topology = d.lines ? VK_PRIMITIVE_TOPOLOGY_LINE_LIST : VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+  VkPipelineViewportStateCreateInfo vp{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+  vp.viewportCount = 1;
+  vp.scissorCount = 1;
+  VkPipelineRasterizationStateCreateInfo rs{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+  rs.polygonMode = VK_POLYGON_MODE_FILL;
+  // glTF winding; the projection flips y, the viewport does not.
+  rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+  rs.lineWidth = 1.0f;
+  VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+  ms.rasterizationSamples = t.samples;
+  VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+  ds.depthCompareOp = VK_COMPARE_OP_LESS_OR_EQUAL;
+  const VkPipelineColorBlendAttachmentState blend = blendAttachment(d.blend);
+  VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+  cb.attachmentCount = 1;
+  cb.pAttachments = &blend;
+  const VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR,
+                                VK_DYNAMIC_STATE_CULL_MODE, VK_DYNAMIC_STATE_DEPTH_TEST_ENABLE,
+                                VK_DYNAMIC_STATE_DEPTH_WRITE_ENABLE};
+  VkPipelineDynamicStateCreateInfo dy{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+  dy.dynamicStateCount = static_cast<uint32_t>(std::size(dyn));
+  dy.pDynamicStates = dyn;
+  VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+  rendering.viewMask = t.viewMask;
+  rendering.colorAttachmentCount = 1;
+  rendering.pColorAttachmentFormats = &t.colorFormat;
+  rendering.depthAttachmentFormat = t.depthFormat;
+
+  VkGraphicsPipelineCreateInfo gci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+  gci.pNext = &rendering;
+  gci.stageCount = 2;
+  gci.pStages = stages;
+  gci.pVertexInputState = &vi;
+  gci.pInputAssemblyState = &ia;
+  gci.pViewportState = &vp;
+  gci.pRasterizationState = &rs;
+  gci.pMultisampleState = &ms;
+  gci.pDepthStencilState = &ds;
+  gci.pColorBlendState = &cb;
+  gci.pDynamicState = &dy;
+  gci.layout = layout;
+  VkPipeline p = VK_NULL_HANDLE;
+  if (VkResult r = vkCreateGraphicsPipelines(dev, VK_NULL_HANDLE, 1, &gci, nullptr, &p); r != VK_SUCCESS)
+    return Error{std::string("vkCreateGraphicsPipelines: ") + vkResultName(r)};
+  return UniquePipeline(dev, p);
+}
 
 }  // namespace
 
@@ -85,98 +202,11 @@ Result<const Renderer::PipelineSet*> Renderer::pipelines(const PipelineKey& key)
   if (auto it = pipelines_.find(key); it != pipelines_.end()) return &it->second;
   const auto [colorFormat, depthFormat, samples, viewMask] = key;
 
+  const PipelineTarget target{colorFormat, depthFormat, samples, viewMask};
   auto build = [&](const PipelineDesc& d) -> Result<UniquePipeline> {
-    VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},
-                                                 {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};
-    stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
-    stages[0].module = d.vert;
-    stages[0].pName = "main";
-    stages[0].pSpecializationInfo = d.spec;
-    stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
-    stages[1].module = d.frag;
-    stages[1].pName = "main";
-    stages[1].pSpecializationInfo = d.spec;
-
-    VkVertexInputBindingDescription binding{0, 0, VK_VERTEX_INPUT_RATE_VERTEX};
-    std::vector<VkVertexInputAttributeDescription> attrs;
-    if (d.lines) {
-      binding.stride = sizeof(LineVertex);
-      attrs = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(LineVertex, position)},
-               {1, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(LineVertex, color)}};
-    } else {
-      using V = avatar::SkinnedVertex;
-      binding.stride = sizeof(V);
-      attrs = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(V, position)},
-               {1, 0, VK_FORMAT_R32G32B32_SFLOAT, offsetof(V, normal)},
-               {2, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(V, uv)},
-               {3, 0, VK_FORMAT_R32G32B32A32_UINT, offsetof(V, joints0)},
-               {4, 0, VK_FORMAT_R32G32B32A32_UINT, offsetof(V, joints1)},
-               {5, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(V, weights0)},
-               {6, 0, VK_FORMAT_R32G32B32A32_SFLOAT, offsetof(V, weights1)},
-               {7, 0, VK_FORMAT_R32G32_SFLOAT, offsetof(V, uv1)}};
-    }
-    VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-    vi.vertexBindingDescriptionCount = 1;
-    vi.pVertexBindingDescriptions = &binding;
-    vi.vertexAttributeDescriptionCount = static_cast<uint32_t>(attrs.size());
-    vi.pVertexAttributeDescriptions = attrs.data();
-    VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
-    ia.topology = d.lines ? VK_PRIMITIVE_TOPOLOGY_LINE_LIST : VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
-    VkPipelineViewportStateCreateInfo vp{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
-    vp.viewportCount = 1;
-    vp.scissorCount = 1;
-    VkPipelineRasterizationStateCreateInfo rs{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
-    rs.polygonMode = VK_POLYGON_MODE_FILL;
-    rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;  // glTF winding; the projection flips y, the viewport does not
-    rs.lineWidth = 1.0f;
-    VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-    ms.rasterizationSamples = samples;
-    VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-    ds.depthCompareOp = VK_COMPARE_OP_LESS_OR_EQUAL;
-    VkPipelineColorBlendAttachmentState blend{};
-    blend.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
-                           VK_COLOR_COMPONENT_A_BIT;
-    if (d.blend) {  // premultiplied by the shader's alpha: classic "over"
-      blend.blendEnable = VK_TRUE;
-      blend.srcColorBlendFactor = VK_BLEND_FACTOR_SRC_ALPHA;
-      blend.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
-      blend.colorBlendOp = VK_BLEND_OP_ADD;
-      blend.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
-      blend.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
-      blend.alphaBlendOp = VK_BLEND_OP_ADD;
-    }
-    VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-    cb.attachmentCount = 1;
-    cb.pAttachments = &blend;
-    const VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_CULL_MODE,
-                                  VK_DYNAMIC_STATE_DEPTH_TEST_ENABLE, VK_DYNAMIC_STATE_DEPTH_WRITE_ENABLE};
-    VkPipelineDynamicStateCreateInfo dy{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
-    dy.dynamicStateCount = static_cast<uint32_t>(std::size(dyn));
-    dy.pDynamicStates = dyn;
-    VkPipelineRenderingCreateInfo rendering{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
-    rendering.viewMask = viewMask;
-    rendering.colorAttachmentCount = 1;
-    rendering.pColorAttachmentFormats = &colorFormat;
-    rendering.depthAttachmentFormat = depthFormat;
-
-    VkGraphicsPipelineCreateInfo gci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
-    gci.pNext = &rendering;
-    gci.stageCount = 2;
-    gci.pStages = stages;
-    gci.pVertexInputState = &vi;
-    gci.pInputAssemblyState = &ia;
-    gci.pViewportState = &vp;
-    gci.pRasterizationState = &rs;
-    gci.pMultisampleState = &ms;
-    gci.pDepthStencilState = &ds;
-    gci.pColorBlendState = &cb;
-    gci.pDynamicState = &dy;
-    gci.layout = pipelineLayout_.get();
-    VkPipeline p = VK_NULL_HANDLE;
-    if (VkResult r = vkCreateGraphicsPipelines(device_.handle(), VK_NULL_HANDLE, 1, &gci, nullptr, &p); r != VK_SUCCESS)
-      return Error{std::string("vkCreateGraphicsPipelines: ") + vkResultName(r)};
-    ++stats_.pipelinesCreated;
-    return UniquePipeline(device_.handle(), p);
+    auto p = createPipeline(device_.handle(), pipelineLayout_.get(), target, d);
+    if (p) ++stats_.pipelinesCreated;
+    return p;
   };
 
   PipelineSet set;

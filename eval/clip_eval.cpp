@@ -2,9 +2,10 @@
 
 #include <algorithm>
 #include <chrono>
-#include <glm/gtc/constants.hpp>
 #include <cmath>
+#include <glm/gtc/constants.hpp>
 
+#include "core/enum_names.h"
 #include "runtime/avatar_body_solver.h"
 #include "runtime/ik_stage.h"
 #include "tracking/pose_source.h"
@@ -276,23 +277,15 @@ ScoredSkeleton scoredSkeleton(const tracking::BvhAvatar& avatar) {
   return s;
 }
 
+constexpr EnumName<TrackerSet> kTrackerSetNames[] = {
+    {TrackerSet::Three, "3"}, {TrackerSet::Four, "4"}, {TrackerSet::Six, "6"}, {TrackerSet::Full, "full"}};
+
 bool parseTrackerSet(std::string_view text, TrackerSet& out) {
-  if (text == "3") out = TrackerSet::Three;
-  else if (text == "4") out = TrackerSet::Four;
-  else if (text == "6") out = TrackerSet::Six;
-  else if (text == "full") out = TrackerSet::Full;
-  else return false;
-  return true;
+  return parseEnumName(kTrackerSetNames, text, out);
 }
 
 const char* trackerSetName(TrackerSet set) {
-  switch (set) {
-    case TrackerSet::Three: return "3";
-    case TrackerSet::Four: return "4";
-    case TrackerSet::Six: return "6";
-    case TrackerSet::Full: return "full";
-  }
-  return "?";
+  return enumName(kTrackerSetNames, set);
 }
 
 tracking::TrackerMask trackerMask(TrackerSet set) {
@@ -305,13 +298,11 @@ tracking::TrackerMask trackerMask(TrackerSet set) {
   return tracking::TrackerMask::all();
 }
 
+constexpr EnumName<Method> kMethodNames[] = {
+    {Method::Coupled, "coupled"}, {Method::Uncoupled, "uncoupled"}, {Method::Naive, "naive"}};
+
 const char* methodName(Method m) {
-  switch (m) {
-    case Method::Coupled: return "coupled";
-    case Method::Uncoupled: return "uncoupled";
-    case Method::Naive: return "naive";
-  }
-  return "?";
+  return enumName(kMethodNames, m);
 }
 
 Result<ClipEval> evaluateClip(const tracking::BvhAvatar& avatar, const EvalOptions& o, tracking::SolvedMotionBvh* solvedBvh) {

@@ -1,12 +1,13 @@
 #include "ik/model.h"
 
-#include "ik/projector.h"
-
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <set>
 #include <sstream>
+
+#include "core/enum_names.h"
+#include "ik/projector.h"
 
 namespace embody::ik {
 namespace {
@@ -42,25 +43,23 @@ int dofCount(JointType type) {
   return 0;
 }
 
+constexpr EnumName<JointType> kJointTypeNames[] = {{JointType::Free, "free"},
+                                                   {JointType::Ball, "ball"},
+                                                   {JointType::Swing, "swing"},
+                                                   {JointType::Revolute, "revolute"},
+                                                   {JointType::Fixed, "fixed"}};
+
 const char* toString(JointType type) {
-  switch (type) {
-    case JointType::Free: return "free";
-    case JointType::Ball: return "ball";
-    case JointType::Swing: return "swing";
-    case JointType::Revolute: return "revolute";
-    case JointType::Fixed: return "fixed";
-  }
-  return "?";
+  return enumName(kJointTypeNames, type);
 }
 
+constexpr EnumName<TaskType> kTaskTypeNames[] = {{TaskType::Position, "position"},
+                                                 {TaskType::Orientation, "orientation"},
+                                                 {TaskType::Pose, "pose"},
+                                                 {TaskType::CenterOfMass, "center-of-mass"}};
+
 const char* toString(TaskType type) {
-  switch (type) {
-    case TaskType::Position: return "position";
-    case TaskType::Orientation: return "orientation";
-    case TaskType::Pose: return "pose";
-    case TaskType::CenterOfMass: return "center-of-mass";
-  }
-  return "?";
+  return enumName(kTaskTypeNames, type);
 }
 
 JointId Model::findJoint(const std::string& name) const {

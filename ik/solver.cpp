@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/enum_names.h"
 #include "ik/solver_detail.h"
 #include "ik/solver_internal.h"
 
@@ -50,15 +51,14 @@ const Clock& steadyClock() {
   return clock;
 }
 
+constexpr EnumName<StopReason> kStopReasonNames[] = {{StopReason::Converged, "converged"},
+                                                     {StopReason::IterationCap, "iteration cap"},
+                                                     {StopReason::Deadline, "deadline"},
+                                                     {StopReason::Stalled, "stalled"},
+                                                     {StopReason::InvalidState, "invalid state"}};
+
 const char* toString(StopReason reason) {
-  switch (reason) {
-    case StopReason::Converged: return "converged";
-    case StopReason::IterationCap: return "iteration cap";
-    case StopReason::Deadline: return "deadline";
-    case StopReason::Stalled: return "stalled";
-    case StopReason::InvalidState: return "invalid state";
-  }
-  return "?";
+  return enumName(kStopReasonNames, reason);
 }
 
 const Eigen::VectorXd& priorityPass(const Model& model, Data& data, const SolveOptions& options) {

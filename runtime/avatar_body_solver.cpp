@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "avatar/body/anthropometry.h"
+#include "avatar/body/eye_point.h"
 #include "avatar/glm_eigen.h"
 #include "avatar/humanoid/humanoid_map.h"
 
@@ -144,15 +145,17 @@ void AvatarBodySolver::measureRest(ik::JointId leftElbow, bool legs) {
   for (auto id : tracking::kAllTrackers)
     restRotation_[size_t(tracking::index(id))] = Eigen::Quaterniond(rest.jointFrame(joint_[size_t(tracking::index(id))]).rotation());
   armReach_ = (pos(leftElbow) - pos(leftShoulder_)).norm() + (pos(body_.leftHand) - pos(leftElbow)).norm();
-  measureHeight(pos(body_.head), pos(body_.leftFoot), pos(body_.rightFoot));
+  // The eyes: the avatar's one eye point (avatar/body/eye_point.h), the renderer's camera too;
+  // floor and stature (avatar::restStature along the humanoid's up, up_) come with it.
+  const avatar::EyePoint restEye =
+      avatar::restEyePoint(avatar_, avatar_.humanoid.joint(avatar::HumanBone::head), toGlm(forward_));
+  floor_ = restEye.stature.floor;
+  avatarHeight_ = restEye.stature.height;
   for (auto id : tracking::kAllTrackers)
     restHeight_[size_t(tracking::index(id))] = up_.dot(pos(joint_[size_t(tracking::index(id))])) - floor_;
-  // The eyes: at the anthropometric eye height (avatar::kEyeHeightRatio of stature), ahead of
-  // the head's pivot.
   const Eigen::Vector3d head = pos(body_.head);
-  const auto dims = tracking::BodyDimensions::fromHeight(float(avatarHeight_));
-  avatarEyeHeight_ = dims.eyeHeight;
-  const Eigen::Vector3d eye = head + up_ * (floor_ + avatarEyeHeight_ - up_.dot(head)) + forward_ * dims.eyeForward;
+  avatarEyeHeight_ = restEye.aboveFloor;
+  const Eigen::Vector3d eye(restEye.position.x, restEye.position.y, restEye.position.z);
   eyeInHead_ = restRotation_[0].conjugate() * (eye - head);
   restHeadToHips_ = pos(body_.hips) - head;
   if (legs) {
@@ -186,27 +189,6 @@ void AvatarBodySolver::measureRest(ik::JointId leftElbow, bool legs) {
 // them 60 cm apart, a T-pose or A-pose often 30-40 cm): a stance taken from them walks wide-legged.
 Eigen::Vector3d AvatarBodySolver::standingAnkle(const Eigen::Vector3d& hipJoint, const Eigen::Vector3d& restAnkle) const {
   return hipJoint - up_ * up_.dot(hipJoint) + up_ * up_.dot(restAnkle);
-}
-
-// Height and floor from the skinned rest mesh (the skeleton alone misses the skull and soles);
-// without a usable mesh, the skeleton with a head's height on top.
-void AvatarBodySolver::measureHeight(const Eigen::Vector3d& head, const Eigen::Vector3d& leftFoot, const Eigen::Vector3d& rightFoot) {
-  std::vector<glm::mat4> globals, palette;
-  avatar::computeGlobals(avatar_.skeleton, avatar::SkeletonPose::rest(avatar_.skeleton), globals);
-  avatar::computeSkinningPalette(avatar_, globals, palette);
-  std::vector<glm::vec3> positions, normals;
-  avatar::skinOnCpu(avatar_.mesh, palette, positions, normals);
-  double lo = 1e30, hi = -1e30;
-  for (const auto& p : positions) {
-    const double h = up_.dot(toEigen(p));
-    lo = std::min(lo, h), hi = std::max(hi, h);
-  }
-  if (!(hi > lo + 0.3)) {
-    lo = std::min(up_.dot(leftFoot), up_.dot(rightFoot)) - 0.07;
-    hi = up_.dot(head) + 0.15;
-  }
-  floor_ = lo;
-  avatarHeight_ = hi - lo;
 }
 
 // Tracker frame -> joint frame. Reference tracker orientations (tracking space) for the rest
@@ -365,6 +347,13 @@ void AvatarBodySolver::require(const Status& s) {
 }
 
 Eigen::Vector3d AvatarBodySolver::eyePosition() const { return data_->jointFrame(body_.head) * eyeInHead_; }
+
+Eigen::Vector3d AvatarBodySolver::restEyePosition() const {
+  ik::Data rest(body_.model);
+  if (!rest.setConfiguration(body_.restConfiguration)) return Eigen::Vector3d::Constant(std::nan(""));
+  ik::kinematics(body_.model, rest, false);
+  return rest.jointFrame(body_.head) * eyeInHead_;
+}
 
 void AvatarBodySolver::resetWarmStart() {
   require(data_->setConfiguration(restQ_));

@@ -134,6 +134,9 @@ class AvatarBodySolver final : public BodySolver {
   Eigen::Vector3d toAvatar(const glm::vec3& trackingPoint) const;
   // Solved positions in the avatar's model space: the eye point, wrists, ankles, shoulders.
   Eigen::Vector3d eyePosition() const;
+  // The eye point at the avatar's rest pose, as the head targets place it: avatar::restEyePoint,
+  // the point the renderer's first-person camera uses too.
+  Eigen::Vector3d restEyePosition() const;
   Eigen::Vector3d jointPosition(ik::JointId joint) const { return data_->jointFrame(joint).translation(); }
   ik::JointId trackerJoint(tracking::TrackerId id) const { return joint_[size_t(tracking::index(id))]; }
   // The last targets in avatar space (feet: the planner's in three-point mode).
@@ -172,7 +175,6 @@ class AvatarBodySolver final : public BodySolver {
   Status bindJoints(ik::JointId& leftElbow);
   void bindLimbs(ik::JointId leftElbow, ik::JointId rightElbow);
   void measureRest(ik::JointId leftElbow, bool legs);
-  void measureHeight(const Eigen::Vector3d& head, const Eigen::Vector3d& leftFoot, const Eigen::Vector3d& rightFoot);
   void trackerFrames();
   Eigen::Vector3d standingAnkle(const Eigen::Vector3d& hipJoint, const Eigen::Vector3d& restAnkle) const;
   void addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskDesc>& tasks);

@@ -2,19 +2,20 @@
 
 #include <cmath>
 
+#include "core/enum_names.h"
+
 namespace embody::runtime {
 
+constexpr EnumName<CollapseReason> kCollapseReasonNames[] = {{CollapseReason::None, "none"},
+                                                             {CollapseReason::NonFinite, "non_finite"},
+                                                             {CollapseReason::Stalled, "stalled"},
+                                                             {CollapseReason::PelvisLow, "pelvis_low"},
+                                                             {CollapseReason::Folded, "folded"},
+                                                             {CollapseReason::ThroughFloor, "through_floor"},
+                                                             {CollapseReason::CrossedLegs, "crossed_legs"}};
+
 std::string_view collapseReasonName(CollapseReason reason) {
-  switch (reason) {
-    case CollapseReason::None: return "none";
-    case CollapseReason::NonFinite: return "non_finite";
-    case CollapseReason::Stalled: return "stalled";
-    case CollapseReason::PelvisLow: return "pelvis_low";
-    case CollapseReason::Folded: return "folded";
-    case CollapseReason::ThroughFloor: return "through_floor";
-    case CollapseReason::CrossedLegs: return "crossed_legs";
-  }
-  return "?";
+  return enumName(kCollapseReasonNames, reason);
 }
 
 CollapseReason CollapseGuard::assess(const BodySignals& s) const {

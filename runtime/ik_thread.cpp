@@ -8,6 +8,8 @@
 
 #include <chrono>
 
+#include "core/enum_names.h"
+
 namespace embody::runtime {
 
 IkThread::IkThread(BodySolver& solver, const Clock& clock, const IkStageConfig& config,
@@ -54,13 +56,12 @@ void IkThread::start() {
   });
 }
 
+constexpr EnumName<IkThreadPriority> kIkThreadPriorityNames[] = {{IkThreadPriority::Realtime, "realtime"},
+                                                                 {IkThreadPriority::Raised, "nice -10"},
+                                                                 {IkThreadPriority::Normal, "normal"}};
+
 const char* toString(IkThreadPriority p) {
-  switch (p) {
-    case IkThreadPriority::Realtime: return "realtime";
-    case IkThreadPriority::Raised: return "nice -10";
-    case IkThreadPriority::Normal: return "normal";
-  }
-  return "normal";
+  return enumName(kIkThreadPriorityNames, p, "normal");
 }
 
 void IkThread::stop() {

@@ -2,24 +2,25 @@
 
 #include <algorithm>
 
+#include "core/enum_names.h"
+
 namespace embody::runtime {
 
 using tracking::TrackerId;
 using tracking::TrackerStatus;
 
+constexpr EnumName<TaskKind> kTaskKindNames[] = {{TaskKind::Balance, "balance"},
+                                                 {TaskKind::FootPlant, "foot_plant"},
+                                                 {TaskKind::TrackerPosition, "position"},
+                                                 {TaskKind::TrackerOrientation, "orientation"},
+                                                 {TaskKind::InferredHips, "inferred_hips"},
+                                                 {TaskKind::SeatedHip, "seated_hip"},
+                                                 {TaskKind::SeatedKnee, "seated_knee"},
+                                                 {TaskKind::SeatedPelvis, "seated_pelvis"},
+                                                 {TaskKind::LimbPole, "pole"}};
+
 std::string_view taskKindName(TaskKind kind) {
-  switch (kind) {
-    case TaskKind::Balance: return "balance";
-    case TaskKind::FootPlant: return "foot_plant";
-    case TaskKind::TrackerPosition: return "position";
-    case TaskKind::TrackerOrientation: return "orientation";
-    case TaskKind::InferredHips: return "inferred_hips";
-    case TaskKind::SeatedHip: return "seated_hip";
-    case TaskKind::SeatedKnee: return "seated_knee";
-    case TaskKind::SeatedPelvis: return "seated_pelvis";
-    case TaskKind::LimbPole: return "pole";
-  }
-  return "?";
+  return enumName(kTaskKindNames, kind);
 }
 
 TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {

@@ -6,7 +6,7 @@ BodyDimensions BodyDimensions::fromHeight(float h) {
   BodyDimensions d;
   d.height = h;
   d.eyeHeight = float(kEyeHeightRatio) * h;
-  d.eyeForward = 0.045f * h;
+  d.eyeForward = float(avatar::kEyeForwardRatio) * h;
   d.eyeAboveNeck = 0.062f * h;
   d.shoulderHeight = 0.818f * h;
   d.neckAboveShoulders = d.eyeHeight - d.eyeAboveNeck - d.shoulderHeight;

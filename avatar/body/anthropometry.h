@@ -5,5 +5,7 @@ namespace embody::avatar {
 
 // Eye height over body height: H-Anim's 1.75 m humanoid has its eyes at 1.633 m.
 inline constexpr double kEyeHeightRatio = 0.933;
+// Eyes ahead of the head (neck) pivot over body height, head upright.
+inline constexpr double kEyeForwardRatio = 0.045;
 
 }  // namespace embody::avatar

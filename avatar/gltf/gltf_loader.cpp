@@ -205,6 +205,8 @@ double readComponent(const uint8_t* p, int type, bool normalized) {
 }
 
 constexpr size_t kMaxMorphTargets = 1024;  // per primitive
+constexpr int kFloat = TINYGLTF_COMPONENT_TYPE_FLOAT, kUByte = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+              kUShort = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, kUInt = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
 
 class AccessorReader {
  public:
@@ -226,9 +228,32 @@ class AccessorReader {
       return fail(where + ": count " + std::to_string(a.count) + " exceeds the limit of " +
                   std::to_string(limits_.maxAccessorCount));
     const size_t elemSize = static_cast<size_t>(componentSize(a.componentType)) * components;
-    // Every declared count is checked against the bytes the file has before anything is allocated.
-    const uint8_t* base = nullptr;
     size_t stride = elemSize;
+    auto base = denseData(a, elemSize, where, stride);
+    if (!base.ok()) return Error{base.error()};
+    std::vector<double> out(a.count * components, 0.0);
+    if (base.value()) {
+      const int cs = componentSize(a.componentType);
+      for (size_t i = 0; i < a.count; ++i)
+        for (int c = 0; c < components; ++c)
+          out[i * components + c] =
+              readComponent(base.value() + i * stride + c * cs, a.componentType, a.normalized);
+    }
+    if (a.sparse.isSparse)
+      if (auto s = applySparse(a, components, elemSize, where, out); !s.ok()) return Error{s.error()};
+    for (double v : out)
+      if (!std::isfinite(v)) return fail(where + ": contains a non-finite value");
+    return out;
+  }
+
+  size_t count(int index) const { return model_.accessors[index].count; }
+
+ private:
+  // The accessor's first element in its bufferView (null without one, then it is all zeros) and its
+  // stride. Every declared count is checked against the bytes the file has before anything is
+  // allocated.
+  Result<const uint8_t*> denseData(const tinygltf::Accessor& a, size_t elemSize, const std::string& where,
+                                   size_t& stride) const {
     if (a.bufferView >= 0) {
       auto view = bufferView(a.bufferView, where);
       if (!view.ok()) return Error{view.error()};
@@ -246,61 +271,54 @@ class AccessorReader {
           return fail(where + ": reads " + std::to_string(need) + " bytes of a " +
                       std::to_string(bv.byteLength) + "-byte bufferView");
       }
-      base = view.value() + a.byteOffset;
-    } else if (a.count > std::max<uint64_t>(4096, totalBufferBytes())) {
+      return view.value() + a.byteOffset;
+    }
+    if (a.count > std::max<uint64_t>(4096, totalBufferBytes())) {
       // All zeros (plus sparse entries): never longer than the file's binary data could back.
       return fail(where + ": " + std::to_string(a.count) + " elements without a bufferView exceed the file's " +
                   std::to_string(totalBufferBytes()) + " bytes of buffers");
     }
-    std::vector<double> out(a.count * components, 0.0);
-    if (base) {
-      const int cs = componentSize(a.componentType);
-      for (size_t i = 0; i < a.count; ++i)
-        for (int c = 0; c < components; ++c)
-          out[i * components + c] = readComponent(base + i * stride + c * cs, a.componentType, a.normalized);
-    }
-    if (a.sparse.isSparse) {
-      const auto& sp = a.sparse;
-      if (sp.count < 0 || static_cast<size_t>(sp.count) > a.count)
-        return fail(where + ": sparse count " + std::to_string(sp.count) + " out of range");
-      const int ics = componentSize(sp.indices.componentType);
-      if (ics == 0 || sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_BYTE ||
-          sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_SHORT ||
-          sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT)
-        return fail(where + ": bad sparse index component type");
-      auto iv = bufferView(sp.indices.bufferView, where + " sparse indices");
-      if (!iv.ok()) return Error{iv.error()};
-      auto vv = bufferView(sp.values.bufferView, where + " sparse values");
-      if (!vv.ok()) return Error{vv.error()};
-      if (sp.indices.byteOffset < 0 || sp.values.byteOffset < 0)
-        return fail(where + ": negative sparse offset");
-      const uint64_t ineed =
-          static_cast<uint64_t>(sp.indices.byteOffset) + static_cast<uint64_t>(sp.count) * ics;
-      const uint64_t vneed =
-          static_cast<uint64_t>(sp.values.byteOffset) + static_cast<uint64_t>(sp.count) * elemSize;
-      if (ineed > model_.bufferViews[sp.indices.bufferView].byteLength ||
-          vneed > model_.bufferViews[sp.values.bufferView].byteLength)
-        return fail(where + ": sparse data runs past its bufferView");
-      const int cs = componentSize(a.componentType);
-      for (int s = 0; s < sp.count; ++s) {
-        const auto target = static_cast<uint64_t>(
-            readComponent(iv.value() + sp.indices.byteOffset + static_cast<size_t>(s) * ics,
-                          sp.indices.componentType, false));
-        if (target >= a.count)
-          return fail(where + ": sparse index " + std::to_string(target) + " out of range");
-        for (int c = 0; c < components; ++c)
-          out[target * components + c] = readComponent(
-              vv.value() + sp.values.byteOffset + s * elemSize + c * cs, a.componentType, a.normalized);
-      }
-    }
-    for (double v : out)
-      if (!std::isfinite(v)) return fail(where + ": contains a non-finite value");
-    return out;
+    return static_cast<const uint8_t*>(nullptr);
   }
 
-  size_t count(int index) const { return model_.accessors[index].count; }
+  // Overwrites the sparse entries of `out` after checking their indices and byte ranges.
+  Status applySparse(const tinygltf::Accessor& a, int components, size_t elemSize, const std::string& where,
+                     std::vector<double>& out) const {
+    const auto& sp = a.sparse;
+    if (sp.count < 0 || static_cast<size_t>(sp.count) > a.count)
+      return fail(where + ": sparse count " + std::to_string(sp.count) + " out of range");
+    const int ics = componentSize(sp.indices.componentType);
+    if (ics == 0 || sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_BYTE ||
+        sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_SHORT ||
+        sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT)
+      return fail(where + ": bad sparse index component type");
+    auto iv = bufferView(sp.indices.bufferView, where + " sparse indices");
+    if (!iv.ok()) return Error{iv.error()};
+    auto vv = bufferView(sp.values.bufferView, where + " sparse values");
+    if (!vv.ok()) return Error{vv.error()};
+    if (sp.indices.byteOffset < 0 || sp.values.byteOffset < 0)
+      return fail(where + ": negative sparse offset");
+    const uint64_t ineed =
+        static_cast<uint64_t>(sp.indices.byteOffset) + static_cast<uint64_t>(sp.count) * ics;
+    const uint64_t vneed =
+        static_cast<uint64_t>(sp.values.byteOffset) + static_cast<uint64_t>(sp.count) * elemSize;
+    if (ineed > model_.bufferViews[sp.indices.bufferView].byteLength ||
+        vneed > model_.bufferViews[sp.values.bufferView].byteLength)
+      return fail(where + ": sparse data runs past its bufferView");
+    const int cs = componentSize(a.componentType);
+    for (int s = 0; s < sp.count; ++s) {
+      const auto target = static_cast<uint64_t>(
+          readComponent(iv.value() + sp.indices.byteOffset + static_cast<size_t>(s) * ics,
+                        sp.indices.componentType, false));
+      if (target >= a.count)
+        return fail(where + ": sparse index " + std::to_string(target) + " out of range");
+      for (int c = 0; c < components; ++c)
+        out[target * components + c] = readComponent(
+            vv.value() + sp.values.byteOffset + s * elemSize + c * cs, a.componentType, a.normalized);
+    }
+    return {};
+  }
 
- private:
   uint64_t totalBufferBytes() const {
     uint64_t n = 0;
     for (const auto& b : model_.buffers) n += b.data.size();
@@ -498,87 +516,94 @@ struct MeshBuilder {
     return {};
   }
 
-  Status addPrimitive(int node, const tinygltf::Primitive& p, const std::string& where) {
-    if (p.mode != TINYGLTF_MODE_TRIANGLES && p.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
-        p.mode != TINYGLTF_MODE_TRIANGLE_FAN) {
-      warnings.push_back(where + ": mode " + std::to_string(p.mode) + " is not triangles; skipped");
-      return {};
-    }
-    auto attr = [&](const char* name) {
-      auto it = p.attributes.find(name);
-      return it == p.attributes.end() ? -1 : it->second;
-    };
-    const int posAcc = attr("POSITION");
-    if (posAcc < 0) {
-      warnings.push_back(where + ": no POSITION; skipped");
-      return {};
-    }
-    AccessorReader reader(m, limits);
-    constexpr int F = TINYGLTF_COMPONENT_TYPE_FLOAT, UB = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
-                  US = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, UI = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
-    auto pos = reader.read(posAcc, 3, {F}, where + " POSITION");
+  // A primitive's vertex attributes as read from the file (empty when absent), each already checked
+  // against the POSITION count.
+  struct VertexAttributes {
+    std::vector<double> position, normal, uv0, uv1, joints[2], weights[2];
+    const tinygltf::Skin* skin = nullptr;  // null: drawn rigidly on its node
+    size_t count() const { return position.size() / 3; }
+  };
+
+  static int attributeAccessor(const tinygltf::Primitive& p, const char* name) {
+    auto it = p.attributes.find(name);
+    return it == p.attributes.end() ? -1 : it->second;
+  }
+
+  // An optional per-vertex attribute: empty when absent, an error when its count is not `vcount`.
+  Result<std::vector<double>> optionalAttribute(const tinygltf::Primitive& p, const char* name, int comps,
+                                                std::initializer_list<int> types, size_t vcount,
+                                                const std::string& where) const {
+    const int acc = attributeAccessor(p, name);
+    if (acc < 0) return std::vector<double>{};
+    auto r = AccessorReader(m, limits).read(acc, comps, types, where + " " + name);
+    if (!r.ok()) return r;
+    if (r->size() / comps != vcount)
+      return fail(where + " " + name + ": " + std::to_string(r->size() / comps) + " elements for " +
+                  std::to_string(vcount) + " vertices");
+    return r;
+  }
+
+  Status readVertexAttributes(int node, const tinygltf::Primitive& p, int posAcc, const std::string& where,
+                              VertexAttributes& va) const {
+    auto pos = AccessorReader(m, limits).read(posAcc, 3, {kFloat}, where + " POSITION");
     if (!pos.ok()) return Error{pos.error()};
-    const size_t vcount = pos->size() / 3;
+    va.position = std::move(pos.value());
+    const size_t vcount = va.count();
     if (asset.mesh.vertices.size() + vcount > limits.maxTotalVertices)
       return Error{where + ": more than " + std::to_string(limits.maxTotalVertices) + " vertices in total"};
-
-    auto optional = [&](const char* name, int comps,
-                        std::initializer_list<int> types) -> Result<std::vector<double>> {
-      const int acc = attr(name);
-      if (acc < 0) return std::vector<double>{};
-      auto r = reader.read(acc, comps, types, where + " " + name);
-      if (!r.ok()) return r;
-      if (r->size() / comps != vcount)
-        return fail(where + " " + name + ": " + std::to_string(r->size() / comps) + " elements for " +
-                    std::to_string(vcount) + " vertices");
-      return r;
-    };
-    auto nrm = optional("NORMAL", 3, {F});
-    if (!nrm.ok()) return Error{nrm.error()};
-    auto uv = optional("TEXCOORD_0", 2, {F, UB, US});
-    if (!uv.ok()) return Error{uv.error()};
-    auto uv1 = optional("TEXCOORD_1", 2, {F, UB, US});
+    auto normal = optionalAttribute(p, "NORMAL", 3, {kFloat}, vcount, where);
+    if (!normal.ok()) return Error{normal.error()};
+    auto uv0 = optionalAttribute(p, "TEXCOORD_0", 2, {kFloat, kUByte, kUShort}, vcount, where);
+    if (!uv0.ok()) return Error{uv0.error()};
+    auto uv1 = optionalAttribute(p, "TEXCOORD_1", 2, {kFloat, kUByte, kUShort}, vcount, where);
     if (!uv1.ok()) return Error{uv1.error()};
+    va.normal = std::move(normal.value());
+    va.uv0 = std::move(uv0.value());
+    va.uv1 = std::move(uv1.value());
+    return readSkinAttributes(node, p, where, va);
+  }
 
+  // JOINTS_n / WEIGHTS_n (two sets) when the node has a skin; without JOINTS_0 the primitive is
+  // drawn rigidly.
+  Status readSkinAttributes(int node, const tinygltf::Primitive& p, const std::string& where,
+                            VertexAttributes& va) const {
     const int skinIndex = m.nodes[node].skin;
-    const tinygltf::Skin* skin = nullptr;
-    if (skinIndex >= 0) {
-      if (static_cast<size_t>(skinIndex) >= m.skins.size())
-        return Error{where + ": skin " + std::to_string(skinIndex) + " out of range"};
-      skin = &m.skins[skinIndex];
+    if (skinIndex < 0) return {};
+    if (static_cast<size_t>(skinIndex) >= m.skins.size())
+      return Error{where + ": skin " + std::to_string(skinIndex) + " out of range"};
+    va.skin = &m.skins[skinIndex];
+    for (int set = 0; set < 2; ++set) {
+      const std::string j = "JOINTS_" + std::to_string(set), w = "WEIGHTS_" + std::to_string(set);
+      if ((attributeAccessor(p, j.c_str()) < 0) != (attributeAccessor(p, w.c_str()) < 0))
+        return Error{where + ": " + j + " and " + w + " must come together"};
+      auto jr = optionalAttribute(p, j.c_str(), 4, {kUByte, kUShort}, va.count(), where);
+      if (!jr.ok()) return Error{jr.error()};
+      auto wr = optionalAttribute(p, w.c_str(), 4, {kFloat, kUByte, kUShort}, va.count(), where);
+      if (!wr.ok()) return Error{wr.error()};
+      va.joints[set] = std::move(jr.value());
+      va.weights[set] = std::move(wr.value());
     }
-    std::vector<double> joints[2], weights[2];
-    if (skin) {
-      for (int set = 0; set < 2; ++set) {
-        const std::string j = "JOINTS_" + std::to_string(set), w = "WEIGHTS_" + std::to_string(set);
-        if ((attr(j.c_str()) < 0) != (attr(w.c_str()) < 0))
-          return Error{where + ": " + j + " and " + w + " must come together"};
-        auto jr = optional(j.c_str(), 4, {UB, US});
-        if (!jr.ok()) return Error{jr.error()};
-        auto wr = optional(w.c_str(), 4, {F, UB, US});
-        if (!wr.ok()) return Error{wr.error()};
-        joints[set] = std::move(jr.value());
-        weights[set] = std::move(wr.value());
-      }
-      if (joints[0].empty()) {
-        warnings.push_back(where +
-                           ": node has a skin but the mesh has no JOINTS_0; drawn rigidly on its node");
-        skin = nullptr;
-      }
-      if (attr("JOINTS_2") >= 0)
-        warnings.push_back(where + ": JOINTS_2 and beyond ignored (8 influences max)");
+    if (va.joints[0].empty()) {
+      warnings.push_back(where + ": node has a skin but the mesh has no JOINTS_0; drawn rigidly on its node");
+      va.skin = nullptr;
     }
+    if (attributeAccessor(p, "JOINTS_2") >= 0)
+      warnings.push_back(where + ": JOINTS_2 and beyond ignored (8 influences max)");
+    return {};
+  }
 
-    // Indices.
+  // The primitive's triangles as indices local to its vertices (strips and fans triangulated).
+  Result<std::vector<uint32_t>> readTriangles(const tinygltf::Primitive& p, size_t vcount,
+                                              const std::string& where) {
     std::vector<uint32_t> local;
     if (p.indices >= 0) {
-      auto ir = reader.read(p.indices, 1, {UB, US, UI}, where + " indices");
+      auto ir = AccessorReader(m, limits).read(p.indices, 1, {kUByte, kUShort, kUInt}, where + " indices");
       if (!ir.ok()) return Error{ir.error()};
       local.reserve(ir->size());
       for (double v : ir.value()) {
         if (v >= static_cast<double>(vcount))
-          return Error{where + ": index " + std::to_string(static_cast<uint64_t>(v)) + " out of range (" +
-                       std::to_string(vcount) + " vertices)"};
+          return fail(where + ": index " + std::to_string(static_cast<uint64_t>(v)) + " out of range (" +
+                      std::to_string(vcount) + " vertices)");
         local.push_back(static_cast<uint32_t>(v));
       }
     } else {
@@ -589,72 +614,111 @@ struct MeshBuilder {
       warnings.push_back(where + ": index count not a multiple of 3; the last partial triangle is dropped");
     std::vector<uint32_t> tris = triangulate(p.mode, local);
     if (asset.mesh.indices.size() + tris.size() > limits.maxTotalIndices)
-      return Error{where + ": more than " + std::to_string(limits.maxTotalIndices) + " indices in total"};
+      return fail(where + ": more than " + std::to_string(limits.maxTotalIndices) + " indices in total");
+    return tris;
+  }
 
-    const size_t first = asset.mesh.vertices.size();
-    const int nodeJoint = asset.gltfNodeToJoint[node];
-    // Rigid vertices are stored in the space where palette[nodeJoint] = global * inverseBind
-    // maps them like global alone would: pre-multiply by inverse(inverseBind[nodeJoint]).
-    const glm::mat4 rigidToBind = glm::inverse(asset.mesh.inverseBind[nodeJoint]);
-    const glm::mat3 rigidNormal = glm::inverseTranspose(glm::mat3(rigidToBind));
+  // Vertex i's up to eight influences, normalised; with no influence at all it follows the skin's
+  // first joint rather than collapsing to the origin.
+  Status setSkinWeights(SkinnedVertex& v, const VertexAttributes& va, size_t i, int nodeJoint,
+                        const std::string& where) const {
+    const tinygltf::Skin* skin = va.skin;
+    float w[8] = {};
+    uint32_t jt[8] = {};
+    float sum = 0.0f;
+    for (int set = 0; set < 2; ++set) {
+      if (va.joints[set].empty()) continue;
+      for (int k = 0; k < 4; ++k) {
+        const double ji = va.joints[set][i * 4 + k];
+        const float wk = static_cast<float>(va.weights[set][i * 4 + k]);
+        if (!(wk >= 0.0f)) return Error{where + ": negative skin weight at vertex " + std::to_string(i)};
+        if (wk == 0.0f) continue;
+        if (ji >= static_cast<double>(skin->joints.size()))
+          return Error{where + ": JOINTS_" + std::to_string(set) + " index " +
+                       std::to_string(static_cast<uint64_t>(ji)) + " out of range (skin has " +
+                       std::to_string(skin->joints.size()) + " joints)"};
+        w[set * 4 + k] = wk;
+        jt[set * 4 + k] = static_cast<uint32_t>(asset.gltfNodeToJoint[skin->joints[static_cast<size_t>(ji)]]);
+        sum += wk;
+      }
+    }
+    if (!(sum > 1e-8f)) {
+      const int fallback = skin->joints.empty() ? nodeJoint : asset.gltfNodeToJoint[skin->joints[0]];
+      v.joints0 = glm::uvec4(static_cast<uint32_t>(fallback), 0, 0, 0);
+      v.weights0 = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
+      return {};
+    }
+    for (int k = 0; k < 4; ++k) {
+      v.joints0[k] = jt[k];
+      v.weights0[k] = w[k] / sum;
+      v.joints1[k] = jt[4 + k];
+      v.weights1[k] = w[4 + k] / sum;
+    }
+    return {};
+  }
+
+  // Appends the primitive's vertices from `first` on. Rigid vertices are stored in the space where
+  // palette[nodeJoint] = global * inverseBind maps them like global alone would.
+  Status appendVertices(const VertexAttributes& va, size_t first, int nodeJoint, const glm::mat4& rigidToBind,
+                        const glm::mat3& rigidNormal, const std::string& where) {
+    const size_t vcount = va.count();
     asset.mesh.vertices.resize(first + vcount);
     for (size_t i = 0; i < vcount; ++i) {
       SkinnedVertex& v = asset.mesh.vertices[first + i];
-      v.position = glm::vec3(pos.value()[i * 3], pos.value()[i * 3 + 1], pos.value()[i * 3 + 2]);
-      if (!nrm->empty()) {
-        glm::vec3 n(nrm.value()[i * 3], nrm.value()[i * 3 + 1], nrm.value()[i * 3 + 2]);
+      v.position = glm::vec3(va.position[i * 3], va.position[i * 3 + 1], va.position[i * 3 + 2]);
+      if (!va.normal.empty()) {
+        glm::vec3 n(va.normal[i * 3], va.normal[i * 3 + 1], va.normal[i * 3 + 2]);
         const float len = glm::length(n);
         v.normal = len > 1e-12f ? n / len : glm::vec3(0.0f, 1.0f, 0.0f);
       }
-      if (!uv->empty()) v.uv = glm::vec2(uv.value()[i * 2], uv.value()[i * 2 + 1]);
-      if (!uv1->empty()) v.uv1 = glm::vec2(uv1.value()[i * 2], uv1.value()[i * 2 + 1]);
-      if (!skin) {
+      if (!va.uv0.empty()) v.uv = glm::vec2(va.uv0[i * 2], va.uv0[i * 2 + 1]);
+      if (!va.uv1.empty()) v.uv1 = glm::vec2(va.uv1[i * 2], va.uv1[i * 2 + 1]);
+      if (!va.skin) {
         v.joints0 = glm::uvec4(static_cast<uint32_t>(nodeJoint), 0, 0, 0);
         v.weights0 = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
         v.position = glm::vec3(rigidToBind * glm::vec4(v.position, 1.0f));
         v.normal = glm::normalize(rigidNormal * v.normal);
         continue;
       }
-      float w[8] = {};
-      uint32_t jt[8] = {};
-      float sum = 0.0f;
-      for (int set = 0; set < 2; ++set) {
-        if (joints[set].empty()) continue;
-        for (int k = 0; k < 4; ++k) {
-          const double ji = joints[set][i * 4 + k];
-          const float wk = static_cast<float>(weights[set][i * 4 + k]);
-          if (!(wk >= 0.0f)) return Error{where + ": negative skin weight at vertex " + std::to_string(i)};
-          if (wk == 0.0f) continue;
-          if (ji >= static_cast<double>(skin->joints.size()))
-            return Error{where + ": JOINTS_" + std::to_string(set) + " index " +
-                         std::to_string(static_cast<uint64_t>(ji)) + " out of range (skin has " +
-                         std::to_string(skin->joints.size()) + " joints)"};
-          w[set * 4 + k] = wk;
-          jt[set * 4 + k] =
-              static_cast<uint32_t>(asset.gltfNodeToJoint[skin->joints[static_cast<size_t>(ji)]]);
-          sum += wk;
-        }
-      }
-      if (!(sum > 1e-8f)) {
-        // No influence at all: follow the skin's first joint rather than collapsing to the origin.
-        const int fallback = skin->joints.empty() ? nodeJoint : asset.gltfNodeToJoint[skin->joints[0]];
-        v.joints0 = glm::uvec4(static_cast<uint32_t>(fallback), 0, 0, 0);
-        v.weights0 = glm::vec4(1.0f, 0.0f, 0.0f, 0.0f);
-        continue;
-      }
-      for (int k = 0; k < 4; ++k) {
-        v.joints0[k] = jt[k];
-        v.weights0[k] = w[k] / sum;
-        v.joints1[k] = jt[4 + k];
-        v.weights1[k] = w[4 + k] / sum;
-      }
+      if (auto s = setSkinWeights(v, va, i, nodeJoint, where); !s.ok()) return s;
     }
-    if (nrm->empty()) computeNormals(asset.mesh.vertices, first, tris);
-    if (auto s = checkFinite(first, where); !s.ok()) return s;
-    const glm::mat3 deltaToBind = skin ? glm::mat3(1.0f) : glm::mat3(rigidToBind);
-    const glm::mat3 normalDeltaToBind = skin ? glm::mat3(1.0f) : rigidNormal;
-    if (auto s = addMorphTargets(node, p, first, vcount, deltaToBind, normalDeltaToBind, where); !s.ok()) return s;
+    return {};
+  }
 
+  Status addPrimitive(int node, const tinygltf::Primitive& p, const std::string& where) {
+    if (p.mode != TINYGLTF_MODE_TRIANGLES && p.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+        p.mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+      warnings.push_back(where + ": mode " + std::to_string(p.mode) + " is not triangles; skipped");
+      return {};
+    }
+    const int posAcc = attributeAccessor(p, "POSITION");
+    if (posAcc < 0) {
+      warnings.push_back(where + ": no POSITION; skipped");
+      return {};
+    }
+    VertexAttributes va;
+    if (auto s = readVertexAttributes(node, p, posAcc, where, va); !s.ok()) return s;
+    const size_t vcount = va.count();
+    auto tris = readTriangles(p, vcount, where);
+    if (!tris.ok()) return Error{tris.error()};
+
+    const size_t first = asset.mesh.vertices.size();
+    const int nodeJoint = asset.gltfNodeToJoint[node];
+    // Rigid vertices are pre-multiplied by inverse(inverseBind[nodeJoint]).
+    const glm::mat4 rigidToBind = glm::inverse(asset.mesh.inverseBind[nodeJoint]);
+    const glm::mat3 rigidNormal = glm::inverseTranspose(glm::mat3(rigidToBind));
+    if (auto s = appendVertices(va, first, nodeJoint, rigidToBind, rigidNormal, where); !s.ok()) return s;
+    if (va.normal.empty()) computeNormals(asset.mesh.vertices, first, tris.value());
+    if (auto s = checkFinite(first, where); !s.ok()) return s;
+    const glm::mat3 deltaToBind = va.skin ? glm::mat3(1.0f) : glm::mat3(rigidToBind);
+    const glm::mat3 normalDeltaToBind = va.skin ? glm::mat3(1.0f) : rigidNormal;
+    if (auto s = addMorphTargets(node, p, first, vcount, deltaToBind, normalDeltaToBind, where); !s.ok()) return s;
+    appendPrimitive(node, p, first, tris.value(), where);
+    return {};
+  }
+
+  void appendPrimitive(int node, const tinygltf::Primitive& p, size_t first,
+                       const std::vector<uint32_t>& tris, const std::string& where) {
     Primitive prim;
     prim.firstIndex = static_cast<uint32_t>(asset.mesh.indices.size());
     prim.indexCount = static_cast<uint32_t>(tris.size());
@@ -666,7 +730,6 @@ struct MeshBuilder {
                          " out of range; default material used");
     for (uint32_t i : tris) asset.mesh.indices.push_back(static_cast<uint32_t>(first) + i);
     if (prim.indexCount > 0) asset.mesh.primitives.push_back(prim);
-    return {};
   }
 
   // The channel for (node, target), created with the mesh's default weight and target name.

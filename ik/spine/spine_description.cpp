@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/enum_names.h"
 #include "ik/spine/spine_default_data.h"
 
 namespace embody::ik::spine {
@@ -48,10 +49,12 @@ Status readVector3(const json& object, const char* key, const std::string& who, 
   return Status::success();
 }
 
+constexpr EnumName<Region> kRegionNames[] = {
+    {Region::Lumbar, "lumbar"}, {Region::Thoracic, "thoracic"}, {Region::Cervical, "cervical"}};
+
 Result<Region> parseRegion(const std::string& s, const std::string& who) {
-  if (s == "lumbar") return Region::Lumbar;
-  if (s == "thoracic") return Region::Thoracic;
-  if (s == "cervical") return Region::Cervical;
+  Region region{};
+  if (parseEnumName(kRegionNames, s, region)) return region;
   return fail(who + ": region \"" + s + "\" is not one of lumbar, thoracic, cervical");
 }
 
@@ -149,21 +152,14 @@ Result<Site> parseSite(const json& js, size_t i, const SpineDescription& d) {
 }  // namespace
 
 const char* toString(Region region) {
-  switch (region) {
-    case Region::Lumbar: return "lumbar";
-    case Region::Thoracic: return "thoracic";
-    case Region::Cervical: return "cervical";
-  }
-  return "?";
+  return enumName(kRegionNames, region);
 }
 
+constexpr EnumName<Component> kComponentNames[] = {
+    {Component::Flexion, "flexion"}, {Component::Bending, "bending"}, {Component::Torsion, "torsion"}};
+
 const char* toString(Component component) {
-  switch (component) {
-    case Component::Flexion: return "flexion";
-    case Component::Bending: return "bending";
-    case Component::Torsion: return "torsion";
-  }
-  return "?";
+  return enumName(kComponentNames, component);
 }
 
 int SpineDescription::swingCount() const {

@@ -56,6 +56,14 @@ std::string evalArgs(const std::string& clip, const std::string& trackers, const
          out.string();
 }
 
+// Runs `embody <args>`, which must succeed, and returns its metrics.json (written under `out`).
+nlohmann::json evalMetrics(const std::string& args, const fs::path& out) {
+  auto r = runEmbody(args, true);
+  INFO(r.output);
+  REQUIRE(r.exitCode == 0);
+  return readJson(out / "metrics.json");
+}
+
 }  // namespace
 
 TEST_CASE("embody eval: metrics.json for three methods, solved.bvh on the clip's hierarchy, the same bytes twice",
@@ -120,10 +128,7 @@ TEST_CASE("embody eval --trackers full: the clip driven on its own skeleton", "[
   // turns one joint is most of the rest (docs/eval.md). This guards the figure from getting worse.
   EMBODY_REQUIRE_SHARED_ASSET(clip, "cmu_12_01_walk.bvh");
   const fs::path out = outDir("eval_walk_full");
-  auto r = runEmbody(evalArgs(clip, "full", out), true);
-  INFO(r.output);
-  REQUIRE(r.exitCode == 0);
-  const auto j = readJson(out / "metrics.json");
+  const auto j = evalMetrics(evalArgs(clip, "full", out), out);
   for (const char* m : {"coupled", "uncoupled"}) {
     INFO(m);
     const auto& e = j["methods"][m]["mpjpe_cm"];
@@ -140,12 +145,9 @@ TEST_CASE("embody eval --trackers full on a T-pose rest: import, solve and expor
   // upper body 1.8 cm off; around the neutral pose every joint is reached (0.16 / 0.02 cm).
   const std::string clip = std::string(embody::test::kSourceDir) + "/tests/tracking/fixtures/mixamo.bvh";
   const fs::path out = outDir("eval_fixture_full");
-  auto r = runEmbody("eval --motion " + clip + " --trackers full --fps 240 --ik-iterations 10 --no-plots --no-sheet --out " +
-                         out.string(),
-                     true);
-  INFO(r.output);
-  REQUIRE(r.exitCode == 0);
-  const auto j = readJson(out / "metrics.json");
+  const auto j = evalMetrics(
+      "eval --motion " + clip + " --trackers full --fps 240 --ik-iterations 10 --no-plots --no-sheet --out " + out.string(),
+      out);
   for (const char* m : {"coupled", "uncoupled"}) {
     INFO(m);
     const auto& e = j["methods"][m]["mpjpe_cm"];

@@ -24,7 +24,7 @@
 #include "avatar/vrm/secondary_motion.h"
 #include "engine/avatar_renderer.h"
 #include "engine_test_support.h"
-#include "tests/support/gltf_validator.h"
+#include "tests/support/gltf_validator_checks.h"
 #include "tests/support/mtoon_test_avatar.h"
 #include "tests/support/vrm_test_avatar.h"
 
@@ -48,16 +48,9 @@ avatar::AvatarAsset loadBytes(const Result<std::vector<uint8_t>>& bytes, std::ve
 void requireValid(const std::vector<uint8_t>& bytes, const char* name) {
   const auto file = std::filesystem::temp_directory_path() / (std::string(name) + std::to_string(::getpid()) + ".vrm");
   std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
-  const auto v = test::validateGltfFile(file.string());
-  std::filesystem::remove(file);
-  if (!v.skipReason.empty()) {
-    WARN("SKIPPED: " << v.skipReason);
-    return;
-  }
-  INFO(v.report);
-  const auto report = json::parse(v.report, nullptr, false);
-  REQUIRE_FALSE(report.is_discarded());
-  CHECK(report["numErrors"].get<int>() == 0);
+  const auto found = test::requireNoGltfErrors(file.string());
+  if (!found) return;
+  const json& report = *found;
   std::string codes;
   for (const auto& w : report.value("warnings", json::array())) codes += " " + w.value("code", "");
   WARN(name << ": Khronos validator " << report["numErrors"] << " errors, " << report["numWarnings"] << " warnings"

@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -97,6 +98,19 @@ inline Eigen::VectorXd randomInsideLimits(const Model& model, std::mt19937& rng,
   return q;
 }
 
+// Every task's target := its current value in `source` (after kinematics), translated by
+// `shift()` (one draw per task).
+template <class Shift>
+inline void setTargetsToTaskValues(const Model& model, const Data& source, Data& data, Shift shift) {
+  for (size_t t = 0; t < model.tasks.size(); ++t) {
+    const TaskId id = static_cast<TaskId>(t);
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = source.taskOrientation(id).toRotationMatrix();
+    pose.translation() = source.taskPosition(id) + shift();
+    if (!data.setTarget(id, pose)) throw std::runtime_error("target");
+  }
+}
+
 // Targets = the task values of a random configuration inside the limits, optionally pushed by
 // `push` metres (normal per axis).
 inline void randomTargets(const Model& model, Data& data, std::mt19937& rng, double spread, double push = 0.0,
@@ -105,16 +119,34 @@ inline void randomTargets(const Model& model, Data& data, std::mt19937& rng, dou
   if (!probe.setConfiguration(randomInsideLimits(model, rng, spread, shrink))) throw std::runtime_error("configuration");
   kinematics(model, probe, false);
   std::normal_distribution<double> g;
-  for (size_t t = 0; t < model.tasks.size(); ++t) {
-    const TaskId id = static_cast<TaskId>(t);
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.linear() = probe.taskOrientation(id).toRotationMatrix();
-    pose.translation() = probe.taskPosition(id) + push * Eigen::Vector3d(g(rng), g(rng), g(rng));
-    if (!data.setTarget(id, pose)) throw std::runtime_error("target");
-  }
+  setTargetsToTaskValues(model, probe, data, [&] { return Eigen::Vector3d(push * Eigen::Vector3d(g(rng), g(rng), g(rng))); });
 }
 
-// max |A q - b| over the equality rows.
+// The strict-priority scenario (sample humanoid): from a random configuration inside the limits,
+// every task keeps its current value except the left hand, which wants to be 0.5 m further out
+// than the arm reaches without moving the feet, CoM and head.
+inline void setConflictingReach(const Model& model, Data& data, std::mt19937& rng) {
+  if (!data.setConfiguration(randomInsideLimits(model, rng, 0.3, 0.5))) throw std::runtime_error("configuration");
+  kinematics(model, data, false);
+  setTargetsToTaskValues(model, data, data, [] { return Eigen::Vector3d::Zero(); });
+  const TaskId lh = model.findTask("left_hand");
+  if (!data.setTarget(lh, data.taskPosition(lh) + Eigen::Vector3d(0.5, 0.3, 0.3))) throw std::runtime_error("target");
+}
+
+// What setConflictingReach's solve must show: the feet exact and the head close (second-order drift
+// from the lower task's steps is corrected every iteration: what is left is orders of magnitude
+// below the lower task's own error), and the conflict real: the hand stays off.
+inline void checkConflictingReach(const Model& model, const SolveReport& r) {
+  const TaskId lf = model.findTask("left_foot"), rf = model.findTask("right_foot");
+  const TaskId lh = model.findTask("left_hand"), head = model.findTask("head");
+  CHECK(r.tasks[lf].position < 2e-5);
+  CHECK(r.tasks[rf].position < 2e-5);
+  CHECK(r.tasks[lf].rotation < 2e-5);
+  CHECK(r.tasks[rf].rotation < 2e-5);
+  CHECK(r.tasks[head].position < 2e-3);
+  CHECK(r.tasks[lh].position > 0.02);
+}
+
 inline double equalityViolation(const Model& model, const Eigen::VectorXd& q) {
   if (model.equality_matrix.rows() == 0) return 0.0;
   return (model.equality_matrix * q - model.equality_rhs).cwiseAbs().maxCoeff();
@@ -132,16 +164,21 @@ inline double worstInequality(const Model& model, const Eigen::VectorXd& q, cons
   return worst;
 }
 
-// Two revolute joints about z on a short chain (links 0.5 m), a point task (x, y) at the tip
-// (position tolerance `tolerance`, the TaskDesc default when negative).
-inline Model twoJointModel(const std::vector<InequalityRow>& inequalities, const std::vector<EqualityRow>& equalities = {},
-                           double tolerance = -1.0) {
-  ModelBuilder b;
+// Two revolute joints about z on a short chain (links 0.5 m) and a fixed tip; returns the tip.
+inline JointId addTwoJointChain(ModelBuilder& b) {
   Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
   step.translation() = Eigen::Vector3d(0.5, 0, 0);
   const JointId a = b.addJoint("a", kNoParent, JointType::Revolute);
   const JointId c = b.addJoint("b", a, JointType::Revolute, step);
-  const JointId tip = b.addJoint("tip", c, JointType::Fixed, step);
+  return b.addJoint("tip", c, JointType::Fixed, step);
+}
+
+// The two-joint chain with a point task (x, y) at the tip (position tolerance `tolerance`, the
+// TaskDesc default when negative).
+inline Model twoJointModel(const std::vector<InequalityRow>& inequalities, const std::vector<EqualityRow>& equalities = {},
+                           double tolerance = -1.0) {
+  ModelBuilder b;
+  const JointId tip = addTwoJointChain(b);
   for (InequalityRow row : inequalities) b.addInequality(row);
   for (EqualityRow row : equalities) b.addEquality(row);
   TaskDesc t;

@@ -65,29 +65,11 @@ Eigen::VectorXd oracleStep(const Model& model, const Data& data, const SolveOpti
   return dq;
 }
 
-void randomTargets(const Model& model, Data& data, std::mt19937& rng, double push) {
-  Data probe(model);
-  REQUIRE(probe.setConfiguration(test::randomInsideLimits(model, rng, 1.0)));
-  kinematics(model, probe, false);
-  std::normal_distribution<double> g;
-  for (size_t t = 0; t < model.tasks.size(); ++t) {
-    const TaskId id = static_cast<TaskId>(t);
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.linear() = probe.taskOrientation(id).toRotationMatrix();
-    pose.translation() = probe.taskPosition(id) + push * Eigen::Vector3d(g(rng), g(rng), g(rng));
-    REQUIRE(data.setTarget(id, pose));
-  }
-}
-
-// Two revolute joints about z and a tip; `copies` identical position tasks on level 0 (a
+// The two-joint chain (test::addTwoJointChain); `copies` identical position tasks on level 0 (a
 // rank-deficient level when copies > 1).
 Model duplicatedTaskModel(int copies) {
   ModelBuilder b;
-  Eigen::Isometry3d step = Eigen::Isometry3d::Identity();
-  step.translation() = Eigen::Vector3d(0.5, 0, 0);
-  const JointId a = b.addJoint("a", kNoParent, JointType::Revolute);
-  const JointId c = b.addJoint("b", a, JointType::Revolute, step);
-  const JointId tip = b.addJoint("tip", c, JointType::Fixed, step);
+  const JointId tip = test::addTwoJointChain(b);
   for (int i = 0; i < copies; ++i) {
     TaskDesc t;
     t.name = "tip" + std::to_string(i);
@@ -112,7 +94,7 @@ TEST_CASE("both paths match an independent SVD oracle of the damped priority loo
     for (int trial = 0; trial < 12; ++trial) {
       Data data(model);
       REQUIRE(data.setConfiguration(test::randomInsideLimits(model, rng, 1.0)));
-      randomTargets(model, data, rng, trial % 3 == 0 ? 0.5 : 0.05);  // some far: damping active
+      test::randomTargets(model, data, rng, 1.0, trial % 3 == 0 ? 0.5 : 0.05);  // some far: damping active
       kinematics(model, data);
       SolveOptions o;
       o.max_level_step = 0.0;  // the oracle has no trust region

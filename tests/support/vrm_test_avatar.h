@@ -115,15 +115,9 @@ inline avatar::Material material(const char* name, glm::vec4 color, bool doubleS
   return m;
 }
 
-}  // namespace vrm_test_detail
-
-inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
-  using namespace vrm_test_detail;
-  using nlohmann::json;
-  VrmTestAvatar t;
-  avatar::AvatarAsset& a = t.asset;
-  a.format = avatar::AvatarFormat::Vrm1;
-  auto& s = a.skeleton;
+// The bust (root .. eyes) and the eight hair strands hanging from the head.
+inline void addBustAndHair(VrmTestAvatar& t) {
+  auto& s = t.asset.skeleton;
   addJoint(s, "Root", -1, {0, 0, 0});
   addJoint(s, "J_Hips", 0, {0, 0.9f, 0});
   addJoint(s, "J_Spine", 1, {0, 0.1f, 0});
@@ -152,8 +146,12 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
     }
     t.strands.push_back(strand);
   }
-  // Limbs without skin (after the hair, so every index above stays): the humanoid is complete, so
-  // the IK body model and `embody render` accept the file.
+}
+
+// Limbs without skin (after the hair, so every index above stays): the humanoid is complete, so
+// the IK body model and `embody render` accept the file.
+inline void addSkinlessLimbs(VrmTestAvatar& t) {
+  auto& s = t.asset.skeleton;
   const struct { const char* name; const char* bone; int parentLimb; glm::vec3 global; } limbs[] = {
       {"J_UpperArm_L", "leftUpperArm", -1, {0.17f, 1.42f, 0}}, {"J_LowerArm_L", "leftLowerArm", 0, {0.43f, 1.42f, 0}},
       {"J_Hand_L", "leftHand", 1, {0.68f, 1.42f, 0}},           {"J_UpperArm_R", "rightUpperArm", -1, {-0.17f, 1.42f, 0}},
@@ -171,12 +169,25 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
     limbGlobal.push_back(l.global);
     t.limbBones.emplace_back(l.bone, limbJoint.back());
   }
-  a.mesh.inverseBind.assign(s.joints.size(), glm::mat4(1.0f));
+  t.asset.mesh.inverseBind.assign(s.joints.size(), glm::mat4(1.0f));
   {
     std::vector<glm::mat4> g;
     avatar::computeGlobals(s, avatar::SkeletonPose::rest(s), g);
-    for (size_t j = 0; j < g.size(); ++j) a.mesh.inverseBind[j] = glm::inverse(g[j]);
+    for (size_t j = 0; j < g.size(); ++j) t.asset.mesh.inverseBind[j] = glm::inverse(g[j]);
   }
+}
+
+// The vertex ranges the morph targets move.
+struct FaceVertices {
+  std::vector<std::pair<uint32_t, uint32_t>> whites, pupils;
+  std::pair<uint32_t, uint32_t> mouth;
+};
+
+// Materials and the skinned mesh: head and neck, torso, eye whites, pupils, mouth, hair ribbons.
+inline FaceVertices addMaterialsAndMesh(VrmTestAvatar& t) {
+  avatar::AvatarAsset& a = t.asset;
+  const auto& s = a.skeleton;
+  const glm::vec3 headCentre(0, 1.65f, 0);
   a.materials = {material("skin", {0.93f, 0.78f, 0.68f, 1}), material("eyeWhite", {0.97f, 0.97f, 0.97f, 1}),
                  material("pupil", {0.08f, 0.1f, 0.25f, 1}), material("hair", {0.45f, 0.22f, 0.1f, 1}, true),
                  material("shirt", {0.2f, 0.45f, 0.7f, 1}), material("mouth", {0.55f, 0.12f, 0.15f, 1})};
@@ -190,6 +201,9 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
   a.materials[4].baseColorTransform.scale = {0.25f, 1.0f};
   a.materials[4].baseColorTransform.offset = {0.125f, 0.0f};
   MeshBuilder mb{a.mesh};
+  FaceVertices face;
+  auto& whites = face.whites;
+  auto& pupils = face.pupils;
   uint32_t first = 0;
   mb.sphere(headCentre, {0.09f, 0.105f, 0.095f}, t.head);
   mb.sphere({0, 1.5f, 0}, {0.035f, 0.07f, 0.035f}, 4, 8, 12);  // neck
@@ -197,7 +211,6 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
   first = static_cast<uint32_t>(a.mesh.indices.size());
   mb.sphere({0, 1.25f, 0}, {0.17f, 0.22f, 0.1f}, 3);  // torso
   mb.primitive(first, 4);
-  std::vector<std::pair<uint32_t, uint32_t>> whites, pupils;
   first = static_cast<uint32_t>(a.mesh.indices.size());
   for (int e = 0; e < 2; ++e) whites.push_back(mb.disc({e ? -0.033f : 0.033f, 1.66f, 0.093f}, 0.017f, 0.013f, e ? t.rightEye : t.leftEye));
   mb.primitive(first, 1);
@@ -205,7 +218,7 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
   for (int e = 0; e < 2; ++e) pupils.push_back(mb.disc({e ? -0.033f : 0.033f, 1.66f, 0.0955f}, 0.008f, 0.009f, e ? t.rightEye : t.leftEye));
   mb.primitive(first, 2);
   first = static_cast<uint32_t>(a.mesh.indices.size());
-  const auto mouth = mb.disc({0, 1.595f, 0.09f}, 0.022f, 0.004f, t.head);
+  face.mouth = mb.disc({0, 1.595f, 0.09f}, 0.022f, 0.004f, t.head);
   mb.primitive(first, 5);
   first = static_cast<uint32_t>(a.mesh.indices.size());
   for (const auto& strand : t.strands) {  // a ribbon 3 cm wide, facing outwards, one level per joint
@@ -229,8 +242,15 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
   mb.primitive(first, 3);
   a.mesh.firstPersonIndices = a.mesh.indices;
   a.mesh.firstPersonPrimitives = a.mesh.primitives;
+  return face;
+}
 
-  // Morph channels on the mesh node.
+// Morph channels on the mesh node.
+inline void addMorphTargets(VrmTestAvatar& t, const FaceVertices& face) {
+  avatar::AvatarAsset& a = t.asset;
+  const auto& whites = face.whites;
+  const auto& pupils = face.pupils;
+  const auto& mouth = face.mouth;
   const char* names[6] = {"blink", "lookLeft", "lookRight", "lookUp", "lookDown", "aa"};
   for (int c = 0; c < 6; ++c) {
     avatar::MorphChannel ch;
@@ -258,22 +278,21 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
     add(v, 5, {0, y * 3.0f, 0});
   }
   std::stable_sort(d.begin(), d.end(), [](const avatar::MorphDelta& x, const avatar::MorphDelta& y) { return x.vertex < y.vertex; });
+}
 
-  // Extensions.
+inline nlohmann::json humanBonesJson(const VrmTestAvatar& t) {
+  nlohmann::json humanBones = {{"hips", {{"node", 1}}}, {"spine", {{"node", 2}}}, {"chest", {{"node", 3}}},
+                               {"neck", {{"node", 4}}}, {"head", {{"node", 5}}}, {"leftEye", {{"node", 6}}},
+                               {"rightEye", {{"node", 7}}}};
+  for (const auto& [bone, joint] : t.limbBones) humanBones[bone] = {{"node", joint}};
+  return humanBones;
+}
+
+// VRMC_vrm: meta, humanoid, first person, look-at and the expressions.
+inline nlohmann::json vrm1Extension(const VrmTestAvatar& t, const VrmTestAvatarOptions& o) {
+  using nlohmann::json;
   const int mesh = t.meshNode();
   auto bind = [&](int channel, double w) { return json::array({{{"node", mesh}, {"index", channel}, {"weight", w}}}); };
-  json springs = json::array();
-  for (size_t k = 0; k < t.strands.size(); ++k) {
-    json joints = json::array();
-    for (int j : t.strands[k])
-      joints.push_back({{"node", j}, {"stiffness", o.stiffness}, {"dragForce", o.dragForce}, {"gravityPower", o.gravityPower},
-                        {"gravityDir", {0, -1, 0}}, {"hitRadius", 0.01}});
-    springs.push_back({{"name", "hair" + std::to_string(k)}, {"joints", joints}, {"colliderGroups", {0}}});
-  }
-  json humanBones = {{"hips", {{"node", 1}}}, {"spine", {{"node", 2}}}, {"chest", {{"node", 3}}},
-                     {"neck", {{"node", 4}}}, {"head", {{"node", 5}}}, {"leftEye", {{"node", 6}}},
-                     {"rightEye", {{"node", 7}}}};
-  for (const auto& [bone, joint] : t.limbBones) humanBones[bone] = {{"node", joint}};
   const json range = {{"inputMaxValue", 45.0}, {"outputScale", o.boneLookAt ? 12.0 : 1.0}};
   json vrm = {
       {"specVersion", "1.0"},
@@ -281,7 +300,7 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
                 {"licenseUrl", "https://vrm.dev/licenses/1.0/"}, {"avatarPermission", "onlyAuthor"},
                 {"commercialUsage", "personalNonProfit"}, {"creditNotation", "required"},
                 {"allowRedistribution", false}, {"modification", "prohibited"}}},
-      {"humanoid", {{"humanBones", humanBones}}},
+      {"humanoid", {{"humanBones", humanBonesJson(t)}}},
       {"firstPerson", {{"meshAnnotations", {{{"node", mesh}, {"type", "auto"}}}}}},
       {"lookAt", {{"offsetFromHeadBone", {0, 0.11, 0.07}}, {"type", o.boneLookAt ? "bone" : "expression"},
                   {"rangeMapHorizontalInner", range}, {"rangeMapHorizontalOuter", range},
@@ -300,6 +319,20 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
   vrm["expressions"]["preset"]["angry"] = {
       {"materialColorBinds", {{{"material", 0}, {"type", "color"}, {"targetValue", {kAngrySkin.r, kAngrySkin.g, kAngrySkin.b, 1.0}}}}},
       {"textureTransformBinds", {{{"material", 4}, {"scale", {2.0, 1.0}}, {"offset", {0.0, 0.0}}}}}};
+  return vrm;
+}
+
+// VRMC_springBone: one spring per strand, a head sphere and a chest capsule in one group.
+inline nlohmann::json springBoneExtension(const VrmTestAvatar& t, const VrmTestAvatarOptions& o) {
+  using nlohmann::json;
+  json springs = json::array();
+  for (size_t k = 0; k < t.strands.size(); ++k) {
+    json joints = json::array();
+    for (int j : t.strands[k])
+      joints.push_back({{"node", j}, {"stiffness", o.stiffness}, {"dragForce", o.dragForce}, {"gravityPower", o.gravityPower},
+                        {"gravityDir", {0, -1, 0}}, {"hitRadius", 0.01}});
+    springs.push_back({{"name", "hair" + std::to_string(k)}, {"joints", joints}, {"colliderGroups", {0}}});
+  }
   json headSphere = {{"node", t.head}, {"shape", {{"sphere", {{"offset", {0, 0.1, 0}}, {"radius", 0.095}}}}}};
   json chestCapsule = {{"node", 3}, {"shape", {{"capsule", {{"offset", {0, 0, 0}}, {"tail", {0, 0.2, 0}}, {"radius", 0.14}}}}}};
   json colliderGroup = {{"name", "body"}, {"colliders", {0, 1}}};
@@ -307,14 +340,15 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
                  {"colliders", json::array({headSphere, chestCapsule})},
                  {"colliderGroups", json::array({colliderGroup})},
                  {"springs", springs}};
-  if (!o.vrm0) {
-    t.extensionsJson = json({{"VRMC_vrm", vrm}, {"VRMC_springBone", spring}}).dump();
-    return t;
-  }
-  // VRM 0.x: the same data in the 0.x schema (its z axis is Unity's: collider offsets, the look-at
-  // offset and gravity are written with z negated; this avatar faces +Z, as a 0.x file would not,
-  // which the parsers do not care about).
-  a.format = avatar::AvatarFormat::Vrm0;
+  return spring;
+}
+
+// VRM 0.x: the same data in the 0.x schema (its z axis is Unity's: collider offsets, the look-at
+// offset and gravity are written with z negated; this avatar faces +Z, as a 0.x file would not,
+// which the parsers do not care about).
+inline nlohmann::json vrm0Extension(const VrmTestAvatar& t, const VrmTestAvatarOptions& o) {
+  using nlohmann::json;
+  const json humanBones = humanBonesJson(t);
   json bones = json::array();
   for (const auto& [bone, node] : humanBones.items()) bones.push_back({{"bone", bone}, {"node", node["node"]}});
   json roots = json::array();
@@ -347,7 +381,26 @@ inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
                          {"gravityDir", {{"x", 0}, {"y", -1}, {"z", 0}}}, {"dragForce", o.dragForce}, {"center", -1},
                          {"hitRadius", 0.01}, {"bones", roots}, {"colliderGroups", {0, 1}}}}},
         {"colliderGroups", json::array({group0(t.head, 0.1f, 0.095f), group0(3, 0.1f, 0.14f)})}}}};
-  t.extensionsJson = json({{"VRM", v0}}).dump();
+  return v0;
+}
+
+}  // namespace vrm_test_detail
+
+inline VrmTestAvatar buildVrmTestAvatar(const VrmTestAvatarOptions& o = {}) {
+  using namespace vrm_test_detail;
+  using nlohmann::json;
+  VrmTestAvatar t;
+  t.asset.format = avatar::AvatarFormat::Vrm1;
+  addBustAndHair(t);
+  addSkinlessLimbs(t);
+  const FaceVertices face = addMaterialsAndMesh(t);
+  addMorphTargets(t, face);
+  if (!o.vrm0) {
+    t.extensionsJson = json({{"VRMC_vrm", vrm1Extension(t, o)}, {"VRMC_springBone", springBoneExtension(t, o)}}).dump();
+    return t;
+  }
+  t.asset.format = avatar::AvatarFormat::Vrm0;
+  t.extensionsJson = json({{"VRM", vrm0Extension(t, o)}}).dump();
   return t;
 }
 
