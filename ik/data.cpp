@@ -187,6 +187,8 @@ void Workspace::sizeLevelScratch(const Model& model) {
   block_begin.assign(levels, 0);
   block_size.assign(levels, 0);
   block_touched.assign(levels, 0);
+  block_level.assign(levels, 0);
+  block_pivoted.assign(levels, 0);
   block_ranges.resize(levels);
   for (std::vector<Range>& ranges : block_ranges) ranges.reserve(n);
   level_solve.setZero(max_level_rows, max_level_rows);
@@ -213,7 +215,16 @@ void Workspace::sizeInequalities(const Model& model) {
   warm_residual.setZero(rows);
   warm_gradient.setZero(n);
   warm_multiplier.setZero(n);
+  warm_force.setZero(rows);
+  warm_reduced.setZero(n);
   warm_released.assign(model.inequalities.size(), 0);
+  warm_saved_dq.setZero(n);
+  warm_saved_dq0.setZero(n);
+  warm_released_rows.reserve(model.inequalities.size());
+  warm_deciding.assign(model.inequalities.size(), 0.0);
+  warm_undecided.assign(model.inequalities.size(), 0);
+  warm_hold_multiplier.assign(model.inequalities.size(), 0.0);
+  warm_hold_since.assign(model.inequalities.size(), 0);
 
   report.tasks.resize(task_count);
   report.levels.resize(model.levels.size());

@@ -265,6 +265,7 @@ int appendLevelRows(const FastLevel& f, Workspace& w, const SolveOptions& o, con
   std::vector<Workspace::Range>& newRanges = w.block_ranges[blocks];
   int added = 0;
   double smallest = 0.0;
+  w.block_pivoted[blocks] = 0;
   if (d.gram_pd && d.sigma_min > o.rank_tolerance && m <= r - s) {
     // Full rank: U = Ĵᵀ L⁻ᵀ (no eigen-decomposition), row range by row range.
     added = m;
@@ -283,6 +284,7 @@ int appendLevelRows(const FastLevel& f, Workspace& w, const SolveOptions& o, con
     // Rank-deficient level: a pivoted Cholesky of G picks rows I of Ĵ that span its row space
     // (pivots > tolerance²); then U = Ĵ_Iᵀ L_II⁻ᵀ as for a full-rank level. An eigen-
     // decomposition would do too, at ten times the cost for a 24-row level (the seated legs).
+    w.block_pivoted[blocks] = 1;
     Eigen::MatrixXd& work = w.level_factor2[k];
     Eigen::VectorXi& perm = w.level_perm[k];
     added = detail::pivotedCholesky(w.level_gram[k], o.rank_tolerance * o.rank_tolerance, r - s, work, perm,
@@ -355,6 +357,7 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     if (levelActive(model.levels[k], w)) lastActive = static_cast<int>(k);
   int s = 0;       // columns of W
   int blocks = 0;  // W's blocks: block b has columns block_begin[b] + [0, block_size[b])
+  w.block_count = 0;
   for (size_t k = 0; k < model.levels.size(); ++k) {
     const Model::Level& level = model.levels[k];
     if (!levelActive(level, w) || s >= r) continue;
@@ -388,7 +391,8 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
     if (added == 0) continue;
     w.block_begin[blocks] = s;
     w.block_size[blocks] = added;
-    ++blocks;
+    w.block_level[blocks] = static_cast<int>(k);
+    w.block_count = ++blocks;
     s += added;
   }
   w.dq = w.dq0;

@@ -64,6 +64,7 @@ bool step(const Model& model, Workspace& w, const SolveOptions& o) {
     computeDq0(w);
     runPass(model, w, o);
     ++passes;
+    confirmRelease(model, w, o);  // undone (no further pass) when the new step violates it again
   }
   while (o.clamping) {
     if (passes >= std::max(1, o.max_clamp_passes) || !pinViolations(model, w, o)) {

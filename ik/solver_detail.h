@@ -121,6 +121,11 @@ struct Workspace {
   std::vector<int> block_begin, block_size;
   std::vector<std::vector<Range>> block_ranges;
   std::vector<char> block_touched;
+  // After a pass: how many blocks W has, the level each came from and whether that level's rows
+  // were picked by the pivoted Cholesky (rank-deficient) (multipliers.cpp reads them).
+  int block_count = 0;
+  std::vector<int> block_level;
+  std::vector<char> block_pivoted;
   std::vector<char> row_mark;  // n
   Eigen::MatrixXd level_solve; // max_level_rows²: V Σ⁻¹ (rank-deficient levels)
   Eigen::MatrixXd level_cols;  // n x max_level_rows: Ĵᵀ
@@ -149,8 +154,23 @@ struct Workspace {
   int carried_count = 0;
   Eigen::VectorXd warm_residual;    // task rows
   Eigen::VectorXd warm_gradient;    // n
+  double warm_gradient_norm = 0.0;  // |J_kᵀ r_k| of the last carriedMultipliers call
   Eigen::VectorXd warm_multiplier;  // n (rank used)
+  Eigen::VectorXd warm_force;       // task rows: the higher levels' multipliers (multipliers.cpp)
+  Eigen::VectorXd warm_reduced;     // n: a gradient in reduced coordinates / projected
   std::vector<char> warm_released;  // inequality count
+  // A release the next pass undid (the released row violated again: a lower level pushes it back
+  // out): the step with the rows kept, restored, and per row the deciding multiplier and the
+  // iteration of the failed release (held rows are not released again until the multiplier
+  // doubles or kRetryAfter iterations have passed; warm_active_set.cpp).
+  Eigen::VectorXd warm_saved_dq, warm_saved_dq0;  // n
+  std::vector<int> warm_released_rows;            // reserved to the inequality count
+  std::vector<double> warm_deciding;              // per carried row: the deciding multiplier
+  std::vector<char> warm_undecided;               // per carried row (scratch)
+  bool warm_one_at_a_time = false;                // the last joint release was undone
+  std::vector<double> warm_hold_multiplier;       // per inequality row; 0: not held
+  std::vector<long> warm_hold_since;              // per inequality row
+  long warm_iteration = 0;
 
   SolveReport report;
 };

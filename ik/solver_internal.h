@@ -9,6 +9,7 @@
 //   reference_pass.cpp  the reference priority pass (n x n projectors, SVD)
 //   clamping.cpp        the clamping loop's pieces (pin, exchange, report)
 //   warm_active_set.cpp the active set carried from the previous iteration (docs/ik.md)
+//   multipliers.cpp     the pinned rows' lexicographic multipliers (the warm set's release test)
 //   iteration.cpp       one iteration: clamping loop, oscillation guard, q += Δq
 //   solver.cpp          the public entry points: priorityPass, iterate, solve
 #include <Eigen/Core>
@@ -71,6 +72,14 @@ int startActiveSet(const Model& model, Workspace& w, const SolveOptions& o);
 // After the first pass: releases the carried rows whose multiplier says the tasks pull them
 // inside their bounds and rebuilds the active set without them. True when any was released.
 bool releaseCarriedRows(const Model& model, Workspace& w, const SolveOptions& o);
+// After the pass that follows a release: when the new step violates a released row again (a
+// lower level pushes it back out, which the multipliers of a damped, trust-region step cannot
+// always foresee), the released rows go back, the step from before the release is restored and
+// the row is held (not released again for a while). True when the release stands.
+bool confirmRelease(const Model& model, Workspace& w, const SolveOptions& o);
+// multipliers.cpp: the carried rows' multipliers for level k (into w.warm_multiplier, carried
+// order), with the active rows and the levels above k held (lexicographic), after a pass.
+void carriedMultipliers(const Model& model, Workspace& w, size_t k, const SolveOptions& o);
 // At the end of an iteration: the pinned rows become the next iteration's carried rows.
 void keepActiveSet(Workspace& w, const SolveOptions& o);
 void clearCarriedActiveSet(Workspace& w);

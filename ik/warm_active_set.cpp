@@ -1,7 +1,9 @@
 // The warm active set (SolveOptions::warm_active_set): the clamping loop starts from the rows it
 // pinned in the previous iteration instead of rediscovering them pass by pass. docs/ik.md
 // ("The warm active set") says what is carried, when a row is released, and why it is correct.
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "ik/solver_detail.h"
 #include "ik/solver_internal.h"
@@ -44,10 +46,26 @@ void rebuildFromCarried(const Model& model, Workspace& w, Path path, Keep&& keep
   }
 }
 
+// A level decides about a row when |μ| is above round-off: kDecisive, or kDecisiveRelative of
+// its gradient |J_kᵀ r_k|; a level whose gradient is below kMetGradient is met (decides nothing).
+constexpr double kDecisive = 1e-12;
+constexpr double kDecisiveRelative = 1e-9;
+constexpr double kMetGradient = 1e-10;
+// A held row (its last release was undone) is tried again after this many iterations, or at
+// once when its deciding multiplier has doubled (the tasks pull it inside harder than then).
+constexpr long kRetryAfter = 8;
+
+bool held(const Workspace& w, size_t row, double multiplier) {
+  const double then = w.warm_hold_multiplier[row];
+  return then < 0.0 && multiplier > 2.0 * then && w.warm_iteration - w.warm_hold_since[row] < kRetryAfter;
+}
+
 }  // namespace
 
 void clearCarriedActiveSet(Workspace& w) {
   w.carried.clear();
+  std::fill(w.warm_hold_multiplier.begin(), w.warm_hold_multiplier.end(), 0.0);
+  w.warm_one_at_a_time = false;
   w.carried_structure = false;
   w.carried_count = 0;
 }
@@ -82,58 +100,135 @@ int startActiveSet(const Model& model, Workspace& w, const SolveOptions& o) {
   return w.carried_count;
 }
 
-// The multipliers of the carried rows, from the step just computed with them pinned. Let
-// r_k = e_k - J_k Δq be level k's remaining error (weighted, clamped: what the priority loop
-// tracks) and A = F Bᵀ the active rows (F lower triangular, B orthonormal: active_set.cpp). The
-// direction that moves pinned row p outward by one and keeps every other active row where it is
-// is d_p = B F⁻ᵀ e_p: the row's own direction projected off all the others (its dual vector).
-// Along it level k's error changes at the rate -(J_k d_p)ᵀ r_k = -μ_kp, with
-//   μ_k = F⁻¹ Bᵀ (J_kᵀ r_k)      (every row's multiplier at once: two products, one solve).
-// μ_kp > 0: level k pushes the row outward and the bound holds it; μ_kp < 0: level k pulls it
-// inside. A row is released as soon as one level (above round-off: |μ| > kDecisive) pulls it
-// inside, and stays when the levels that care all push it outward, or when none cares (every task
-// is met as well with it as without). Releasing on any pull errs on the safe side: a wrong
-// release costs a pass (the loop pins the row again if the new step violates it), a wrong keep
-// would hold a row the tasks want to leave. Projecting is what makes the multiplier right: with
-// the raw row c_p instead of d_p, a limit and a band pinned on the same dof would each be
-// credited with the force that holds the other. Known weakness: d_p keeps the other active rows
-// fixed, not the higher levels (docs/ik.md).
-bool releaseCarriedRows(const Model& model, Workspace& w, const SolveOptions& o) {
-  if (w.carried_count == 0) return false;
-  constexpr double kDecisive = 1e-12;
-  const int rank = w.rank;
-  std::vector<char>& decision = w.warm_released;  // per carried row: 0 undecided, 1 keep, 2 release
-  std::fill(decision.begin(), decision.begin() + w.carried_count, 0);
+namespace {
+
+// The carried rows' multipliers, from the step just computed with them pinned, level by level
+// (carriedMultipliers, multipliers.cpp: lexicographic, each level's with the active rows and the
+// levels above it held). The highest level that cares about a row decides (|μ| above round-off):
+// μ < 0, it pulls the row inside (release); μ > 0, it pushes the row outward and the row stays,
+// whatever the levels below want (they may not trade a higher level's error). A row no level
+// cares about stays (every task is met as well with it as without). Into w.warm_released (per
+// carried row: 1 keep, 2 release) and w.warm_deciding (the deciding multiplier).
+void decideCarriedRows(const Model& model, Workspace& w, const SolveOptions& o) {
+  std::vector<char>& decision = w.warm_released;
+  std::fill(decision.begin(), decision.begin() + w.carried_count, 1);
+  std::fill(w.warm_deciding.begin(), w.warm_deciding.begin() + w.carried_count, 0.0);
   int undecided = w.carried_count;
+  std::vector<char>& open = w.warm_undecided;
+  std::fill(open.begin(), open.begin() + w.carried_count, 1);
   for (size_t k = 0; k < model.levels.size() && undecided > 0; ++k) {
-    const Model::Level& level = model.levels[k];
-    if (!levelActive(level, w)) continue;
-    const auto j = w.jacobian.middleRows(level.first_row, level.rows);
-    auto residual = w.warm_residual.head(level.rows);
-    residual = w.error.segment(level.first_row, level.rows);
-    residual.noalias() -= j * w.dq;
-    w.warm_gradient.noalias() = j.transpose() * residual;
-    auto mu = w.warm_multiplier.head(rank);
-    mu.noalias() = w.basis.leftCols(rank).transpose() * w.warm_gradient;
-    w.factor.topLeftCorner(rank, rank).triangularView<Eigen::Lower>().solveInPlace(mu);
-    for (int p = 0; p < w.carried_count; ++p) {  // carried row p sits at basis index eq_rank + p
-      const double m = mu(w.eq_rank + p);
-      if (decision[static_cast<size_t>(p)] == 2 || !(std::abs(m) > kDecisive)) continue;
-      if (m < 0.0) --undecided;
-      decision[static_cast<size_t>(p)] = m < 0.0 ? 2 : 1;
+    if (!levelActive(model.levels[k], w)) continue;
+    carriedMultipliers(model, w, k, o);
+    // A level met to round-off pushes nothing (the two paths' round-off differs there).
+    if (!(w.warm_gradient_norm > kMetGradient)) continue;
+    const double decisive = std::max(kDecisive, kDecisiveRelative * w.warm_gradient_norm);
+    for (int p = 0; p < w.carried_count; ++p) {
+      const auto pi = static_cast<size_t>(p);
+      const double m = w.warm_multiplier(p);
+      if (!open[pi] || !(std::abs(m) > decisive)) continue;
+      open[pi] = 0;
+      decision[pi] = m < 0.0 ? 2 : 1;
+      w.warm_deciding[pi] = m;
+      --undecided;
     }
   }
-  bool release = false;
-  for (int p = 0; p < w.carried_count; ++p) release = release || decision[static_cast<size_t>(p)] == 2;
-  if (!release) return false;
+}
+
+}  // namespace
+
+// The release test. For the exact lexicographic problem a row whose deciding level pulls it
+// inside is one the next step leaves inside when it is released alone; damping, the trust
+// region and lower levels that push it back out (within the deciding level's null space) can
+// still undo that, and releasing several rows at once can too. confirmRelease handles both.
+bool releaseCarriedRows(const Model& model, Workspace& w, const SolveOptions& o) {
+  if (w.carried_count == 0) return false;
+  decideCarriedRows(model, w, o);
+  std::vector<char>& decision = w.warm_released;
+  int candidates = 0, mostNegative = -1;
+  for (int p = 0; p < w.carried_count; ++p) {
+    const auto pi = static_cast<size_t>(p);
+    const auto row = static_cast<size_t>(w.report.active_clamps[pi]);
+    if (decision[pi] == 1 && w.warm_deciding[pi] > 0.0) w.warm_hold_multiplier[row] = 0.0;  // pushed out: moot
+    if (decision[pi] == 2 && held(w, row, w.warm_deciding[pi])) decision[pi] = 1;
+    if (decision[pi] != 2) continue;
+    ++candidates;
+    if (mostNegative < 0 || w.warm_deciding[pi] < w.warm_deciding[static_cast<size_t>(mostNegative)]) mostNegative = p;
+  }
+  if (candidates == 0) return false;
+  if (candidates > 1 && w.warm_one_at_a_time)  // the last joint release was undone: one row only
+    for (int p = 0; p < w.carried_count; ++p)
+      if (p != mostNegative) decision[static_cast<size_t>(p)] = 1;
+  w.warm_one_at_a_time = false;
+  w.warm_saved_dq = w.dq;  // the step with every carried row kept, should the release be undone
+  w.warm_saved_dq0 = w.dq0;
+  w.warm_released_rows.clear();
   std::vector<int>& carried = w.carried;
   carried = w.report.active_clamps;  // the carried rows in basis order (no allocation)
+  for (int p = 0; p < w.carried_count; ++p)
+    if (decision[static_cast<size_t>(p)] == 2) {
+      w.warm_released_rows.push_back(carried[static_cast<size_t>(p)]);
+      w.warm_deciding[w.warm_released_rows.size() - 1] = w.warm_deciding[static_cast<size_t>(p)];  // p >= index
+    }
   rebuildFromCarried(model, w, o.path, [&](size_t p, int) { return decision[p] != 2; });
   w.carried_count = static_cast<int>(w.report.active_clamps.size());
   return true;
 }
 
+// After the pass that follows a release, every row the new step violates is held (not released
+// again for a while, kRetryAfter): a released row violated again (a lower level pushes it back
+// out), or another row the release let go past its bound. Both would otherwise repeat in a
+// steady state, a pass or two every iteration (the release churn), or cycle between two active
+// sets (release one, pin the other; release that, pin the first). The clamping loop pins them.
+// When the violated rows are exactly the released ones, the loop would rebuild the carried set
+// and its step: that is restored instead, without a pass. Several rows undone together say
+// nothing about each alone: they are not held, and the next release takes one row at a time.
+bool confirmRelease(const Model& model, Workspace& w, const SolveOptions& o) {
+  const auto violatedAt = [&](size_t row) {
+    return nextRowValue(w, row) > model.inequalities[row].rhs + o.inequality_tolerance;
+  };
+  size_t releasedViolated = 0, othersViolated = 0;
+  for (size_t row = 0; row < model.inequalities.size(); ++row)
+    if (!w.ineq_active[row] && violatedAt(row)) ++othersViolated;  // released rows included
+  for (int row : w.warm_released_rows) releasedViolated += violatedAt(static_cast<size_t>(row)) ? 1 : 0;
+  othersViolated -= releasedViolated;
+  const size_t released = w.warm_released_rows.size();
+  if (releasedViolated == 0 && othersViolated == 0) {
+    w.warm_one_at_a_time = false;
+    return true;
+  }
+  if (othersViolated == 0 && releasedViolated == released) {
+    if (released == 1) {
+      const auto row = static_cast<size_t>(w.warm_released_rows[0]);
+      w.warm_hold_multiplier[row] = w.warm_deciding[0];
+      w.warm_hold_since[row] = w.warm_iteration;
+    } else {
+      w.warm_one_at_a_time = true;
+    }
+    for (int row : w.warm_released_rows)
+      if (pinRow(model, w, static_cast<size_t>(row), o.path)) {
+        w.ineq_active[static_cast<size_t>(row)] = 1;
+        w.report.active_clamps.push_back(row);
+      }
+    w.carried_count = static_cast<int>(w.report.active_clamps.size());
+    w.dq = w.warm_saved_dq;
+    w.dq0 = w.warm_saved_dq0;
+    return false;
+  }
+  w.warm_one_at_a_time = false;
+  for (size_t row = 0; row < model.inequalities.size(); ++row) {
+    if (w.ineq_active[row] || !violatedAt(row)) continue;
+    // A released row keeps its deciding multiplier (a doubled pull retries it at once); another
+    // row waits out kRetryAfter.
+    w.warm_hold_multiplier[row] = -std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < released; ++i)
+      if (w.warm_released_rows[i] == static_cast<int>(row)) w.warm_hold_multiplier[row] = w.warm_deciding[i];
+    w.warm_hold_since[row] = w.warm_iteration;
+  }
+  return false;
+}
+
 void keepActiveSet(Workspace& w, const SolveOptions& o) {
+  ++w.warm_iteration;
   if (!o.warm_active_set || !o.clamping) {
     clearCarriedActiveSet(w);
     return;

@@ -7,7 +7,10 @@
 
 #include <cmath>
 
+#include <Eigen/QR>
+
 #include "ik/solver_detail.h"
+#include "ik/solver_internal.h"
 #include "ik_test_util.h"
 #include "tests/support/sample_models.h"
 
@@ -34,7 +37,78 @@ Model limitAndSum(double tolerance = -1.0) {
                              {}, tolerance);
 }
 
+// The carried rows' multipliers for level k by a dense least-squares solve of
+// [Aᵀ J_<kᵀ] (μ, λ) = J_kᵀ r_k (A: the independent equality rows and the carried rows as the model
+// writes them; J_<k: the higher levels' non-zero task rows). Empty when that matrix is not of full
+// column rank (the multipliers are not unique then).
+Eigen::VectorXd denseMultipliers(const Model& model, const Data& data, size_t k) {
+  const Workspace& w = data.workspace();
+  const int eq = w.eq_rank, carried = w.carried_count;
+  std::vector<Eigen::VectorXd> cols;
+  for (int i = 0; i < eq; ++i) cols.push_back(model.equality_matrix.row(w.eq_rows[static_cast<size_t>(i)]).transpose());
+  for (int p = 0; p < carried; ++p) {
+    Eigen::VectorXd c = Eigen::VectorXd::Zero(w.n);
+    for (const LinearTerm& t : model.inequalities[static_cast<size_t>(w.report.active_clamps[static_cast<size_t>(p)])].terms)
+      c(model.dofIndex(t.dof)) += t.coefficient;
+    cols.push_back(c);
+  }
+  for (size_t j = 0; j < k; ++j) {
+    const Model::Level& level = model.levels[j];
+    for (int i = level.first_row; i < level.first_row + level.rows; ++i)
+      if (w.jacobian.row(i).norm() > 0) cols.push_back(w.jacobian.row(i).transpose());
+  }
+  Eigen::MatrixXd c(w.n, static_cast<Eigen::Index>(cols.size()));
+  for (size_t i = 0; i < cols.size(); ++i) c.col(static_cast<Eigen::Index>(i)) = cols[i];
+  const Model::Level& level = model.levels[k];
+  const auto j = w.jacobian.middleRows(level.first_row, level.rows);
+  const Eigen::VectorXd g = j.transpose() * (w.error.segment(level.first_row, level.rows) - j * w.dq);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(c, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const auto& sv = svd.singularValues();
+  if (sv.size() < c.cols() || sv(sv.size() - 1) < 1e-4 * sv(0)) return {};
+  return svd.solve(g).segment(eq, carried);
+}
+
 }  // namespace
+
+TEST_CASE("warm active set: the carried rows' multipliers hold the levels above (dense KKT oracle)") {
+  // The release test reads each level's multipliers of the carried rows with the active rows and
+  // the higher levels held. Against a dense solve on the humanoid and the coupled spine, both
+  // paths, after the first pass of warm iterations of random problems. A multiplier that keeps
+  // only the active rows fixed (or solves with F where Fᵀ is due) misses this by O(1).
+  const Model humanoid = test::sampleHumanoid().value();
+  const Model spine = test::sampleSpine(true).value();
+  for (const Model* model : {&humanoid, &spine}) {
+    for (Path path : {Path::Fast, Path::Reference}) {
+      std::mt19937 rng(23);
+      Data data(*model);
+      SolveOptions o = warm(true, 1);
+      o.path = path;
+      double worst = 0.0;
+      int compared = 0;
+      for (int it = 0; it < 400; ++it) {
+        if (it % 20 == 0) test::randomTargets(*model, data, rng, 1.0, 0.05);
+        kinematics(*model, data);
+        Workspace& w = data.workspace();
+        detail::startActiveSet(*model, w, o);
+        detail::computeDq0(w);
+        detail::runPass(*model, w, o);
+        for (size_t k = 0; k < model->levels.size() && w.carried_count > 0; ++k) {
+          if (!detail::levelActive(model->levels[k], w)) continue;
+          const Eigen::VectorXd expected = denseMultipliers(*model, data, k);
+          if (expected.size() == 0) continue;
+          detail::carriedMultipliers(*model, w, k, o);
+          const double scale = std::max(1.0, expected.cwiseAbs().maxCoeff());
+          worst = std::max(worst, (w.warm_multiplier.head(w.carried_count) - expected).cwiseAbs().maxCoeff() / scale);
+          ++compared;
+        }
+        iterate(*model, data, o);
+      }
+      INFO((model == &spine ? "spine" : "humanoid") << (path == Path::Fast ? " fast" : " reference"));
+      CHECK(worst < 1e-7);
+      CHECK(compared > 50);
+    }
+  }
+}
 
 TEST_CASE("warm active set: a carried row the task now pulls inside is released (dropped row)") {
   const Model model = limitAndSum();
