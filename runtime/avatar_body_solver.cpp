@@ -19,6 +19,9 @@ namespace {
 using avatar::toEigen;
 using avatar::toGlm;
 
+// The first live solve's iteration cap (see solve()): ~40 x 0.25 ms at worst, once.
+constexpr int kFirstSolveSettleIterations = 40;
+
 // The model `body` was built with, plus `tasks` (the builder's validation runs again).
 Result<ik::Model> withTasks(const ik::Model& model, const std::vector<ik::TaskDesc>& tasks) {
   ik::ModelBuilder b;
@@ -596,7 +599,20 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   IterationBudget budget(clock, iterationDeadline, &iterationCost_);
   int iterations = 0;
   bool converged = false, broken = false;
-  while (iterations < maxIterations) {
+  // The first live solve settles outside the budget, once (a few ms on the first frame), as the
+  // seated placement does: from the rest pose the hands start ~0.5 m off, and at the two
+  // iterations a 1 ms frame allows the body took 13-17 frames (0.15-0.19 s) to reach them, which
+  // alone decided `embody demo`'s hand p95 (0.2 mm or 160 mm, by how the first frames were
+  // scheduled). Fixed-iteration runs keep their counts (their outputs repeat to the bit).
+  if (!solvedOnce_ && !fixed && !layout_.seated) {
+    ik::SolveOptions settle = o;
+    settle.max_iterations = kFirstSolveSettleIterations;
+    const ik::SolveReport& report = ik::solve(body_.model, *data_, settle);
+    iterations += report.iterations;
+    converged = report.converged();
+    broken = report.stop == ik::StopReason::InvalidState;
+  }
+  while (!converged && !broken && iterations < maxIterations) {
     // Not even the retargeting fits: no iteration (the first one otherwise always runs).
     if (!fixed && (clock.now() >= iterationDeadline || !budget.startIteration())) break;
     const ik::SolveReport& report = ik::solve(body_.model, *data_, o);
