@@ -115,6 +115,13 @@ static void BM_SolveAndRetargetDefault(benchmark::State& state) {
 }
 BENCHMARK(BM_SolveAndRetargetDefault)->Unit(benchmark::kMicrosecond);
 
+// The default avatar's body model, coupled spine or uncoupled (the body-iteration benchmarks').
+static BodyModel defaultBodyModel(bool coupled) {
+  BodyModelOptions options;
+  options.coupledSpine = coupled;
+  return std::move(buildBodyModel(buildDefaultAvatar(), options)).value();
+}
+
 // The body-iteration benchmarks' problem: solver state at rest, every task's target taken from a
 // bent pose (each dof past the root moved by up to 0.15 rad).
 static ik::Data bentPoseProblem(const ik::Model& model) {
@@ -138,11 +145,8 @@ static ik::Data bentPoseProblem(const ik::Model& model) {
 // model, the model the runtime solves every frame: coupled spine (24 vertebrae, 33 equality
 // rows) or uncoupled. The same state each time: targets from a bent pose, solved from rest.
 static void BM_BodyIteration(benchmark::State& state, bool coupled, ik::Path path) {
-  const AvatarAsset a = buildDefaultAvatar();
-  BodyModelOptions options;
-  options.coupledSpine = coupled;
-  auto body = buildBodyModel(a, options);
-  const ik::Model& model = body->model;
+  const BodyModel body = defaultBodyModel(coupled);
+  const ik::Model& model = body.model;
   ik::Data data = bentPoseProblem(model);
   const Eigen::VectorXd start = data.q();
   ik::SolveOptions o;
@@ -193,11 +197,8 @@ BENCHMARK(BM_SecondaryMotionBust)->Unit(benchmark::kMicrosecond);
 // docs/ik.md). The Data is restored outside the timed region before each timed iteration, in all
 // four variants alike (the pause itself costs a few µs of each figure).
 static void BM_BodyIterationInSolve(benchmark::State& state, bool coupled, bool warm) {
-  const AvatarAsset a = buildDefaultAvatar();
-  BodyModelOptions options;
-  options.coupledSpine = coupled;
-  auto body = buildBodyModel(a, options);
-  const ik::Model& model = body->model;
+  const BodyModel body = defaultBodyModel(coupled);
+  const ik::Model& model = body.model;
   ik::Data data = bentPoseProblem(model);
   ik::SolveOptions o;
   o.warm_active_set = warm;
@@ -229,24 +230,21 @@ BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_uncoupled_warm, false, true)-
 // a state settled on the moving targets. Time per frame; iterations per frame and clamping
 // passes per iteration as counters (the per-iteration cost is time / iterations).
 static void BM_BodyFrames(benchmark::State& state, bool coupled, bool warm) {
-  const AvatarAsset a = buildDefaultAvatar();
-  BodyModelOptions options;
-  options.coupledSpine = coupled;
-  auto body = buildBodyModel(a, options);
-  const ik::Model& model = body->model;
+  const BodyModel body = defaultBodyModel(coupled);
+  const ik::Model& model = body.model;
   ik::Data data = bentPoseProblem(model);
   ik::SolveOptions o;
   o.max_iterations = 1;
   o.max_level_step = 0.05;
   o.warm_active_set = warm;
-  const Eigen::Vector3d left = data.targetPosition(body->leftHandTask), right = data.targetPosition(body->rightHandTask);
-  const Eigen::Vector3d head = data.targetPosition(body->headTask);
+  const Eigen::Vector3d left = data.targetPosition(body.leftHandTask), right = data.targetPosition(body.rightHandTask);
+  const Eigen::Vector3d head = data.targetPosition(body.headTask);
   long frame = 0, iterations = 0, passes = 0;
   const auto runFrame = [&] {
     const double phase = 0.07 * static_cast<double>(frame++);
-    (void)data.setTarget(body->leftHandTask, Eigen::Vector3d(left + 0.1 * Eigen::Vector3d(std::cos(phase), std::sin(phase), 0.0)));
-    (void)data.setTarget(body->rightHandTask, Eigen::Vector3d(right + 0.1 * Eigen::Vector3d(0.0, std::sin(phase), std::cos(phase))));
-    (void)data.setTarget(body->headTask, Eigen::Vector3d(head + Eigen::Vector3d(0.0, 0.03 * std::sin(0.5 * phase), 0.0)));
+    (void)data.setTarget(body.leftHandTask, Eigen::Vector3d(left + 0.1 * Eigen::Vector3d(std::cos(phase), std::sin(phase), 0.0)));
+    (void)data.setTarget(body.rightHandTask, Eigen::Vector3d(right + 0.1 * Eigen::Vector3d(0.0, std::sin(phase), std::cos(phase))));
+    (void)data.setTarget(body.headTask, Eigen::Vector3d(head + Eigen::Vector3d(0.0, 0.03 * std::sin(0.5 * phase), 0.0)));
     for (int i = 0; i < 8; ++i) {
       const ik::SolveReport& r = ik::solve(model, data, o);
       iterations += r.iterations;
