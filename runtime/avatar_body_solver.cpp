@@ -19,8 +19,10 @@ namespace {
 using avatar::toEigen;
 using avatar::toGlm;
 
-// The first live solve's iteration cap (see solve()): ~40 x 0.25 ms at worst, once.
+// The caps of the two settles outside the budget (settle()): the first live solve's (~40 x 0.25 ms
+// at worst, once) and a seat placement's (sitting down from standing needs more).
 constexpr int kFirstSolveSettleIterations = 40;
+constexpr int kSeatSettleIterations = 80;
 
 // The model `body` was built with, plus `tasks` (the builder's validation runs again).
 Result<ik::Model> withTasks(const ik::Model& model, const std::vector<ik::TaskDesc>& tasks) {
@@ -530,9 +532,14 @@ void AvatarBodySolver::setSeatedTargets(const tracking::GuardedSample& targets) 
   // the first frame and each recenter). Within a 1 ms budget the budgeted solve otherwise folded
   // the legs and raised the arms over dozens of frames (hand p95 35 cm over the first 2 s of
   // `embody xr --seated`).
-  ik::SolveOptions o;
-  o.max_iterations = 80;
-  (void)ik::solve(body_.model, d, o);
+  (void)settle({}, kSeatSettleIterations);
+}
+
+// Iterations outside the budget, once, from a cold start (the seat's placement, the first live
+// solve): until converged or `maxIterations`.
+const ik::SolveReport& AvatarBodySolver::settle(ik::SolveOptions options, int maxIterations) {
+  options.max_iterations = maxIterations;
+  return ik::solve(body_.model, *data_, options);
 }
 
 namespace {
@@ -605,9 +612,7 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   // alone decided `embody demo`'s hand p95 (0.2 mm or 160 mm, by how the first frames were
   // scheduled). Fixed-iteration runs keep their counts (their outputs repeat to the bit).
   if (!solvedOnce_ && !fixed && !layout_.seated) {
-    ik::SolveOptions settle = o;
-    settle.max_iterations = kFirstSolveSettleIterations;
-    const ik::SolveReport& report = ik::solve(body_.model, *data_, settle);
+    const ik::SolveReport& report = settle(o, kFirstSolveSettleIterations);
     iterations += report.iterations;
     converged = report.converged();
     broken = report.stop == ik::StopReason::InvalidState;

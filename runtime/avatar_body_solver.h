@@ -188,6 +188,7 @@ class AvatarBodySolver final : public BodySolver {
   void scaleStrides(const tracking::GuardedSample& targets);
   void setInferredLowerBody(const tracking::GuardedSample& targets);
   void setSeatedTargets(const tracking::GuardedSample& targets);
+  const ik::SolveReport& settle(ik::SolveOptions options, int maxIterations);
   // Standing start: the root under the head, facing the head's and hands' heading (body_seed.h).
   // False (nothing changed) without a live head or under a head lower than the standing pelvis.
   bool seedStanding(const tracking::GuardedSample& targets);
