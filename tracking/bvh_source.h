@@ -9,8 +9,8 @@
 //   an error naming the joint and the override; other missing trackers are absent with a note.
 // - The clip is turned onto OpenXR's +Y up, the performer facing -Z at the start; scaled so the
 //   performer is the user's height (`scale`, --bvh-scale, overrides: e.g. 0.0564 for CMU's
-//   units); the lowest point of the clip on the floor (y = 0), the first frame's hips over the
-//   origin.
+//   units); the floor (the 5th percentile of each frame's lowest point, robust to end sites
+//   that dip through it) at y = 0, the first frame's hips over the origin.
 #include <array>
 #include <string>
 

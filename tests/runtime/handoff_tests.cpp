@@ -204,9 +204,10 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
   const TaskLayout full = taskLayoutFor(tracking::TrackerMask::all());
   CHECK_FALSE(full.inferLowerBody);
   for (const auto& t : full.tasks) CHECK((t.kind != TaskKind::FootPlant && t.kind != TaskKind::InferredHips));
-  CHECK(full.describe().find("1  position left_foot") != std::string::npos);
-  // All trackers: the eyes right after the feet, hands next, orientations below positions, the
-  // tracked pelvis the softest level (it yields to head and hands when proportions differ).
+  CHECK(full.describe().find("2  position left_foot") != std::string::npos);
+  // All trackers: the eyes first, the tracked feet next (they yield to the eyes when the avatar's
+  // legs cannot reach both), hands next, orientations below positions, the tracked pelvis the
+  // softest level (it yields to head and hands when proportions differ).
   int headPos = 0, headRot = 0, handPos = 0, hips = 0;
   for (const auto& t : full.tasks) {
     if (t.kind == TaskKind::LimbPole) {
@@ -217,7 +218,11 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
     if (t.tracker == tracking::TrackerId::LeftHand && t.kind == TaskKind::TrackerPosition) handPos = t.priority;
     if (t.tracker == tracking::TrackerId::Hips) hips = t.priority;
   }
-  CHECK(headPos == 2);
+  int footPos = 0;
+  for (const auto& t : full.tasks)
+    if (t.tracker == tracking::TrackerId::LeftFoot && t.kind == TaskKind::TrackerPosition) footPos = t.priority;
+  CHECK(headPos == 1);
+  CHECK(footPos == 2);
   CHECK(handPos == 3);
   CHECK(headRot > handPos);
   CHECK(hips == full.levels() - 1);

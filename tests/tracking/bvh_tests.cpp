@@ -173,6 +173,26 @@ TEST_CASE("BVH trackers in OpenXR conventions from CMU, Mixamo and Bandai-Namco 
   }
 }
 
+TEST_CASE("the BVH floor is where the feet stand, not a glitch frame's lowest point") {
+  // 40 frames; in one the whole figure drops 5 units (a marker glitch, or an end site
+  // extrapolated through the floor). The floor is the 5th percentile of each frame's lowest
+  // point, so the feet stand on it in the other 39; the clip's lowest point would have stood them
+  // 5 units (19 cm) in the air.
+  auto clip = avatar::parseBvh(figure("cmu", 40), "glitch.bvh");
+  REQUIRE(clip.ok());
+  clip->values[7 * 36 + 1] = 15.0f;
+  auto trace = bvhToTrace(*clip, {}, nullptr);
+  REQUIRE(trace.ok());
+  const float unit = 1.75f / 45.0f;
+  for (int f : {0, 6, 8, 39}) CHECK(trace->samples[size_t(f)][TrackerId::LeftFoot].position.y == Approx(2.0f * unit).margin(1e-4));
+  CHECK(trace->samples[7][TrackerId::LeftFoot].position.y == Approx(-3.0f * unit).margin(1e-4));
+  // Three glitch frames in 40 (7.5 %) are more than the percentile ignores: the floor follows them.
+  for (int f : {7, 17, 27}) clip->values[size_t(f) * 36 + 1] = 15.0f;
+  auto glitchy = bvhToTrace(*clip, {}, nullptr);
+  REQUIRE(glitchy.ok());
+  CHECK(glitchy->samples[0][TrackerId::LeftFoot].position.y == Approx(7.0f * unit).margin(1e-4));
+}
+
 TEST_CASE("a BVH tracker whose joint is missing is absent and reported") {
   auto clip = avatar::parseBvh(figure("cmu", 2, false), "nofeet.bvh");
   REQUIRE(clip.ok());
