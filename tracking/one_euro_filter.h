@@ -15,8 +15,11 @@ struct OneEuroParams {
 
 struct TrackerFilterParams {
   // Defaults measured for 90 Hz tracking with ~1 mm / 0.3 deg noise (tests/tracking/filter_tests.cpp):
-  // about 5x less jitter at rest, about 1 cm of lag at 1 m/s.
-  OneEuroParams position{1.0f, 15.0f, 1.0f};
+  // about 4x less jitter at rest, about 4 mm of lag at 1 m/s. Position beta 40 rather than 15:
+  // 1 mm jitter 4.3x less instead of 4.8x (0.3 mm: 4.9x instead of 5.1x), for 3.9 mm of lag at
+  // 1 m/s instead of 9.9 mm, which was most of a hand's error against motion capture (embody eval,
+  // three trackers, eight clips: hands 1.45 -> 0.84 cm; docs/eval.md).
+  OneEuroParams position{1.0f, 40.0f, 1.0f};
   OneEuroParams orientation{1.0f, 3.0f, 1.0f};
 };
 
