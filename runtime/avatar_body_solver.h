@@ -12,94 +12,35 @@
 // the floor and turned so the user's forward is the avatar's. Residuals are measured there, in
 // metres on the avatar.
 //
-// Tracker -> IK joint: head (the eyes, an offset in the head joint's frame), hands (wrist = the
-// hand joint's pivot), hips (pelvis = the root), feet (ankle = the foot joint's pivot). The
-// rotation from a tracker's frame to its joint's frame is fixed at calibration: the tracker
-// orientation that corresponds to the avatar's rest pose (identity for head, hips and feet; for a
-// hand the grip pose of the rest hand) maps onto the joint's rest orientation.
-//
-// Budget. The solve runs PIK iterations until converged, the iteration cap, or the deadline minus
-// the predicted cost of one more iteration (the runtime's one deadline policy: IterationBudget and
-// IterationCostModel, runtime/clock.h), so it returns before the deadline while iterations cost
-// what they did and by the deadline plus at most one iteration when one suddenly costs more.
+// Per frame, solve() runs small jobs (ozz's shape: inputs/outputs, Validate(), Run(), no
+// allocation) over data built once: the body rig (body_rig.h: the model with its tasks, the rest
+// geometry, the spaces; from create()) and the calibration (body_calibration.h: scale and height
+// offsets, from the options or the first samples):
+//   TrackerTargetsJob  guarded sample -> avatar-space targets and weights (tracker_targets_job.h)
+//   TaskTargetsJob     targets -> ik::Data tasks, the inferred pelvis and feet, the seat, the poles
+//   BudgetedSolveJob   PIK iterations under the one deadline policy (budgeted_solve_job.h)
+//   SkeletonPoseJob    solved body -> avatar::SkeletonPose (skeleton_pose_job.h)
+//   ResidualsJob       residuals and reach (residuals_job.h)
+// then the collapse guard and the recovery fade. docs/runtime.md has the table.
 #include <memory>
 
 #include "avatar/avatar_asset.h"
 #include "avatar/body/body_model.h"
+#include "runtime/avatar_body_options.h"
+#include "runtime/body_calibration.h"
+#include "runtime/body_rig.h"
 #include "runtime/body_seed.h"
 #include "runtime/body_solver.h"
+#include "runtime/body_targets.h"
 #include "runtime/collapse_guard.h"
 #include "runtime/foot_planner.h"
 #include "runtime/pole_tasks.h"
 #include "runtime/pose_blend.h"
 #include "runtime/seated_pose.h"
 #include "runtime/task_layout.h"
+#include "runtime/task_targets_job.h"
 
 namespace embody::runtime {
-
-struct AvatarBodyOptions {
-  avatar::SpineMode spine = avatar::SpineMode::Auto;
-  tracking::TrackerMask trackers = tracking::TrackerMask::all();  // what the source provides
-  // The user's height in metres (profile / --user-height); 0 = from the first valid head sample
-  // (its height is taken as a standing eye height).
-  float userHeight = 0.0f;
-  int maxIterations = 40;
-  double totalMass = 75.0;
-  FootPlannerConfig feet;
-  // Balance in three-point mode is kept by stepping: a step starts as soon as the centre of mass
-  // leaves the support polygon. The centre-of-mass row of the layout (an inequality: enabled only
-  // while the CoM is outside, target the nearest point of the polygon) no longer destabilises
-  // the solve (the solver's per-level trust region), but it shares level 1 with the planted
-  // feet, and trading the two in least squares let planted feet slide by up to 2.6 cm on the
-  // CMU walk (the limit is 2 cm); off by default until it gets a level of its own.
-  bool balanceRow = false;
-  // A tracked pelvis steers the trunk over the ground at the lowest level (it yields to the
-  // head and hands whenever the user's proportions differ from the avatar's).
-  bool pelvisRow = true;
-  // The coupled spine (ik/spine, Raunhardt & Boulic 2008; default) or one uncoupled ball
-  // joint per spine site with its vertebrae's summed ranges (the escape hatch).
-  bool coupledSpine = true;
-  // ik::SolveOptions::max_level_step for this solver (the per-level trust region). Smaller than
-  // the library's 0.1: the pelvis, head and hand levels push against the feet's level every
-  // iteration on a walk, and their second-order pull on the feet shrinks with the cap (CMU walk,
-  // 30 Hz, coupled spine, feet p95: none 42/57 mm, 0.2: 16/35, 0.1: 17/26, 0.05: 10/17,
-  // 0.025: 1.2/8.5 mm; docs/runtime.md). 0.05 keeps a per-frame step far above what tracking
-  // needs.
-  double maxLevelStep = 0.05;
-  // Seated mode (seatedTaskLayoutFor, seated_pose.h): the lower body sits on a seat placed under
-  // the first tracked head (again after resetWarmStart), the spine and arms follow the head and
-  // hands. A seated head says nothing about the user's stature: give userHeight (else 1.75 m).
-  SeatOptions seat;
-  // Standing: a body found in a heap (collapse_guard.h) is re-seeded standing under the head
-  // (body_seed.h) and the published pose fades to the new solution over `recoveryBlendSeconds`.
-  CollapseGuardConfig collapse;
-  double recoveryBlendSeconds = 0.2;
-  // Knee and elbow direction tasks at the lowest level (pole_tasks.h).
-  bool limbPoles = true;
-  // The elbows' poles too (a swivel from the palm's direction, pole_tasks.h). Off: on the eval
-  // clips they pulled elbows off the performers' (3 trackers: upper body 6.7 -> 8.2 cm, reverse
-  // elbows 65 -> 273 frames; 6 trackers worse on 7 of 8 clips; docs/eval.md).
-  bool elbowPoles = false;
-  // The tracked person IS this avatar (embody eval: the avatar is the clip's own skeleton, built
-  // in tracking space, tracking/bvh_avatar.h): tracking space is avatar space (scale 1, floor at
-  // y = 0, no turn), no height or stride calibration, and the trackers' rest references are the
-  // source's (tracking::BvhMapping), so a perfect solve puts every joint where the clip's is.
-  // Joint markers (embody eval --trackers full, the paper's §5.2.3): a pose task (position and
-  // orientation) on every avatar joint an IK joint pivots at, one level below the tracker layout;
-  // targets from setMarkers() before each solve. They do not come from a tracking source: no
-  // filter, no loss guard.
-  bool jointMarkers = false;
-  struct SameBody {
-    bool enabled = false;
-    Eigen::Vector3d eyeOffset = Eigen::Vector3d::Zero();  // from the head joint, rest pose, tracking axes
-    // Eigen's quaternion default constructor leaves it uninitialised: start from identity.
-    std::array<Eigen::Quaterniond, tracking::kTrackerCount> reference = [] {
-      std::array<Eigen::Quaterniond, tracking::kTrackerCount> r;
-      r.fill(Eigen::Quaterniond::Identity());
-      return r;
-    }();  // tracker orientation at rest
-  } sameBody;
-};
 
 // The solved lower body and trunk, measured (avatar space; angles in radians).
 struct LowerBodyPosture {
@@ -121,16 +62,18 @@ class AvatarBodySolver final : public BodySolver {
   SolveResult solve(const SolveRequest& request, avatar::SkeletonPose& pose) override;
   void resetWarmStart() override;
 
-  const avatar::BodyModel& body() const { return body_; }
+  const avatar::BodyModel& body() const { return rig_.body; }
+  const BodyRig& rig() const { return rig_; }
+  const BodyCalibration& calibration() const { return calibration_; }
   const ik::Data& data() const { return *data_; }
-  const TaskLayout& layout() const { return layout_; }
+  const TaskLayout& layout() const { return rig_.layout; }
   const FootPlanner& feet() const { return planner_; }
-  bool threePoint() const { return layout_.inferLowerBody; }
+  bool threePoint() const { return rig_.layout.inferLowerBody; }
   // Calibration: tracking metres -> avatar metres (0 until the first head sample when the user's
   // height comes from it).
-  double scale() const { return scale_; }
-  double avatarHeight() const { return avatarHeight_; }
-  double armReach() const { return armReach_; }
+  double scale() const { return calibration_.scale; }
+  double avatarHeight() const { return rig_.avatarHeight; }
+  double armReach() const { return rig_.armReach; }
   Eigen::Vector3d toAvatar(const glm::vec3& trackingPoint) const;
   // Solved positions in the avatar's model space: the eye point, wrists, ankles, shoulders.
   Eigen::Vector3d eyePosition() const;
@@ -138,16 +81,16 @@ class AvatarBodySolver final : public BodySolver {
   // the point the renderer's first-person camera uses too.
   Eigen::Vector3d restEyePosition() const;
   Eigen::Vector3d jointPosition(ik::JointId joint) const { return data_->jointFrame(joint).translation(); }
-  ik::JointId trackerJoint(tracking::TrackerId id) const { return joint_[size_t(tracking::index(id))]; }
+  ik::JointId trackerJoint(tracking::TrackerId id) const { return rig_.joint[size_t(tracking::index(id))]; }
   // The last targets in avatar space (feet: the planner's in three-point mode).
-  const Eigen::Vector3d& target(tracking::TrackerId id) const { return targetPoint_[size_t(tracking::index(id))]; }
-  bool calibratedFromHead() const { return calibratedFromHead_; }
-  ik::JointId shoulderJoint(tracking::Side side) const { return side == tracking::Side::Left ? leftShoulder_ : rightShoulder_; }
-  const Eigen::Vector3d& up() const { return up_; }
-  bool seated() const { return layout_.seated; }
+  const Eigen::Vector3d& target(tracking::TrackerId id) const { return targets_.point[size_t(tracking::index(id))]; }
+  bool calibratedFromHead() const { return calibration_.fromHead; }
+  ik::JointId shoulderJoint(tracking::Side side) const { return rig_.shoulder(side); }
+  const Eigen::Vector3d& up() const { return rig_.up; }
+  bool seated() const { return rig_.layout.seated; }
   // Seated mode: the seat in avatar space, once placed (null before the first tracked head).
-  const SeatedPose* seat() const { return seatPlaced_ ? &seat_ : nullptr; }
-  const SeatedLegs& seatedLegs() const { return legs_; }
+  const SeatedPose* seat() const { return seat_.placed ? &seat_.pose : nullptr; }
+  const SeatedLegs& seatedLegs() const { return rig_.legs; }
   LowerBodyPosture posture() const;
   const CollapseGuard& collapseGuard() const { return guard_; }
   // The measures the collapse guard judges, for the current configuration.
@@ -158,101 +101,49 @@ class AvatarBodySolver final : public BodySolver {
   // is the anatomical direction.
   double hingeAngle(int limb) const;
   // Where a solved foot (0 left, 1 right) points: its rest forward turned as the foot is.
-  Eigen::Vector3d footForward(int side) const;
+  Eigen::Vector3d footForward(int side) const { return runtime::footForward(rig_, *data_, side); }
   // Marker targets (jointMarkers) per avatar skeleton joint, avatar space: world positions and
   // world rotations relative to the joint's rest (identity at rest). Joints without a marker are
   // ignored; call before each solve.
   void setMarkers(const std::vector<glm::dvec3>& positions, const std::vector<glm::dquat>& rotations);
-  size_t markerCount() const { return markerTask_.size(); }
-  // ik::Data setter calls that were refused (non-finite values, unknown ids): 0 unless broken.
+  size_t markerCount() const { return rig_.tasks.marker.size(); }
+  // ik::Data setter calls and per-frame jobs that were refused (non-finite values, unknown ids,
+  // inputs a job's Validate() rejects): 0 unless broken.
   int refusedCalls() const { return refusedCalls_; }
 
  private:
   AvatarBodySolver(const avatar::AvatarAsset& avatar) : avatar_(avatar) {}
-  // create()'s steps: the body model and the frames, the tracker joints, the rest geometry, the
-  // layout's tasks.
   Status build(const AvatarBodyOptions& options);
-  Status bindJoints(ik::JointId& leftElbow);
-  void bindLimbs(ik::JointId leftElbow, ik::JointId rightElbow);
-  void measureRest(ik::JointId leftElbow, bool legs);
-  void trackerFrames();
-  Eigen::Vector3d standingAnkle(const Eigen::Vector3d& hipJoint, const Eigen::Vector3d& restAnkle) const;
-  void addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskDesc>& tasks);
-  void addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks);
-  void calibrate(float userHeight);
-  void useSameBody(const AvatarBodyOptions::SameBody& same);
-  // setTargets' steps: the first sample's height calibration, stride scaling (tracked feet), the
-  // inferred pelvis and feet (three-point).
-  void setTargets(const tracking::GuardedSample& targets);
-  void calibrateHeights(const tracking::GuardedSample& targets);
-  void scaleStrides(const tracking::GuardedSample& targets);
-  void setInferredLowerBody(const tracking::GuardedSample& targets);
-  void setSeatedTargets(const tracking::GuardedSample& targets);
-  const ik::SolveReport& settle(ik::SolveOptions options, int maxIterations);
+  // solve()'s steps around the jobs: the calibration on the first samples, the targets and tasks,
+  // the fallback to the last good configuration.
+  void calibrate(const tracking::GuardedSample& sample);
+  void setTargets(const tracking::GuardedSample& sample);
+  void keepLastGood(bool broken);
   // Standing start: the root under the head, facing the head's and hands' heading (body_seed.h).
   // False (nothing changed) without a live head or under a head lower than the standing pelvis.
   bool seedStanding(const tracking::GuardedSample& targets);
-  void setPoleTargets();
   // After a solve: asks the collapse guard; on a collapse re-seeds and starts the fade.
   void guardAgainstCollapse(const tracking::GuardedSample& targets, const SolveResult& result, avatar::SkeletonPose& pose);
   void require(const Status& s);  // counts a refused ik::Data call
-  // Enables (weight > 0, times the task's own) or disables a position/orientation/pose task pair.
-  void setPose(ik::TaskId position, ik::TaskId orientation, const Eigen::Vector3d& p, const Eigen::Quaterniond& q, double weight);
+  void require(bool jobRan);      // counts a refused job
 
   const avatar::AvatarAsset& avatar_;
   AvatarBodyOptions options_;
-  avatar::BodyModel body_;
-  std::unique_ptr<ik::Data> data_;
-  TaskLayout layout_;
+  BodyRig rig_;                      // built once (create)
+  BodyCalibration calibration_;      // replaced whole, never edited (body_calibration.h)
+  std::unique_ptr<ik::Data> data_;   // the warm start and the tasks' state
+  // Per-frame state the jobs carry: the targets, the stepping feet, the seat.
+  BodyTargets targets_;
   FootPlanner planner_;
-  Eigen::VectorXd restQ_, lastGoodQ_;
-  std::array<Eigen::Vector3d, tracking::kTrackerCount> targetPoint_{};
-  std::array<Eigen::Quaterniond, tracking::kTrackerCount> targetRotation_{};
-
-  // Tasks per tracker (position, orientation; -1 none), balance, and the inferred hips.
-  std::array<ik::TaskId, tracking::kTrackerCount> positionTask_{-1, -1, -1, -1, -1, -1};
-  std::array<ik::TaskId, tracking::kTrackerCount> orientationTask_{-1, -1, -1, -1, -1, -1};
-  std::array<ik::JointId, tracking::kTrackerCount> joint_{-1, -1, -1, -1, -1, -1};
-  // Tracker frame -> joint frame rotation (avatar space, see above), and the joint's rest rotation.
-  std::array<Eigen::Quaterniond, tracking::kTrackerCount> jointFromTracker_{};
-  std::array<Eigen::Quaterniond, tracking::kTrackerCount> restRotation_{};
-  ik::TaskId balanceTask_ = -1, hipsPosTask_ = -1, hipsRotTask_ = -1;
-  std::vector<std::pair<int, ik::TaskId>> markerTask_;  // avatar joint, its pose task
-  ik::JointId leftShoulder_ = -1, rightShoulder_ = -1;
-  // Limb direction: knees (0 left, 1 right) then elbows (2, 3): the task, the chain's root,
-  // middle and end joints and the hinge joint, and the rest segment lengths.
-  std::array<ik::TaskId, 4> poleTask_{-1, -1, -1, -1};
-  std::array<ik::JointId, 4> limbRoot_{-1, -1, -1, -1}, limbMiddle_{-1, -1, -1, -1}, limbEnd_{-1, -1, -1, -1},
-      limbHinge_{-1, -1, -1, -1};
-  std::array<LimbGeometry, 4> limb_{};
+  SeatState seat_;
+  Eigen::VectorXd lastGoodQ_;
   CollapseGuard guard_;
   PoseFade fade_;
   bool reseeded_ = false;  // the next solve starts cold (after a re-seed)
   bool broken_ = false;    // the last solve produced a non-finite or invalid configuration
-  // Seated mode: tasks per side (0 = left), the legs' rest geometry and the placed seat.
-  std::array<ik::TaskId, 2> seatHipTask_{-1, -1}, seatKneeTask_{-1, -1};
-  ik::TaskId seatPelvisTask_ = -1;
-  std::array<ik::JointId, 2> hipJoint_{-1, -1}, kneeJoint_{-1, -1};
-  SeatedLegs legs_;
-  SeatedPose seat_;
-  bool seatPlaced_ = false;
-
-  Eigen::Vector3d up_ = Eigen::Vector3d::UnitY(), forward_ = Eigen::Vector3d::UnitZ();
-  Eigen::Quaterniond fromTracking_ = Eigen::Quaterniond::Identity();  // -Z -> the avatar's forward
-  double floor_ = 0.0, avatarHeight_ = 1.75, avatarEyeHeight_ = 1.64, armReach_ = 0.6, scale_ = 0.0;
-  Eigen::Vector3d eyeInHead_ = Eigen::Vector3d::Zero();  // head joint frame
-  Eigen::Vector3d restHeadToHips_ = Eigen::Vector3d::Zero();  // avatar space, at rest
-  // Vertical offsets (avatar metres) added to the hips and feet targets, fixed on the first sample
-  // that has them: the user's (or performer's) pelvis and ankles stand at the avatar's rest
-  // heights then, whatever the proportions. 0 for the other trackers.
-  std::array<double, tracking::kTrackerCount> heightOffset_{};
-  std::array<double, tracking::kTrackerCount> restHeight_{};  // joint pivot above the floor at rest
-  bool heightsCalibrated_ = false;
-  double legRatio_ = 1.0;  // avatar leg / user leg, for tracked feet
   IterationCostModel iterationCost_;  // one PIK iteration
   IterationCostModel finishCost_;     // retargeting and residuals after the iterations
   bool solvedOnce_ = false;
-  bool calibratedFromHead_ = false;
   int refusedCalls_ = 0;
 };
 

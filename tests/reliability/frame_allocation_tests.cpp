@@ -1,6 +1,6 @@
 // The whole runtime frame allocates nothing after warm-up: pose source -> One Euro filter ->
 // tracking-loss guard -> tasks -> budgeted solve -> skeleton pose -> skinning palette, for the
-// default mannequin, glTF avatars and a BVH clip's own skeleton (`--avatar CLIP.bvh`), through the faults the guard handles (a lost hand, a NaN
+// default mannequin (standing and seated), glTF avatars and a BVH clip's own skeleton (`--avatar CLIP.bvh`), through the faults the guard handles (a lost hand, a NaN
 // burst, the head lost while the hands stay live, a 10 m teleport).
 #include <catch2/catch.hpp>
 
@@ -54,11 +54,13 @@ struct RuntimeFrame {
   }
 };
 
-long allocationsPerFrameLoop(const avatar::AvatarAsset& asset, const char* motion, bool threePoint) {
+long allocationsPerFrameLoop(const avatar::AvatarAsset& asset, const char* motion, bool threePoint, bool seated = false) {
   auto source = tracking::openPoseSource(motion);
   REQUIRE(source.ok());
   runtime::TrackedBodyOptions o;
   o.body.trackers = threePoint ? tracking::TrackerMask::threePoint() : tracking::TrackerMask::all();
+  o.body.seat.enabled = seated;
+  if (seated) o.body.userHeight = 1.75f;
   auto body = runtime::TrackedAvatarBody::create(asset, o);
   REQUIRE(body.ok());
   RuntimeFrame f{asset, **source, **body, avatar::SkeletonPose::rest(asset.skeleton), {}, {}};
@@ -84,6 +86,11 @@ TEST_CASE("a runtime frame allocates nothing: default mannequin, three-point", "
 
 TEST_CASE("a runtime frame allocates nothing: default mannequin, six trackers", "[reliability][allocation]") {
   CHECK(allocationsPerFrameLoop(mannequin(), "synthetic:squat", false) == 0);
+}
+
+// Seated mode's frame (the seat's jobs: hips, knees and feet on the seat placed in the warm-up).
+TEST_CASE("a runtime frame allocates nothing: default mannequin, seated", "[reliability][allocation]") {
+  CHECK(allocationsPerFrameLoop(mannequin(), "synthetic:reach", true, true) == 0);
 }
 
 TEST_CASE("a runtime frame allocates nothing: a generated glTF humanoid", "[reliability][allocation]") {

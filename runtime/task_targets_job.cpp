@@ -1,0 +1,218 @@
+#include "runtime/task_targets_job.h"
+
+#include <cmath>
+
+
+namespace embody::runtime {
+
+using tracking::TrackerId;
+using tracking::TrackerStatus;
+
+namespace {
+
+// TaskTargetsJob::Run()'s steps over one frame's state.
+class TaskWriter {
+ public:
+  explicit TaskWriter(const TaskTargetsJob& job)
+      : r(*job.rig), calibration(*job.calibration), sample(*job.sample), job_(job), targets(*job.targets),
+        planner(*job.planner), seat(*job.seat), d(*job.data), out(*job.output) {}
+  void setTargets();
+
+ private:
+  void scaleStrides();
+  void setInferredLowerBody();
+  void setSeatedTargets();
+  void setPoleTargets();
+  // Enables (weight > 0, times the task's own) or disables a position/orientation/pose task pair.
+  void setPose(ik::TaskId position, ik::TaskId orientation, const Eigen::Vector3d& p, const Eigen::Quaterniond& q, double weight);
+  Eigen::Vector3d jointPosition(ik::JointId joint) const { return d.jointFrame(joint).translation(); }
+  void require(const Status& s) {
+    if (!s) ++out.refusedCalls;
+  }
+
+  const BodyRig& r;
+  const BodyCalibration& calibration;
+  const tracking::GuardedSample& sample;
+  const TaskTargetsJob& job_;
+  BodyTargets& targets;
+  FootPlanner& planner;
+  SeatState& seat;
+  ik::Data& d;
+  TaskTargetsOutput& out;
+};
+
+void TaskWriter::setTargets() {
+  for (auto id : tracking::kAllTrackers) {
+    const size_t i = size_t(tracking::index(id));
+    if (r.tasks.position[i] >= 0 && r.body.model.tasks[size_t(r.tasks.position[i])].desc.type == ik::TaskType::Pose) continue;
+    setPose(r.tasks.position[i], r.tasks.orientation[i], targets.point[i], targets.rotation[i], targets.weight[i]);
+  }
+  if (r.layout.seated) {
+    setSeatedTargets();
+    return;
+  }
+  if (r.layout.inferLowerBody)
+    setInferredLowerBody();
+  else
+    scaleStrides();
+  setPoleTargets();
+}
+
+// Tracked feet with a tracked pelvis: strides scaled by the leg ratio about the pelvis's ground
+// point, so a longer-legged user's steps stay within the avatar's legs.
+void TaskWriter::scaleStrides() {
+  const size_t hipsI = size_t(tracking::index(TrackerId::Hips));
+  if (calibration.legRatio == 1.0 || sample.status[hipsI] == TrackerStatus::Absent) return;
+  const Eigen::Vector3d pelvis = targets.point[hipsI];
+  for (auto id : {TrackerId::LeftFoot, TrackerId::RightFoot}) {
+    const size_t i = size_t(tracking::index(id));
+    if (r.tasks.position[i] < 0 || !d.enabled(r.tasks.position[i])) continue;
+    Eigen::Vector3d offset = targets.point[i] - pelvis;
+    offset -= r.up * r.up.dot(offset);
+    targets.point[i] += (calibration.legRatio - 1.0) * offset;
+    require(d.setTarget(r.tasks.position[i], targets.point[i]));
+  }
+}
+
+// Three-point mode: the pelvis and the feet are inferred from the head (the foot planner steps).
+void TaskWriter::setInferredLowerBody() {
+  const size_t headIndex = size_t(tracking::index(TrackerId::Head));
+  const Eigen::Quaterniond headTurn = targets.rotation[headIndex] * r.restRotation[headIndex].conjugate();
+  const double yaw = headingOf(headTurn, r.up, r.forward);
+  const Eigen::Quaterniond heading = yawRotation(yaw, r.up);
+  const Eigen::Vector3d headPivot = targets.point[headIndex] - targets.rotation[headIndex] * r.eyeInHead;
+  const Eigen::Vector3d hips = headPivot + heading * r.restHeadToHips;
+  const size_t hipsIndex = size_t(tracking::index(TrackerId::Hips));
+  setPose(r.tasks.hipsPosition, r.tasks.hipsRotation, hips, heading * r.restRotation[hipsIndex], 1.0);
+
+  const double time = sample.pose.time;
+  if (!planner.initialised()) planner.reset(hips, yaw, time);
+  const Eigen::Vector3d com = job_.solvedOnce ? Eigen::Vector3d(d.centerOfMass()) : hips;
+  const auto& feet = planner.update(time, hips, yaw, com);
+  for (int f = 0; f < 2; ++f) {
+    const size_t i = size_t(tracking::index(f == 0 ? TrackerId::LeftFoot : TrackerId::RightFoot));
+    targets.point[i] = feet[size_t(f)].position;
+    targets.rotation[i] = yawRotation(feet[size_t(f)].yaw, r.up) * r.restRotation[i];
+    setPose(r.tasks.position[i], -1, targets.point[i], targets.rotation[i], 1.0);
+  }
+  // Balance as an inequality: only while the centre of mass is off the support polygon.
+  if (r.tasks.balance >= 0) {
+    const bool over = !job_.solvedOnce || planner.overSupport(com);
+    require(d.setEnabled(r.tasks.balance, !over && job_.balanceRow));
+    if (!over) require(d.setTarget(r.tasks.balance, planner.nearestSupportPoint(com, 0.01 * r.avatarHeight / 1.75)));
+  }
+}
+
+void TaskWriter::setSeatedTargets() {
+  const size_t headIndex = size_t(tracking::index(TrackerId::Head));
+  if (!seat.placed && sample.status[headIndex] == TrackerStatus::Tracked && sample.pose[TrackerId::Head].valid) {
+    // The seat goes under the first tracked head, facing where it looks.
+    const Eigen::Quaterniond headTurn = targets.rotation[headIndex] * r.restRotation[headIndex].conjugate();
+    const double seatHeight = job_.seatHeight > 0.0f ? calibration.scale * double(job_.seatHeight) : -1.0;
+    seat.pose = placeSeat(r.legs, targets.point[headIndex], headingOf(headTurn, r.up, r.forward), seatHeight);
+    seat.placed = true;
+    if (!job_.solvedOnce) {
+      // Start the cold solve with the hips over the seat: the legs then only fold.
+      ik::kinematics(r.body.model, d, false);
+      const ik::Model::Joint& root = r.body.model.joints[size_t(r.body.hips)];
+      if (root.desc.type == ik::JointType::Free && root.desc.parent == ik::kNoParent) {
+        const Eigen::Vector3d shift =
+            0.5 * (seat.pose.hip[0] + seat.pose.hip[1] - jointPosition(r.hipJoint[0]) - jointPosition(r.hipJoint[1]));
+        Eigen::VectorXd q = d.q();
+        q.segment<3>(root.first_dof) += root.desc.rest.linear().transpose() * shift;
+        require(d.setConfiguration(q));
+      }
+      // A cold start sits down and reaches the first targets outside the budget (once per
+      // placement: the first frame and each recenter). Within a 1 ms budget the budgeted solve
+      // otherwise folded the legs and raised the arms over dozens of frames (hand p95 35 cm over
+      // the first 2 s of `embody xr --seated`).
+      out.settleSeat = true;
+    }
+  }
+  // Until then (no tracked head yet) the lower body is left to the warm start.
+  const double w = seat.placed ? 1.0 : 0.0;
+  const Eigen::Quaterniond none = Eigen::Quaterniond::Identity();
+  for (size_t s = 0; s < 2; ++s) {
+    setPose(r.tasks.seatHip[s], -1, seat.pose.hip[s], none, w);
+    setPose(r.tasks.seatKnee[s], -1, seat.pose.knee[s], none, w);
+    const size_t f = size_t(tracking::index(s == 0 ? TrackerId::LeftFoot : TrackerId::RightFoot));
+    targets.point[f] = seat.pose.ankle[s];
+    targets.rotation[f] = seat.pose.footRotation[s];
+    setPose(r.tasks.position[f], -1, targets.point[f], targets.rotation[f], w);
+  }
+  setPose(-1, r.tasks.seatPelvis, Eigen::Vector3d::Zero(), seat.pose.pelvisRotation, w);
+}
+
+void TaskWriter::setPoleTargets() {
+  const size_t hips = size_t(tracking::index(TrackerId::Hips));
+  const Eigen::Quaterniond pelvisTurn = Eigen::Quaterniond(d.jointFrame(r.body.hips).rotation()) * r.restRotation[hips].conjugate();
+  const Eigen::Vector3d fwd = yawRotation(headingOf(pelvisTurn, r.up, r.forward), r.up) * r.forward;
+  const Eigen::Vector3d left = r.up.cross(fwd);
+  for (size_t k = 0; k < 4; ++k) {
+    if (r.tasks.pole[k] < 0) continue;
+    const Eigen::Vector3d root = jointPosition(r.limbRoot[k]), end = jointPosition(r.limbEnd[k]);
+    Eigen::Vector3d pole, fallback;
+    if (k < 2) {  // the knee over the toes
+      pole = footForward(r, d, int(k));
+      fallback = fwd;
+    } else {
+      const bool leftArm = k == 2;
+      const Eigen::Vector3d palm = d.jointFrame(r.limbEnd[k]).rotation() * Eigen::Vector3d::UnitX() * (leftArm ? 1.0 : -1.0);
+      pole = elbowPole(r.up, fwd, leftArm ? left : Eigen::Vector3d(-left), palm, end - root);
+      fallback = -r.up;
+    }
+    setPose(r.tasks.pole[k], -1, poleTarget(root, end, r.limb[k], pole, fallback), Eigen::Quaterniond::Identity(), 1.0);
+  }
+}
+
+void TaskWriter::setPose(ik::TaskId position, ik::TaskId orientation, const Eigen::Vector3d& p, const Eigen::Quaterniond& q,
+                         double weight) {
+  setTaskPose(r.body.model, d, position, orientation, p, q, weight, out.refusedCalls);
+}
+
+}  // namespace
+
+void setTaskPose(const ik::Model& model, ik::Data& d, ik::TaskId position, ik::TaskId orientation, const Eigen::Vector3d& p,
+                 const Eigen::Quaterniond& q, double weight, int& refusedCalls) {
+  auto require = [&](const Status& s) {
+    if (!s) ++refusedCalls;
+  };
+  for (ik::TaskId t : {position, orientation}) {
+    if (t < 0) continue;
+    if (!(weight > 0.0)) {
+      require(d.setEnabled(t, false));
+      continue;
+    }
+    require(d.setEnabled(t, true));
+    require(d.setWeight(t, weight * model.tasks[size_t(t)].desc.weight));
+    const ik::TaskType type = model.tasks[size_t(t)].desc.type;
+    if (type == ik::TaskType::Pose) {
+      Eigen::Isometry3d iso = Eigen::Isometry3d::Identity();
+      iso.linear() = q.toRotationMatrix();
+      iso.translation() = p;
+      require(d.setTarget(t, iso));
+    } else if (type == ik::TaskType::Orientation) {
+      require(d.setTarget(t, q));
+    } else {
+      require(d.setTarget(t, p));
+    }
+  }
+}
+
+bool TaskTargetsJob::Validate() const {
+  if (!rig || !calibration || !sample || !targets || !planner || !seat || !data || !output) return false;
+  if (data->q().size() != rig->body.model.dofs || !calibration->scaled() || !std::isfinite(sample->pose.time)) return false;
+  for (size_t i = 0; i < tracking::kTrackerCount; ++i)
+    if (!targets->point[i].allFinite() || !targets->rotation[i].coeffs().allFinite() || !std::isfinite(targets->weight[i]))
+      return false;
+  return true;
+}
+
+bool TaskTargetsJob::Run() const {
+  if (!Validate()) return false;
+  *output = TaskTargetsOutput{};
+  TaskWriter(*this).setTargets();
+  return true;
+}
+
+}  // namespace embody::runtime
