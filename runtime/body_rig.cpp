@@ -189,8 +189,15 @@ void RigBuilder::measureRest(ik::JointId leftElbow, bool legs) {
   // Feet for three-point mode: the stance relative to the hips' ground point.
   const Eigen::Vector3d hipsGround = pos(r.body.hips) - r.up * r.up.dot(pos(r.body.hips));
   std::array<Eigen::Vector3d, 2> stance{pos(r.body.leftFoot) - hipsGround, pos(r.body.rightFoot) - hipsGround};
-  if (legs)
-    for (size_t s = 0; s < 2; ++s) stance[s] = standingAnkle(pos(r.hipJoint[s]), stance[s] + hipsGround) - hipsGround;
+  if (legs) {
+    r.standingHeadRise = 1e300;
+    for (size_t s = 0; s < 2; ++s) {
+      stance[s] = standingAnkle(pos(r.hipJoint[s]), stance[s] + hipsGround) - hipsGround;
+      // A straight leg under its hip joint against the rest's height of the hip over the ankle.
+      const double leg = r.limb[s].upper + r.limb[s].lower;
+      r.standingHeadRise = std::min(r.standingHeadRise, std::max(0.0, leg - r.up.dot(pos(r.hipJoint[s]) - stance[s] - hipsGround)));
+    }
+  }
   r.stance = stance;
 }
 

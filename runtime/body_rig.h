@@ -71,6 +71,9 @@ struct BodyRig {
   Eigen::Vector3d restHeadToHips = Eigen::Vector3d::Zero();  // avatar space
   SeatedLegs legs;                                           // seated mode (legs mapped)
   std::array<Eigen::Vector3d, 2> stance{};  // three-point feet relative to the hips' ground point
+  // How far the head pivot can rise above its rest height with the feet on the floor at the
+  // stance (both legs straight under their hip joints): above that, a three-point body jumps.
+  double standingHeadRise = 0.0;
   // The configuration a body starts from: the rest pose with knees and elbows slightly bent.
   Eigen::VectorXd restQ;
 

@@ -89,9 +89,14 @@ void TaskWriter::setInferredLowerBody() {
   if (!planner.initialised()) planner.reset(hips, yaw, time);
   const Eigen::Vector3d com = job_.solvedOnce ? Eigen::Vector3d(d.centerOfMass()) : hips;
   const auto& feet = planner.update(time, hips, yaw, com);
+  // A jump: a head higher than straight legs on the floor can hold it lifts both feet by the
+  // difference (the planner keeps their places on the ground). Without it a jumping user's body
+  // stayed planted and its head sank up to 26 cm below the HMD (cmu_131_03, docs/eval.md).
+  const double headHeight = r.up.dot(headPivot) - r.floor;
+  const double airborne = std::max(0.0, headHeight - r.restHeight[headIndex] - r.standingHeadRise);
   for (int f = 0; f < 2; ++f) {
     const size_t i = size_t(tracking::index(f == 0 ? TrackerId::LeftFoot : TrackerId::RightFoot));
-    targets.point[i] = feet[size_t(f)].position;
+    targets.point[i] = feet[size_t(f)].position + r.up * airborne;
     targets.rotation[i] = yawRotation(feet[size_t(f)].yaw, r.up) * r.restRotation[i];
     setPose(r.tasks.position[i], -1, targets.point[i], targets.rotation[i], 1.0);
   }

@@ -187,6 +187,43 @@ TEST_CASE("three-point standing still: the feet stay planted") {
   CHECK(r.summary.headErrorP95 <= 0.01);
 }
 
+TEST_CASE("three-point jump: a head above what straight legs reach lifts both feet, and they land again") {
+  // Standing idle; between 1 and 2 s the head and hands rise 15 cm and come down (a smooth bump,
+  // 0.3 m/s at most). Straight legs under the hips reach a few cm above the rest pose's eyes: the
+  // rest must come from the feet leaving the floor, or the eyes stay below the HMD.
+  auto src = open("synthetic:idle", tracking::TrackerMask::threePoint());
+  AvatarBodyOptions o;
+  o.userHeight = 1.75f;
+  o.trackers = tracking::TrackerMask::threePoint();
+  auto rise = [](double t) { return t > 1.0 && t < 2.0 ? 0.15 * std::pow(std::sin(M_PI * (t - 1.0)), 2.0) : 0.0; };
+  int frame = 0;
+  std::array<double, 2> standing{}, highest{}, landed{};
+  double eyeErrorAtTop = 1.0;
+  const Run r = drive(defaultAvatar(), *src, o, 240, 60.0, kGenerousBudget,
+                      [&](tracking::PoseSample& s) {
+                        const float dy = float(rise(frame++ / 60.0));
+                        for (auto id : {TrackerId::Head, TrackerId::LeftHand, TrackerId::RightHand}) s[id].position.y += dy;
+                      },
+                      [&](const AvatarBodySolver& s, const SolvedFrame&) {
+                        const int f = frame - 1;
+                        for (int k = 0; k < 2; ++k) {
+                          const double y = s.jointPosition(s.trackerJoint(k == 0 ? TrackerId::LeftFoot : TrackerId::RightFoot)).y();
+                          if (f == 59) standing[size_t(k)] = y;
+                          if (f == 90) highest[size_t(k)] = y;
+                          if (f == 239) landed[size_t(k)] = y;
+                        }
+                        if (f == 90) eyeErrorAtTop = (s.eyePosition() - s.target(TrackerId::Head)).norm();
+                      });
+  CHECK(r.nonFinitePoses == 0);
+  INFO("ankles standing " << standing[0] << ", " << standing[1] << " at the top " << highest[0] << ", " << highest[1]
+                          << " landed " << landed[0] << ", " << landed[1] << " eye error at the top " << eyeErrorAtTop);
+  for (size_t k = 0; k < 2; ++k) {
+    CHECK(highest[k] - standing[k] > 0.08);             // 15 cm less the legs' straightening
+    CHECK(std::abs(landed[k] - standing[k]) < 0.005);   // back on the floor
+  }
+  CHECK(eyeErrorAtTop < 0.02);
+}
+
 TEST_CASE("hands lost for 1 s: within arm's reach of the shoulder every frame, at most 3 m/s when tracking returns") {
   auto src = open("synthetic:figure8");
   AvatarBodyOptions o;
