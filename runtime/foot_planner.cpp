@@ -79,6 +79,21 @@ Eigen::Vector3d FootPlanner::standSpot(int foot, const Eigen::Vector3d& centre, 
   return ground(centre) + offset + up_ * floorHeight_;
 }
 
+// A landing spot kept on its own side of the other foot: at least half the stance width from it
+// across the heading `yaw`. Without this a turn or a sidestep could land a foot across the planted
+// one (the body's heading moves on while the planted foot stays), and the legs crossed: on the eval
+// clips the collapse guard then re-seeded the body 2-10 times a clip (docs/runtime.md).
+Eigen::Vector3d FootPlanner::uncrossed(int foot, const Eigen::Vector3d& spot, double yaw) const {
+  const size_t other = static_cast<size_t>(1 - foot);
+  const Eigen::Vector3d otherAnkle = swing_[other].active ? swing_[other].to : feet_[other].position;
+  const Eigen::Vector3d side = yawRotation(yaw, up_) * axisB_;
+  const double restSide = (restOffset_[static_cast<size_t>(foot)] - restOffset_[other]).dot(axisB_);
+  const double sign = restSide >= 0.0 ? 1.0 : -1.0;
+  const double minimum = 0.5 * std::abs(restSide);
+  const double across = sign * (spot - otherAnkle).dot(side);
+  return across >= minimum ? spot : Eigen::Vector3d(spot + sign * (minimum - across) * side);
+}
+
 void FootPlanner::reset(const Eigen::Vector3d& centre, double yaw, double time) {
   floorHeight_ = up_.dot(restOffset_[0]);  // the rest ankle height above the centre's ground point
   for (int f = 0; f < 2; ++f) {
@@ -112,7 +127,7 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
   // Where a foot landing after `remaining` seconds should go: under the body then, half a step
   // ahead of it while it moves.
   auto landing = [&](int f, double remaining) {
-    return standSpot(f, centre + velocity_ * (remaining + 0.5 * step), yaw);
+    return uncrossed(f, standSpot(f, centre + velocity_ * (remaining + 0.5 * step), yaw), yaw);
   };
 
   // Swinging feet move along their arcs; a landing ends the swing.

@@ -78,6 +78,7 @@ class FootPlanner {
   };
   Eigen::Vector3d ground(const Eigen::Vector3d& p) const { return p - up_ * up_.dot(p); }
   Eigen::Vector3d standSpot(int foot, const Eigen::Vector3d& centre, double yaw) const;
+  Eigen::Vector3d uncrossed(int foot, const Eigen::Vector3d& spot, double yaw) const;
   Eigen::Vector2d plane(const Eigen::Vector3d& p) const { return {p.dot(axisA_), p.dot(axisB_)}; }
   void buildSupport();
 
