@@ -12,6 +12,7 @@
 #include "app/args.h"
 #include "app/job_options.h"
 #include "app/motion_export.h"
+#include "app/job_inputs.h"
 #include "avatar/body/calibration.h"
 #include "runtime/frame_stats.h"
 #include "runtime/seated_stats.h"
@@ -160,6 +161,13 @@ Result<bool> attachBody(const XrCommand& c, const avatar::AvatarAsset& asset, Bo
   // assumes 1.75 m unless --height gives the standing eye height.
   const float eye = c.loop.placement.userEyeHeight;
   bo.body.userHeight = eye > 0.0f ? eye / float(avatar::kEyeHeightRatio) : 0.0f;
+  if (!c.shared.profile.empty()) {
+    auto profile = avatar::loadProfile(c.shared.profile);
+    if (!profile) return Error{"profile " + c.shared.profile + ": " + profile.error()};
+    auto arms = app::profileArmScale(*profile, c.shared.profile, asset, bo.body.userHeight);
+    if (!arms) return Error{arms.error()};
+    bo.body.armScale = *arms;
+  }
   bo.stage.budgetSeconds = c.budgetMs * 1e-3;
   auto created = runtime::TrackedAvatarBody::create(asset, bo);
   if (!created) return Error{"avatar " + c.avatarArg + ": " + created.error()};

@@ -5,13 +5,30 @@
 
 namespace embody::app {
 
+Result<double> profileArmScale(const avatar::BodyProfile& profile, const std::string& path, const avatar::AvatarAsset& asset,
+                               float userHeight) {
+  if (!(profile.armSpan > 0.0)) return 1.0;
+  // The profile's arm span against this avatar (it may have been calibrated on another one).
+  avatar::CalibrationInput ci;
+  ci.userHeight = userHeight > 0.0f ? double(userHeight) : profile.userHeight;
+  ci.armSpan = profile.armSpan;
+  auto onThis = avatar::calibrate(asset, ci);
+  if (!onThis) return Error{"profile " + path + ": " + onThis.error()};
+  if (!(onThis->armLengthScale >= 0.5 && onThis->armLengthScale <= 2.0))
+    return Error{"profile " + path + ": an arm span of " + std::to_string(profile.armSpan) +
+                 " m gives arms outside half to twice this avatar's at the user's height"};
+  return onThis->armLengthScale;
+}
+
 Result<JobInputs> openJobInputs(const RenderJob& job) {
   JobInputs in;
   in.userHeight = job.userHeight;
-  if (in.userHeight == 0.0f && !job.profile.empty()) {
-    auto profile = avatar::loadProfile(job.profile);  // avatar/body/calibration.h, `embody avatar calibrate`
-    if (!profile) return Error{"profile " + job.profile + ": " + profile.error()};
-    in.userHeight = float(profile->userHeight);
+  std::optional<avatar::BodyProfile> profile;
+  if (!job.profile.empty()) {
+    auto loaded = avatar::loadProfile(job.profile);  // avatar/body/calibration.h, `embody avatar calibrate`
+    if (!loaded) return Error{"profile " + job.profile + ": " + loaded.error()};
+    profile = std::move(loaded).value();
+    if (in.userHeight == 0.0f) in.userHeight = float(profile->userHeight);
   }
   if (isBvhPath(job.avatar) && job.boneMap.empty()) {  // keep the clip: --export writes its hierarchy
     auto bvh = tracking::loadBvhAvatar(job.avatar, {});
@@ -22,6 +39,11 @@ Result<JobInputs> openJobInputs(const RenderJob& job) {
     auto loaded = loadAvatarArg(job.avatar, job.boneMap);
     if (!loaded) return Error{loaded.error()};
     in.asset = std::move(loaded).value();
+  }
+  if (profile) {
+    auto arms = profileArmScale(*profile, job.profile, in.asset, in.userHeight);
+    if (!arms) return Error{arms.error()};
+    in.armScale = *arms;
   }
   in.sourceOptions.userHeight = in.userHeight > 0.0f ? in.userHeight : 1.75f;
   in.sourceOptions.bvhScale = job.bvhScale;
@@ -43,6 +65,7 @@ runtime::AvatarBodyOptions bodyOptionsFor(const RenderJob& job, const JobInputs&
   const bool trace = job.motion.size() > 6 && job.motion.substr(job.motion.size() - 6) == ".jsonl";
   bo.userHeight = in.userHeight > 0.0f ? in.userHeight : (trace ? 0.0f : in.sourceOptions.userHeight);
   bo.seat.enabled = job.seated;
+  bo.armScale = in.armScale;
   return bo;
 }
 

@@ -7,6 +7,7 @@
 
 #include "app/render_job.h"
 #include "avatar/avatar_asset.h"
+#include "avatar/body/calibration.h"
 #include "core/result.h"
 #include "runtime/avatar_body_solver.h"
 #include "tracking/bvh_avatar.h"
@@ -16,6 +17,7 @@ namespace embody::app {
 
 struct JobInputs {
   float userHeight = 0.0f;  // 0: unknown (calibrate from the first head sample)
+  double armScale = 1.0;    // the profile's arm span on this avatar (AvatarBodyOptions::armScale)
   avatar::AvatarAsset asset;
   tracking::SourceOptions sourceOptions;  // sourceOptions.userHeight: what the motion is fitted to
   std::unique_ptr<tracking::PoseSource> source;
@@ -25,6 +27,12 @@ struct JobInputs {
 
 // Errors (exit code 1) name the file that failed.
 Result<JobInputs> openJobInputs(const RenderJob& job);
+
+// AvatarBodyOptions::armScale for a profile (`embody avatar calibrate --arm-span`) on `asset`:
+// 1 without an arm span; an error naming `path` when the arms come out beyond half or twice the
+// avatar's.
+Result<double> profileArmScale(const avatar::BodyProfile& profile, const std::string& path, const avatar::AvatarAsset& asset,
+                               float userHeight);
 
 // The body solver's options for the job. Synthetic motions and BVH clips are built for (fitted
 // to) sourceOptions.userHeight; a recorded trace's user is unknown unless given: the solver

@@ -27,6 +27,8 @@ double angleBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return
 
 Result<std::unique_ptr<AvatarBodySolver>> AvatarBodySolver::create(const avatar::AvatarAsset& avatar,
                                                                    const AvatarBodyOptions& options) {
+  if (!(options.armScale >= 0.5 && options.armScale <= 2.0))
+    return Error{"arm scale " + std::to_string(options.armScale) + " is outside 0.5-2 (user arm span over the avatar's)"};
   std::unique_ptr<AvatarBodySolver> s(new AvatarBodySolver(avatar));
   if (auto st = s->build(options); !st) return Error{st.error()};
   return s;
@@ -101,6 +103,7 @@ void AvatarBodySolver::setTargets(const tracking::GuardedSample& sample) {
   trackers.calibration = &calibration_;
   trackers.sample = &sample;
   trackers.pelvisRow = options_.pelvisRow;
+  trackers.armScale = options_.armScale;
   trackers.targets = &targets_;
   require(trackers.Run());
   TaskTargetsOutput out;

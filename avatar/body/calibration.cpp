@@ -1,5 +1,6 @@
 #include "avatar/body/calibration.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -60,6 +61,7 @@ Result<BodyProfile> calibrate(const AvatarAsset& avatar, const CalibrationInput&
   p.scale = p.userHeight / p.avatarHeight;
   // Arm span of the avatar: both arm chains (shoulder -> hand) plus the hands and the shoulder width.
   const HumanoidMap& h = avatar.humanoid;
+  double avatarArms = 0.0;  // both arms, shoulder to wrist, at rest
   if (h.usable()) {
     std::vector<glm::mat4> g;
     computeGlobals(avatar.skeleton, SkeletonPose::rest(avatar.skeleton), g);
@@ -71,11 +73,13 @@ Result<BodyProfile> calibrate(const AvatarAsset& avatar, const CalibrationInput&
     const double shoulders = glm::length(at(HumanBone::leftUpperArm) - at(HumanBone::rightUpperArm));
     p.avatarArmSpan =
         left + right + shoulders + 2.0 * 0.108 * p.avatarHeight;  // hand length ~10.8 % of height
+    avatarArms = left + right;
   }
   if (in.armSpan) {
     if (!plausible(*in.armSpan)) return Error{"arm span must be between 0.5 and 2.6 m"};
     p.armSpan = *in.armSpan;
     if (p.avatarArmSpan > 0.0) p.armScale = p.armSpan / (p.avatarArmSpan * p.scale);
+    if (avatarArms > 0.0) p.armLengthScale = std::max(0.0, 1.0 + (p.armSpan - p.avatarArmSpan * p.scale) / (avatarArms * p.scale));
   }
   return p;
 }

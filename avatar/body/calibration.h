@@ -4,9 +4,10 @@
 // The avatar is scaled uniformly so that its height matches the user's: from --user-height, or
 // from the eye height (the head pose at calibration; an HMD knows the eyes, not the top of the
 // head). Eye height is taken as 0.933 of body height (H-Anim's 1.75 m humanoid has its eyes at
-// about 1.633 m), for the avatar too unless it states an eye position. Arm span is optional: it
-// is stored with its ratio to the avatar's but not applied (non-uniform limb scaling would break
-// the exact pivot match with the render skeleton).
+// about 1.633 m), for the avatar too unless it states an eye position. Arm span is optional: the
+// avatar's limbs are not rescaled (non-uniform limb scaling would break the exact pivot match with
+// the render skeleton); instead the runtime places the hands relative to the shoulders by the arm
+// length ratio (armLengthScale, runtime/tracker_targets_job.h).
 #include <optional>
 #include <string>
 #include <string_view>
@@ -36,6 +37,11 @@ struct BodyProfile {
   double avatarArmSpan = 0.0;  // metres, hand joint to hand joint along the arm chains + hands
   double scale = 1.0;          // user / avatar, applied uniformly
   double armScale = 1.0;       // user arm span / avatar arm span (stored, not applied)
+  // The user's arm (shoulder to wrist) over the avatar's scaled to the user's height: a span that
+  // differs from the avatar's (scaled) differs in the two arms, the shoulders and hands scale with
+  // height. What the runtime applies (runtime::AvatarBodyOptions::armScale). Not stored: computed
+  // by calibrate() for the avatar at hand.
+  double armLengthScale = 1.0;
 };
 
 // Height of the avatar standing at rest: mesh bounds along up when it has a mesh, else from the

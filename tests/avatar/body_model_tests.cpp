@@ -283,6 +283,14 @@ TEST_CASE("calibration scales the body to the user and round-trips through the p
   CHECK(p->scale == Approx(1.93 / avatarHeight(a)));
   CHECK(p->eyeHeight == Approx(kEyeHeightRatio * 1.93));
   CHECK(p->avatarArmSpan == Approx(1.75).margin(0.15));
+  // The span's excess over the scaled avatar's is the arms' (shoulders and hands scale with height).
+  const double arms = (p->armSpan - p->avatarArmSpan * p->scale);
+  // A span off the avatar's proportions is proportionally more off in the arms than in the span.
+  CHECK(std::abs(p->armLengthScale - 1.0) > std::abs(p->armScale - 1.0));
+  CalibrationInput proportional = in;
+  proportional.armSpan = p->avatarArmSpan * p->scale;
+  CHECK(calibrate(a, proportional)->armLengthScale == Approx(1.0));
+  CHECK((arms > 0.0) == (p->armLengthScale > 1.0));
   // Eye height alone (the HMD at calibration) gives the same scale.
   CalibrationInput eyes;
   eyes.eyeHeight = kEyeHeightRatio * 1.93;

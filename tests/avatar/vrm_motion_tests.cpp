@@ -116,7 +116,7 @@ TEST_CASE("vrm 0.x: secondaryAnimation and blend shape groups are read", "[vrm]"
   CHECK(a.lookAt.offsetFromHead.z == Approx(0.07f));     // z flipped from Unity's
 }
 
-TEST_CASE("spring bones: hair swings after a head turn and settles; colliders hold", "[vrm]") {
+TEST_CASE("spring bones: hair swings after a head turn and settles, colliders hold", "[vrm]") {
   const AvatarAsset a = loadTestVrm();
   test::VrmTestAvatar t = test::buildVrmTestAvatar();
   SecondaryMotion motion(a, {.blink = false});

@@ -87,7 +87,7 @@ TEST_CASE("embody avatar reports usage and file errors with the right exit codes
   CHECK(badMap.exitCode == 1);
 }
 
-TEST_CASE("embody avatar info reports the body model; --spine and calibration profiles apply", "[avatar]") {
+TEST_CASE("embody avatar info reports the body model, --spine and calibration profiles apply", "[avatar]") {
   auto j = nlohmann::json::parse(runEmbody("avatar info default --json").output);
   CHECK(j["body_model"]["spine_model"] == "full");
   CHECK(j["body_model"]["spine_sites"].size() == 25);
@@ -107,4 +107,22 @@ TEST_CASE("embody avatar info reports the body model; --spine and calibration pr
   CHECK(j["body_model"]["scale"].get<double>() == Approx(1.9 / 1.755).epsilon(0.01));
   CHECK(runEmbody("avatar calibrate default --profile /tmp/x.json").exitCode == 2);
   CHECK(runEmbody("avatar calibrate default --user-height 40 --profile /tmp/x.json").exitCode == 2);
+}
+
+TEST_CASE("a profile's arm span reaches the runtime, and arms beyond twice the avatar's stop the run", "[avatar]") {
+  const auto dir = std::filesystem::temp_directory_path() / ("embody_cli_arms_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string longArms = (dir / "long.json").string(), absurd = (dir / "absurd.json").string();
+  REQUIRE(runEmbody("avatar calibrate default --user-height 1.75 --arm-span 2.0 --profile '" + longArms + "'").exitCode == 0);
+  REQUIRE(runEmbody("avatar calibrate default --user-height 1.0 --arm-span 2.5 --profile '" + absurd + "'").exitCode == 0);
+  const auto ok = runEmbody("render --motion synthetic:reach --frames 30 --ik-iterations 10 --size 32x32 --out '" +
+                            (dir / "ok").string() + "' --profile '" + longArms + "'");
+  CHECK(ok.exitCode == 0);
+  const auto bad = runEmbody("render --motion synthetic:reach --frames 3 --ik-iterations 2 --size 32x32 --out '" +
+                                 (dir / "bad").string() + "' --profile '" + absurd + "'",
+                             true);
+  std::filesystem::remove_all(dir);
+  CHECK(bad.exitCode == 1);
+  CHECK(bad.output.find("an arm span of 2.5") != std::string::npos);
+  CHECK(bad.output.find("outside half to twice this avatar's") != std::string::npos);
 }

@@ -280,7 +280,7 @@ avatar::Material blended(glm::vec3 color, int queueOffset, bool zwrite) {
 
 }  // namespace
 
-TEST_CASE("MToon shading follows the specification's formulas; render queue and transparentWithZWrite order",
+TEST_CASE("MToon shading follows the specification's formulas, render queue and transparentWithZWrite order",
           "[gpu][materials]") {
   const engine::Lighting light;
   const glm::vec3 l = glm::normalize(light.directionToLight);
@@ -732,7 +732,7 @@ avatar::TextureTransform equivalentTransform(float angle, glm::vec2 scroll, bool
 
 }  // namespace
 
-TEST_CASE("MToon UV animation on the GPU: equals the texture transform it amounts to; the mask stops it",
+TEST_CASE("MToon UV animation on the GPU: equals the texture transform it amounts to, the mask stops it",
           "[gpu][materials]") {
   const avatar::AvatarAsset still = stripedMToonBust();
   const glm::vec2 scrollSpeed(0.3f, -0.2f);

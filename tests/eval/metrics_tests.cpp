@@ -107,7 +107,7 @@ TEST_CASE("eval metrics: a solved foot sliding while the clip's is planted", "[e
   CHECK(m.clipFootSkating == 0.0);
 }
 
-TEST_CASE("eval metrics: a knee bent the other way round is a reverse bend; a fallen pelvis is a collapse", "[eval]") {
+TEST_CASE("eval metrics: a knee bent the other way round is a reverse bend, a fallen pelvis is a collapse", "[eval]") {
   JointTrack clip;
   clip.joints = 3;  // hip, knee, ankle: the clip's knee bends forward (+Z)
   clip.position = {{0, 1, 0}, {0, 0.5, 0.2}, {0, 0, 0}};

@@ -35,7 +35,7 @@ std::string parseBvh(const std::string& text, std::vector<BodySample>& out) {
 }
 }  // namespace
 
-TEST_CASE("xr poses: a trigger of the wrong JSON type is read; a valid flag of the wrong type names its line",
+TEST_CASE("xr poses: a trigger of the wrong JSON type is read, a valid flag of the wrong type names its line",
           "[reliability][xr_poses]") {
   // The runtime reads its pose files with the project's trace reader (tracking::parseTrace): a
   // malformed "valid" is an error naming the line (the runtime then uses its synthetic motion).

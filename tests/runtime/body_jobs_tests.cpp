@@ -236,6 +236,40 @@ TEST_CASE("TrackerTargetsJob maps a known tracker pose to a known avatar-space t
   CHECK(t.weight[at(TrackerId::Hips)] == 0.0);
 }
 
+TEST_CASE("TrackerTargetsJob: an arm scale moves the hands towards the shoulders the head implies, nothing else",
+          "[runtime][jobs]") {
+  const BodyRig rig = rigFor(tracking::TrackerMask::all());
+  const BodyCalibration calibration = BodyCalibration::fromUserHeight(rig, 1.75f);
+  tracking::GuardedSample sample = standingSample();
+  sample.pose[TrackerId::LeftHand].position = {-0.2f, 1.4f, -0.6f};  // reaching forward
+  const BodyTargets plain = targetsOf(rig, calibration, sample);
+  BodyTargets scaled;
+  TrackerTargetsJob job;
+  job.rig = &rig;
+  job.calibration = &calibration;
+  job.sample = &sample;
+  job.armScale = 1.25;  // the user's arms 25 % longer than the avatar's proportions
+  job.targets = &scaled;
+  REQUIRE(job.Run());
+  // The user's shoulder as the head implies it, in avatar space: the scaled hand is on the line
+  // from it to the unscaled hand, at 1 / 1.25 of the distance.
+  const auto dims = tracking::BodyDimensions::fromHeight(float(rig.avatarHeight / calibration.scale));
+  const glm::vec3 s = dims.shoulderFromHead(sample.pose[TrackerId::Head], tracking::Side::Left);
+  const Eigen::Vector3d shoulder = rig.toAvatar(calibration.scale, Eigen::Vector3d(s.x, s.y, s.z));
+  const size_t left = at(TrackerId::LeftHand);
+  CHECK((scaled.point[left] - shoulder).norm() == Approx((plain.point[left] - shoulder).norm() / 1.25).epsilon(1e-6));
+  CHECK((scaled.point[left] - shoulder).normalized().isApprox((plain.point[left] - shoulder).normalized(), 1e-6));
+  for (auto id : {TrackerId::Head, TrackerId::Hips, TrackerId::LeftFoot, TrackerId::RightFoot}) {
+    CHECK((scaled.point[at(id)] - plain.point[at(id)]).norm() < 1e-12);
+  }
+  CHECK(angle(scaled.rotation[left], plain.rotation[left]) < 1e-12);
+  // Outside [0.5, 2]: refused.
+  job.armScale = 3.0;
+  CHECK_FALSE(job.Validate());
+  job.armScale = std::nan("");
+  CHECK_FALSE(job.Validate());
+}
+
 TEST_CASE("TaskTargetsJob: Validate rejects missing pointers, a data of another model and non-finite targets",
           "[runtime][jobs]") {
   const BodyRig rig = rigFor(tracking::TrackerMask::all());
@@ -388,7 +422,7 @@ TEST_CASE("BudgetedSolveJob: Validate, the fixed count, the cold start's four ti
   CHECK((out.iterations == 3 || out.converged));
 }
 
-TEST_CASE("SkeletonPoseJob: Validate rejects a pose of another size; the rest configuration gives the rest pose",
+TEST_CASE("SkeletonPoseJob: Validate rejects a pose of another size, the rest configuration gives the rest pose",
           "[runtime][jobs]") {
   const BodyRig rig = rigFor(tracking::TrackerMask::all());
   ik::Data data(rig.body.model);

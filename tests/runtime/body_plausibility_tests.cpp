@@ -216,7 +216,7 @@ TEST_CASE("no knee or elbow bends backwards over the synthetic motions, three tr
   }
 }
 
-TEST_CASE("limb poles sit below the trackers; joint markers replace them", "[runtime][plausibility]") {
+TEST_CASE("limb poles sit below the trackers, joint markers replace them", "[runtime][plausibility]") {
   auto poles = [](bool markers, bool elbows = true) {
     AvatarBodyOptions o = optionsFor(tracking::TrackerMask::threePoint());
     o.jointMarkers = markers;

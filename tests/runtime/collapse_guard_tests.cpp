@@ -76,7 +76,7 @@ TEST_CASE("collapse guard: each condition, and NaN at once", "[runtime]") {
         }).first == CollapseReason::None);
 }
 
-TEST_CASE("collapse guard: an error that stays high is a stall; one that keeps falling is not", "[runtime]") {
+TEST_CASE("collapse guard: an error that stays high is a stall, one that keeps falling is not", "[runtime]") {
   CollapseGuard stuck, falling;
   int stuckAt = -1;
   for (int i = 0; i < 120; ++i) {
