@@ -193,6 +193,21 @@ void Workspace::sizeLevelScratch(const Model& model) {
       ranges.push_back({lo, hi});
     }
   }
+  basis_span.assign(n, Range{});
+  for (int k = 0; k < eq_rank; ++k) {  // the equality rows' columns (pinned rows add theirs)
+    int lo = 0, hi = n;
+    while (lo < hi && eq_basis(lo, k) == 0.0) ++lo;
+    while (hi > lo && eq_basis(hi - 1, k) == 0.0) --hi;
+    basis_span[k] = Range{lo, hi};
+  }
+  eq_null_span.assign(n, Range{});
+  for (int k = 0; k < n; ++k) {
+    int lo = 0, hi = n;
+    while (lo < hi && eq_nullspace(lo, k) == 0.0) ++lo;
+    while (hi > lo && eq_nullspace(hi - 1, k) == 0.0) --hi;
+    eq_null_span[k] = lo < hi ? Range{lo, hi} : Range{};
+  }
+  null_span = eq_null_span;
   row_mark.assign(n, 0);
   block_begin.assign(levels, 0);
   block_size.assign(levels, 0);

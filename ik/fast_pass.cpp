@@ -39,9 +39,7 @@ void nullspaceProduct(Workspace& w, int r) {
   if (w.null_ranges_dirty || w.null_groups_cols != r) {
     w.null_groups.clear();
     for (int c = 0; c < r; ++c) {
-      int lo = 0, hi = w.n;
-      while (lo < hi && w.nullspace(lo, c) == 0.0) ++lo;
-      while (hi > lo && w.nullspace(hi - 1, c) == 0.0) --hi;
+      const int lo = w.null_span[c].begin, hi = w.null_span[c].end;
       if (!w.null_groups.empty() && w.null_groups.back().row_begin == lo && w.null_groups.back().row_end == hi &&
           w.null_groups.back().col_end == c)
         w.null_groups.back().col_end = c + 1;

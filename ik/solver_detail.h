@@ -121,6 +121,10 @@ struct Workspace {
   std::vector<int> dense_support;            // dense mode: the current level's reduced columns
   std::vector<Range> dense_support_ranges;   // the same as ranges (both reserved to n)
   std::vector<std::vector<Range>> level_ranges;  // each level's support as ranges
+  std::vector<Range> basis_span;  // per column of `basis`: the rows it is non-zero on (active_set.cpp)
+  // Per column of `nullspace` / `eq_nullspace`: the rows it is non-zero on, kept by addActiveRow
+  // for the columns a reflection changes, so that N's column groups need no scan of N.
+  std::vector<Range> null_span, eq_null_span;
   // W's blocks (one per level that added rows): first column, width, the row ranges it is
   // non-zero on (each reserved to n), and whether the current level overlaps it.
   std::vector<int> block_begin, block_size;
