@@ -180,9 +180,8 @@ static ik::Data bentPoseProblem(const ik::Model& model) {
 // One PIK iteration (FK, Jacobians, every clamping pass, q += Δq) of the default avatar's body
 // model, the model the runtime solves every frame: coupled spine (24 vertebrae, 33 equality
 // rows) or uncoupled. The same state each time: targets from a bent pose, solved from rest.
-static void BM_BodyIteration(benchmark::State& state, bool coupled, ik::Path path) {
-  const BodyModel body = defaultBodyModel(coupled);
-  const ik::Model& model = body.model;
+static void BM_BodyIteration(benchmark::State& state, BodySpine spine, ik::Path path) {
+  const ik::Model model = bodyIkModel(spine);
   ik::Data data = bentPoseProblem(model);
   const Eigen::VectorXd start = data.q();
   ik::SolveOptions o;
@@ -199,9 +198,10 @@ static void BM_BodyIteration(benchmark::State& state, bool coupled, ik::Path pat
   state.counters["equalities"] = static_cast<double>(model.equalities.size());
   state.counters["clamp_passes"] = passes / static_cast<double>(state.iterations());
 }
-BENCHMARK_CAPTURE(BM_BodyIteration, default_coupled_fast, true, ik::Path::Fast)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyIteration, default_uncoupled_fast, false, ik::Path::Fast)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyIteration, default_coupled_reference, true, ik::Path::Reference)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIteration, default_coupled_fast, BodySpine::Coupled, ik::Path::Fast)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIteration, default_uncoupled_fast, BodySpine::Uncoupled, ik::Path::Fast)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIteration, default_nospinedofs_fast, BodySpine::NoDofs, ik::Path::Fast)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIteration, default_coupled_reference, BodySpine::Coupled, ik::Path::Reference)->Unit(benchmark::kMicrosecond);
 
 // One frame of VRM secondary motion on the test bust (8 hair springs of 4 joints, 2 colliders,
 // expression look-at, blinking): 90 Hz frames, so 1 or 2 fixed 120 Hz spring steps each.
@@ -266,9 +266,10 @@ BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_nospinedofs_warm, BodySpine::
 // time with the runtime's trust region (0.05), until converged or 8 iterations per frame, from
 // a state settled on the moving targets. Time per frame; iterations per frame and clamping
 // passes per iteration as counters (the per-iteration cost is time / iterations).
-static void BM_BodyFrames(benchmark::State& state, bool coupled, bool warm) {
-  const BodyModel body = defaultBodyModel(coupled);
-  const ik::Model& model = body.model;
+static void BM_BodyFrames(benchmark::State& state, BodySpine spine, bool warm) {
+  // The body without spine dofs has the uncoupled body's tasks, added in the same order.
+  const BodyModel body = defaultBodyModel(spine == BodySpine::Coupled);
+  const ik::Model model = bodyIkModel(spine);
   ik::Data data = bentPoseProblem(model);
   ik::SolveOptions o;
   o.max_iterations = 1;
@@ -299,9 +300,11 @@ static void BM_BodyFrames(benchmark::State& state, bool coupled, bool warm) {
   state.counters["iterations"] = static_cast<double>(iterations) / frames;
   state.counters["clamp_passes"] = static_cast<double>(passes) / std::max(1.0, static_cast<double>(iterations));
 }
-BENCHMARK_CAPTURE(BM_BodyFrames, default_coupled_cold, true, false)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyFrames, default_uncoupled_cold, false, false)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyFrames, default_coupled_warm, true, true)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyFrames, default_uncoupled_warm, false, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyFrames, default_coupled_cold, BodySpine::Coupled, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyFrames, default_uncoupled_cold, BodySpine::Uncoupled, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyFrames, default_coupled_warm, BodySpine::Coupled, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyFrames, default_uncoupled_warm, BodySpine::Uncoupled, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyFrames, default_nospinedofs_cold, BodySpine::NoDofs, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyFrames, default_nospinedofs_warm, BodySpine::NoDofs, true)->Unit(benchmark::kMicrosecond);
 
 BENCHMARK_MAIN();
