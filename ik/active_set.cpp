@@ -13,15 +13,6 @@ namespace {
 // |b - A q| below this is round-off, not drift: Δq0 is skipped.
 constexpr double kDriftTolerance = 1e-14;
 
-// [lo, hi): the rows where x is non-zero (lo = hi = 0 when none is).
-template <typename Vector>
-Workspace::Range nonZeroSpan(const Vector& x) {
-  int lo = 0, hi = static_cast<int>(x.size());
-  while (lo < hi && x(lo) == 0.0) ++lo;
-  while (hi > lo && x(hi - 1) == 0.0) --hi;
-  return lo < hi ? Workspace::Range{lo, hi} : Workspace::Range{0, 0};
-}
-
 // u -= B t over the rows the basis columns with t_k != 0 are non-zero on (the others add 0).
 template <typename T>
 void subtractBasisProduct(const Workspace& w, const T& t, Eigen::VectorXd& u) {
@@ -36,6 +27,13 @@ void subtractBasisProduct(const Workspace& w, const T& t, Eigen::VectorXd& u) {
 }
 
 }  // namespace
+
+Workspace::Range nonZeroSpan(const Eigen::Ref<const Eigen::VectorXd>& x) {
+  int lo = 0, hi = static_cast<int>(x.size());
+  while (lo < hi && x(lo) == 0.0) ++lo;
+  while (hi > lo && x(hi - 1) == 0.0) --hi;
+  return lo < hi ? Workspace::Range{lo, hi} : Workspace::Range{0, 0};
+}
 
 // Back to the equality rows only. The equality part of basis / factor is written once (in the
 // constructor) and pinned rows only append after it; the null-space basis and the reference

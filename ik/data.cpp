@@ -194,19 +194,9 @@ void Workspace::sizeLevelScratch(const Model& model) {
     }
   }
   basis_span.assign(n, Range{});
-  for (int k = 0; k < eq_rank; ++k) {  // the equality rows' columns (pinned rows add theirs)
-    int lo = 0, hi = n;
-    while (lo < hi && eq_basis(lo, k) == 0.0) ++lo;
-    while (hi > lo && eq_basis(hi - 1, k) == 0.0) --hi;
-    basis_span[k] = Range{lo, hi};
-  }
+  for (int k = 0; k < eq_rank; ++k) basis_span[k] = detail::nonZeroSpan(eq_basis.col(k));  // pinned rows add theirs
   eq_null_span.assign(n, Range{});
-  for (int k = 0; k < n; ++k) {
-    int lo = 0, hi = n;
-    while (lo < hi && eq_nullspace(lo, k) == 0.0) ++lo;
-    while (hi > lo && eq_nullspace(hi - 1, k) == 0.0) --hi;
-    eq_null_span[k] = lo < hi ? Range{lo, hi} : Range{};
-  }
+  for (int k = 0; k < n; ++k) eq_null_span[k] = detail::nonZeroSpan(eq_nullspace.col(k));
   null_span = eq_null_span;
   row_mark.assign(n, 0);
   block_begin.assign(levels, 0);
