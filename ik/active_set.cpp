@@ -146,10 +146,10 @@ bool addActiveRow(Workspace& w, double rhs_delta, int single_dof, Path path, dou
       nv.setZero();
       for (int k = 0; k < d; ++k)
         if (v(k) != 0.0) nv.noalias() += v(k) * w.nullspace.col(k);
-      const double scale = 2.0 / vv;
+      nv *= 2.0 / vv;  // (2 / vᵀv) N v, then each changed column less v_k times it
       for (int k = 0; k < d; ++k)
         if (v(k) != 0.0) {
-          w.nullspace.col(k).noalias() -= (scale * v(k)) * nv;
+          w.nullspace.col(k).noalias() -= v(k) * nv;
           w.null_span[k] = nonZeroSpan(w.nullspace.col(k));
         }
     }
