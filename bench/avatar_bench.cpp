@@ -122,6 +122,42 @@ static BodyModel defaultBodyModel(bool coupled) {
   return std::move(buildBodyModel(buildDefaultAvatar(), options)).value();
 }
 
+// The avatar's body model with its spine sites' joints fixed (the uncoupled body without its 72
+// spine dofs; the hips carry the neck and arms rigidly): 45 dofs, the same tasks, levels and limb
+// limits. Whatever a spine model costs, the rest of the body costs at least what this body does,
+// so its iteration bounds any spine model's from below (docs/performance.md).
+static ik::Model bodyWithoutSpineDofs() {
+  const BodyModel body = defaultBodyModel(false);
+  const ik::Model& m = body.model;
+  std::vector<char> spine(m.joints.size(), 0);  // the head's ancestors below the hips
+  for (ik::JointId j = m.joints[static_cast<size_t>(body.head)].desc.parent; j != ik::kNoParent && j != body.hips;
+       j = m.joints[static_cast<size_t>(j)].desc.parent)
+    spine[static_cast<size_t>(j)] = 1;
+  ik::ModelBuilder builder;
+  for (size_t j = 0; j < m.joints.size(); ++j) {
+    ik::JointDesc d = m.joints[j].desc;
+    if (spine[j]) {
+      d.type = ik::JointType::Fixed;
+      d.lower.clear();
+      d.upper.clear();
+      d.neutral.clear();
+    }
+    builder.addJoint(std::move(d));
+  }
+  for (const ik::InequalityRow& row : m.inequalities)
+    if (row.kind == ik::InequalityKind::UserCoupling) builder.addInequality(row);
+  for (const ik::Model::Task& task : m.tasks) builder.addTask(task.desc);
+  return std::move(builder.build()).value();
+}
+
+// The three spines the body-iteration benchmarks compare.
+enum class BodySpine { Coupled, Uncoupled, NoDofs };
+
+static ik::Model bodyIkModel(BodySpine spine) {
+  if (spine == BodySpine::NoDofs) return bodyWithoutSpineDofs();
+  return defaultBodyModel(spine == BodySpine::Coupled).model;
+}
+
 // The body-iteration benchmarks' problem: solver state at rest, every task's target taken from a
 // bent pose (each dof past the root moved by up to 0.15 rad).
 static ik::Data bentPoseProblem(const ik::Model& model) {
@@ -144,9 +180,8 @@ static ik::Data bentPoseProblem(const ik::Model& model) {
 // One PIK iteration (FK, Jacobians, every clamping pass, q += Δq) of the default avatar's body
 // model, the model the runtime solves every frame: coupled spine (24 vertebrae, 33 equality
 // rows) or uncoupled. The same state each time: targets from a bent pose, solved from rest.
-static void BM_BodyIteration(benchmark::State& state, bool coupled, ik::Path path) {
-  const BodyModel body = defaultBodyModel(coupled);
-  const ik::Model& model = body.model;
+static void BM_BodyIteration(benchmark::State& state, BodySpine spine, ik::Path path) {
+  const ik::Model model = bodyIkModel(spine);
   ik::Data data = bentPoseProblem(model);
   const Eigen::VectorXd start = data.q();
   ik::SolveOptions o;
@@ -163,9 +198,10 @@ static void BM_BodyIteration(benchmark::State& state, bool coupled, ik::Path pat
   state.counters["equalities"] = static_cast<double>(model.equalities.size());
   state.counters["clamp_passes"] = passes / static_cast<double>(state.iterations());
 }
-BENCHMARK_CAPTURE(BM_BodyIteration, default_coupled_fast, true, ik::Path::Fast)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyIteration, default_uncoupled_fast, false, ik::Path::Fast)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyIteration, default_coupled_reference, true, ik::Path::Reference)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIteration, default_coupled_fast, BodySpine::Coupled, ik::Path::Fast)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIteration, default_uncoupled_fast, BodySpine::Uncoupled, ik::Path::Fast)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIteration, default_nospinedofs_fast, BodySpine::NoDofs, ik::Path::Fast)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIteration, default_coupled_reference, BodySpine::Coupled, ik::Path::Reference)->Unit(benchmark::kMicrosecond);
 
 // One frame of VRM secondary motion on the test bust (8 hair springs of 4 joints, 2 colliders,
 // expression look-at, blinking): 90 Hz frames, so 1 or 2 fixed 120 Hz spring steps each.
@@ -196,9 +232,8 @@ BENCHMARK(BM_SecondaryMotionBust)->Unit(benchmark::kMicrosecond);
 // (SolveOptions::warm_active_set: it starts from the rows pinned in the iteration before,
 // docs/ik.md). The Data is restored outside the timed region before each timed iteration, in all
 // four variants alike (the pause itself costs a few µs of each figure).
-static void BM_BodyIterationInSolve(benchmark::State& state, bool coupled, bool warm) {
-  const BodyModel body = defaultBodyModel(coupled);
-  const ik::Model& model = body.model;
+static void BM_BodyIterationInSolve(benchmark::State& state, BodySpine spine, bool warm) {
+  const ik::Model model = bodyIkModel(spine);
   ik::Data data = bentPoseProblem(model);
   ik::SolveOptions o;
   o.warm_active_set = warm;
@@ -219,19 +254,22 @@ static void BM_BodyIterationInSolve(benchmark::State& state, bool coupled, bool 
   state.counters["clamp_passes"] = passes / n;
   state.counters["pinned"] = pinned / n;
 }
-BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_coupled_cold, true, false)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_uncoupled_cold, false, false)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_coupled_warm, true, true)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_uncoupled_warm, false, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_coupled_cold, BodySpine::Coupled, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_uncoupled_cold, BodySpine::Uncoupled, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_coupled_warm, BodySpine::Coupled, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_uncoupled_warm, BodySpine::Uncoupled, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_nospinedofs_cold, BodySpine::NoDofs, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyIterationInSolve, default_nospinedofs_warm, BodySpine::NoDofs, true)->Unit(benchmark::kMicrosecond);
 
 // The runtime's per-frame use (runtime/avatar_body_solver.cpp): targets that move every frame
 // (both hands on 10 cm circles, the head bobbing 3 cm), solve() called for one iteration at a
 // time with the runtime's trust region (0.05), until converged or 8 iterations per frame, from
 // a state settled on the moving targets. Time per frame; iterations per frame and clamping
 // passes per iteration as counters (the per-iteration cost is time / iterations).
-static void BM_BodyFrames(benchmark::State& state, bool coupled, bool warm) {
-  const BodyModel body = defaultBodyModel(coupled);
-  const ik::Model& model = body.model;
+static void BM_BodyFrames(benchmark::State& state, BodySpine spine, bool warm) {
+  // The body without spine dofs has the uncoupled body's tasks, added in the same order.
+  const BodyModel body = defaultBodyModel(spine == BodySpine::Coupled);
+  const ik::Model model = bodyIkModel(spine);
   ik::Data data = bentPoseProblem(model);
   ik::SolveOptions o;
   o.max_iterations = 1;
@@ -262,9 +300,11 @@ static void BM_BodyFrames(benchmark::State& state, bool coupled, bool warm) {
   state.counters["iterations"] = static_cast<double>(iterations) / frames;
   state.counters["clamp_passes"] = static_cast<double>(passes) / std::max(1.0, static_cast<double>(iterations));
 }
-BENCHMARK_CAPTURE(BM_BodyFrames, default_coupled_cold, true, false)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyFrames, default_uncoupled_cold, false, false)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyFrames, default_coupled_warm, true, true)->Unit(benchmark::kMicrosecond);
-BENCHMARK_CAPTURE(BM_BodyFrames, default_uncoupled_warm, false, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyFrames, default_coupled_cold, BodySpine::Coupled, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyFrames, default_uncoupled_cold, BodySpine::Uncoupled, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyFrames, default_coupled_warm, BodySpine::Coupled, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyFrames, default_uncoupled_warm, BodySpine::Uncoupled, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyFrames, default_nospinedofs_cold, BodySpine::NoDofs, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_BodyFrames, default_nospinedofs_warm, BodySpine::NoDofs, true)->Unit(benchmark::kMicrosecond);
 
 BENCHMARK_MAIN();

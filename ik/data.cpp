@@ -50,6 +50,16 @@ void Workspace::sizeTaskState(const Model& model) {
   for (size_t j = 0; j < nj; ++j)
     for (int k = 0; k < model.joints[j].dof_count; ++k) dof_joint[model.joints[j].first_dof + k] = static_cast<int>(j);
 
+  dof_task_row_begin.assign(n, rows);
+  dof_task_row_end.assign(n, 0);
+  for (int t = 0; t < task_count; ++t) {
+    const Model::Task& task = model.tasks[t];
+    for (int dof : task_dofs[t]) {
+      dof_task_row_begin[dof] = std::min(dof_task_row_begin[dof], task.first_row);
+      dof_task_row_end[dof] = std::max(dof_task_row_end[dof], task.first_row + task.rows);
+    }
+  }
+  for (int i = 0; i < n; ++i) dof_task_row_begin[i] = std::min(dof_task_row_begin[i], dof_task_row_end[i]);
   jacobian.setZero(rows, n);
   error.setZero(rows);
   residual.resize(task_count);
@@ -183,6 +193,11 @@ void Workspace::sizeLevelScratch(const Model& model) {
       ranges.push_back({lo, hi});
     }
   }
+  basis_span.assign(n, Range{});
+  for (int k = 0; k < eq_rank; ++k) basis_span[k] = detail::nonZeroSpan(eq_basis.col(k));  // pinned rows add theirs
+  eq_null_span.assign(n, Range{});
+  for (int k = 0; k < n; ++k) eq_null_span[k] = detail::nonZeroSpan(eq_nullspace.col(k));
+  null_span = eq_null_span;
   row_mark.assign(n, 0);
   block_begin.assign(levels, 0);
   block_size.assign(levels, 0);

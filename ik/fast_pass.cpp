@@ -39,14 +39,21 @@ void nullspaceProduct(Workspace& w, int r) {
   if (w.null_ranges_dirty || w.null_groups_cols != r) {
     w.null_groups.clear();
     for (int c = 0; c < r; ++c) {
-      int lo = 0, hi = w.n;
-      while (lo < hi && w.nullspace(lo, c) == 0.0) ++lo;
-      while (hi > lo && w.nullspace(hi - 1, c) == 0.0) --hi;
+      const int lo = w.null_span[c].begin, hi = w.null_span[c].end;
       if (!w.null_groups.empty() && w.null_groups.back().row_begin == lo && w.null_groups.back().row_end == hi &&
           w.null_groups.back().col_end == c)
         w.null_groups.back().col_end = c + 1;
       else
-        w.null_groups.push_back({c, c + 1, lo, hi});
+        w.null_groups.push_back({c, c + 1, lo, hi, 0, 0});
+    }
+    for (Workspace::ColumnGroup& g : w.null_groups) {
+      int begin = w.rows, end = 0;
+      for (int d = g.row_begin; d < g.row_end; ++d) {
+        begin = std::min(begin, w.dof_task_row_begin[d]);
+        end = std::max(end, w.dof_task_row_end[d]);
+      }
+      g.task_row_begin = std::min(begin, end);
+      g.task_row_end = end;
     }
     w.null_ranges_dirty = false;
     w.null_groups_cols = r;
@@ -61,8 +68,13 @@ void nullspaceProduct(Workspace& w, int r) {
       dst.col(0) = w.nullspace(g.row_begin, g.col_begin) * w.jacobian.col(g.row_begin);
     else if (rows == 1)
       dst.noalias() = w.jacobian.col(g.row_begin) * w.nullspace.block(g.row_begin, g.col_begin, 1, cols);
-    else
-      dst.noalias() = w.jacobian.middleCols(g.row_begin, rows) * w.nullspace.block(g.row_begin, g.col_begin, rows, cols);
+    else {  // the constrained dofs' block: J's rows that can be non-zero there only
+      const int t0 = g.task_row_begin, tn = g.task_row_end - g.task_row_begin;
+      dst.topRows(t0).setZero();
+      dst.bottomRows(w.rows - g.task_row_end).setZero();
+      dst.middleRows(t0, tn).noalias() =
+          w.jacobian.block(t0, g.row_begin, tn, rows) * w.nullspace.block(g.row_begin, g.col_begin, rows, cols);
+    }
   }
 }
 

@@ -126,16 +126,18 @@ void taskRows(const Model& model, Workspace& w, TaskId t) {
           if (axes & (1 << k)) ep(k) = full(k);
         res.position = ep.norm();
         const Eigen::Vector3d clamped = clampNorm(ep, d.max_position_error);
+        int axisRow[3] = {-1, -1, -1};  // the row of each constrained axis
         for (int k = 0; k < 3; ++k) {
           if (!(axes & (1 << k))) continue;
           w.error(r) = s * clamped(k);
-          for (int dof : w.task_dofs[t]) {
-            const int j = w.dof_joint[dof];
-            const Eigen::Vector3d col =
-                w.dof_linear.col(dof) + w.dof_angular.col(dof).cross(p - w.frames[j].translation());
-            w.jacobian(r, dof) = s * col(k);
-          }
-          ++r;
+          axisRow[k] = r++;
+        }
+        // One column per dof (its point velocity), written to the constrained axes' rows.
+        for (int dof : w.task_dofs[t]) {
+          const int j = w.dof_joint[dof];
+          const Eigen::Vector3d col = w.dof_linear.col(dof) + w.dof_angular.col(dof).cross(p - w.frames[j].translation());
+          for (int k = 0; k < 3; ++k)
+            if (axisRow[k] >= 0) w.jacobian(axisRow[k], dof) = s * col(k);
         }
       }
       if (hasRot) {

@@ -10,6 +10,14 @@ namespace embody::ik::detail {
 
 namespace {
 
+// g -= J_kᵀ x over the dofs level k recruits (J_k is zero on every other column).
+template <typename X>
+void subtractLevelTransposed(Workspace& w, size_t k, const Model::Level& level, const X& x, Eigen::VectorXd& g) {
+  const auto j = w.jacobian.middleRows(level.first_row, level.rows);
+  for (const Workspace::Range& c : w.level_ranges[k])
+    g.segment(c.begin, c.end - c.begin).noalias() -= j.middleCols(c.begin, c.end - c.begin).transpose() * x;
+}
+
 // Fast path. W (row_space, r x s) holds the higher levels' orthonormal rows in reduced
 // coordinates, one block per level j, and each level's J̃_j = J_j N satisfies
 //   J̃_j = L_j U_jᵀ + (J̃_j W_<j) W_<jᵀ        (U_j its block of W, L_j the Cholesky factor of its G,
@@ -29,8 +37,11 @@ void subtractHigherForcesFast(const Model& model, Workspace& w, size_t k, Eigen:
     for (const Workspace::ColumnGroup& c : w.null_groups) {
       if (c.col_begin >= r) break;
       const int rows = c.row_end - c.row_begin, cols = c.col_end - c.col_begin;
-      reduced.segment(c.col_begin, cols).noalias() =
-          w.nullspace.block(c.row_begin, c.col_begin, rows, cols).transpose() * g.segment(c.row_begin, rows);
+      if (rows == 1 && cols == 1)  // a free dof's unit column: no product call for one term
+        reduced(c.col_begin) = w.nullspace(c.row_begin, c.col_begin) * g(c.row_begin);
+      else
+        reduced.segment(c.col_begin, cols).noalias() =
+            w.nullspace.block(c.row_begin, c.col_begin, rows, cols).transpose() * g.segment(c.row_begin, rows);
     }
   }
   const int s = w.block_begin[static_cast<size_t>(blocks - 1)] + w.block_size[static_cast<size_t>(blocks - 1)];
@@ -52,7 +63,7 @@ void subtractHigherForcesFast(const Model& model, Workspace& w, size_t k, Eigen:
       for (int i = 0; i < added; ++i) lambda(w.level_perm[j](i)) = picked(i);
     }
     if (c0 > 0) t.head(c0).noalias() -= w.level_jw[j].leftCols(c0).transpose() * lambda;
-    g.noalias() -= w.jacobian.middleRows(level.first_row, m).transpose() * lambda;
+    subtractLevelTransposed(w, j, level, lambda, g);
   }
 }
 
@@ -92,9 +103,14 @@ void carriedMultipliers(const Model& model, Workspace& w, size_t k, const SolveO
   const auto j = w.jacobian.middleRows(level.first_row, level.rows);
   auto residual = w.warm_residual.head(level.rows);
   residual = w.error.segment(level.first_row, level.rows);
-  residual.noalias() -= j * w.dq;
+  // J_k is zero outside the dofs the level recruits: its products run over those ranges only.
+  const std::vector<Workspace::Range>& dofs = w.level_ranges[k];
+  for (const Workspace::Range& c : dofs)
+    residual.noalias() -= j.middleCols(c.begin, c.end - c.begin) * w.dq.segment(c.begin, c.end - c.begin);
   Eigen::VectorXd& g = w.warm_gradient;
-  g.noalias() = j.transpose() * residual;
+  g.setZero();
+  for (const Workspace::Range& c : dofs)
+    g.segment(c.begin, c.end - c.begin).noalias() = j.middleCols(c.begin, c.end - c.begin).transpose() * residual;
   w.warm_gradient_norm = g.norm();
   if (o.path == Path::Fast)
     subtractHigherForcesFast(model, w, k, g);

@@ -47,6 +47,9 @@ struct Workspace {
   Eigen::Matrix3Xd dof_linear;   // translation dofs: world direction; others 0
   Eigen::Matrix3Xd dof_angular;  // rotation dofs: world angular-velocity direction; others 0
   std::vector<int> dof_joint;    // joint owning each dof
+  // Per dof: the span [begin, end) of task rows whose task recruits it (J is zero elsewhere in
+  // its column; begin = end when no task does).
+  std::vector<int> dof_task_row_begin, dof_task_row_end;
 
   // Task Jacobian (rows x n; recruitment, weights and on/off applied) and errors.
   Eigen::MatrixXd jacobian;
@@ -75,9 +78,11 @@ struct Workspace {
   int null_dim = 0;
   Eigen::MatrixXd eq_nullspace;  // equality-only null space, restored when pinned rows changed it
   bool nullspace_dirty = false;
-  // N's columns grouped by the span of rows they are non-zero on (see nullspaceProduct).
+  // N's columns grouped by the span of rows they are non-zero on (see nullspaceProduct), and the
+  // span of task rows (rows of J) that can be non-zero on those dofs.
   struct ColumnGroup {
     int col_begin = 0, col_end = 0, row_begin = 0, row_end = 0;
+    int task_row_begin = 0, task_row_end = 0;
   };
   std::vector<ColumnGroup> null_groups;     // reserved to n
   std::vector<ColumnGroup> eq_null_groups;  // the same for the equality rows' N (set on first use)
@@ -116,6 +121,10 @@ struct Workspace {
   std::vector<int> dense_support;            // dense mode: the current level's reduced columns
   std::vector<Range> dense_support_ranges;   // the same as ranges (both reserved to n)
   std::vector<std::vector<Range>> level_ranges;  // each level's support as ranges
+  std::vector<Range> basis_span;  // per column of `basis`: the rows it is non-zero on (active_set.cpp)
+  // Per column of `nullspace` / `eq_nullspace`: the rows it is non-zero on, kept by addActiveRow
+  // for the columns a reflection changes, so that N's column groups need no scan of N.
+  std::vector<Range> null_span, eq_null_span;
   // W's blocks (one per level that added rows): first column, width, the row ranges it is
   // non-zero on (each reserved to n), and whether the current level overlaps it.
   std::vector<int> block_begin, block_size;

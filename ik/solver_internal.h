@@ -31,6 +31,8 @@ inline bool sameShape(const Model& model, const Workspace& w) {
 }
 
 // active_set.cpp
+// [begin, end): the entries where x is non-zero ({0, 0} when none is).
+Workspace::Range nonZeroSpan(const Eigen::Ref<const Eigen::VectorXd>& x);
 // Back to the equality rows only (pinned rows dropped; the carried set is untouched).
 void resetActiveSet(Workspace& w, Path path);
 // Δq0 = A⁺ (b_A - A q) from the active rows' right-hand sides in w.active_rhs.

@@ -427,3 +427,60 @@ TEST_CASE("a dependent violated row takes the place of a pinned row that need no
     }
   }
 }
+
+// A body whose coupled (equality) dofs only the middle level recruits: a leg under level 0, a
+// coupled three-joint "spine" under level 1, an arm off the root under level 2. The fast path's
+// J N computes the coupled block over the task rows that recruit it only (the rows above and
+// below are zero in J there); it must equal the dense product, and both paths must agree.
+TEST_CASE("J N over the coupled dofs' task rows equals the dense product; fast equals reference") {
+  std::mt19937 rng(5);
+  ModelBuilder b;
+  const JointId root = b.addJoint("root", kNoParent, JointType::Free);
+  const JointId leg = b.addJoint("leg", root, JointType::Ball, test::randomRest(rng));
+  const JointId foot = b.addJoint("foot", leg, JointType::Fixed, test::randomRest(rng));
+  const JointId s1 = b.addJoint("s1", root, JointType::Ball, test::randomRest(rng));
+  const JointId s2 = b.addJoint("s2", s1, JointType::Ball, test::randomRest(rng));
+  const JointId s3 = b.addJoint("s3", s2, JointType::Ball, test::randomRest(rng));
+  const JointId head = b.addJoint("head", s3, JointType::Fixed, test::randomRest(rng));
+  const JointId arm = b.addJoint("arm", root, JointType::Ball, test::randomRest(rng));
+  const JointId hand = b.addJoint("hand", arm, JointType::Fixed, test::randomRest(rng));
+  for (int c = 0; c < 3; ++c) {
+    b.addEquality("s1-s2", {s1, c}, 1.0, {s2, c}, -0.8);
+    b.addEquality("s2-s3", {s2, c}, 1.0, {s3, c}, -0.6);
+  }
+  int level = 0;
+  for (JointId j : {foot, head, hand}) {
+    TaskDesc t;
+    t.name = "task" + std::to_string(level);
+    t.joint = j;
+    t.level = level++;
+    b.addTask(t);
+  }
+  const Model model = b.build().value();
+  for (int trial = 0; trial < 20; ++trial) {
+    Data data(model);
+    REQUIRE(data.setConfiguration(test::randomInsideLimits(model, rng, 0.5)));
+    randomTargets(model, data, rng, 0.5, 0.1);
+    kinematics(model, data);
+    SolveOptions fast, reference;
+    reference.path = Path::Reference;
+    const Eigen::VectorXd a = priorityPass(model, data, fast);
+    const Workspace& w = data.workspace();
+    REQUIRE_FALSE(w.mask_mode);
+    int blocks = 0;  // the coupled block is computed over level 1's rows (3..5) only
+    for (const Workspace::ColumnGroup& g : w.null_groups)
+      if (g.row_end - g.row_begin > 1) {
+        ++blocks;
+        CHECK(g.task_row_begin == 3);
+        CHECK(g.task_row_end == 6);
+      }
+    CHECK(blocks == 1);
+    const Eigen::MatrixXd dense = w.jacobian * w.nullspace.leftCols(w.null_dim);
+    INFO("trial " << trial);
+    CHECK((w.reduced_jacobian.leftCols(w.null_dim) - dense).cwiseAbs().maxCoeff() < 1e-14);
+    const Eigen::VectorXd c = priorityPass(model, data, reference);
+    CHECK((a - c).cwiseAbs().maxCoeff() < 1e-9);
+    for (int it = 0; it < 5; ++it) iterate(model, data, fast);
+    CHECK(equalityViolation(model, data.q()) < 1e-12);
+  }
+}
