@@ -432,7 +432,7 @@ TEST_CASE("a dependent violated row takes the place of a pinned row that need no
 // coupled three-joint "spine" under level 1, an arm off the root under level 2. The fast path's
 // J N computes the coupled block over the task rows that recruit it only (the rows above and
 // below are zero in J there); it must equal the dense product, and both paths must agree.
-TEST_CASE("J N over the coupled dofs' task rows equals the dense product; fast equals reference") {
+TEST_CASE("J N over the coupled dofs' task rows equals the dense product, fast equals reference") {
   std::mt19937 rng(5);
   ModelBuilder b;
   const JointId root = b.addJoint("root", kNoParent, JointType::Free);
