@@ -172,7 +172,11 @@ struct Session {
   bool running = false;        // between xrBeginSession and xrEndSession
   bool exitRequested = false;  // xrRequestExitSession or EMBODY_XR_FRAMES reached
   bool lost = false;
-  XrTime startTime = 0;  // session creation: trace time 0
+  XrTime startTime = 0;   // session creation: the 90 Hz display grid's anchor
+  // Trace time 0 (EMBODY_XR_POSES): the session's first xrWaitFrame, not its creation, so an
+  // application that takes long to start (pipelines compiled on a loaded machine) still sees a
+  // trace from its beginning; 0 until then (trace time counts from startTime).
+  XrTime traceStart = 0;
   // Vulkan binding (application objects; the runtime only borrows them).
   VkInstance vkInstance = VK_NULL_HANDLE;
   VkPhysicalDevice vkPhysicalDevice = VK_NULL_HANDLE;

@@ -204,6 +204,7 @@ XrResult XRAPI_CALL WaitFrame(XrSession session, const XrFrameWaitInfo* info, Xr
     // period after the next vsync; the call returns at the vsync before it (throttling the
     // application to 90 Hz when it is faster, never blocking when it is slower).
     const XrTime now = nowNs();
+    if (s->traceStart == 0) s->traceStart = now;
     const XrTime since = now - s->startTime;
     XrTime predicted = s->startTime + (since / kFramePeriodNs + 2) * kFramePeriodNs;
     if (predicted <= s->lastPredicted) predicted = s->lastPredicted + kFramePeriodNs;
@@ -498,7 +499,7 @@ void destroySessionChildren(Session& s) {
 }
 
 double traceSeconds(const Session& s, XrTime t) {
-  return static_cast<double>(t - s.startTime) * 1e-9;
+  return static_cast<double>(t - (s.traceStart != 0 ? s.traceStart : s.startTime)) * 1e-9;
 }
 
 Located locateInStage(Session& s, const Space& space, XrTime t) {
