@@ -327,8 +327,8 @@ TEST_CASE("embody xr --body rest leaves the arms hanging: the controllers' neigh
 TEST_CASE("embody xr handles tracking loss mid-run: the hands disappear and come back, nothing breaks",
           "[xr]") {
   // Hands lost between 0.25 s and 0.9 s of trace time (the runtime's trace clock starts at the
-  // session's first xrWaitFrame: from session creation, a start slowed by load once let the
-  // window pass before the frames came, and this test failed 2 runs in ~10 under a loaded ctest).
+  // session's first xrWaitFrame: counted from session creation, a start slowed by load could let
+  // the window pass before the frames came, the likely cause of two failures under a loaded ctest).
   // Instrumented frames take ~130 ms (TSan), so there the loss lasts until 3 s, or it spans one frame.
   const XrRun r = runEmbodyXr("tracking_loss", {"--frames", "90"}, {}, 0.25, kInstrumented ? 3.0 : 0.9);
   INFO(r.process.output.substr(r.process.output.size() > 4000 ? r.process.output.size() - 4000 : 0));
