@@ -5,14 +5,15 @@
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
 #include "app/avatar_arg.h"
 #include "app/args.h"
+#include "app/job_inputs.h"
 #include "app/job_options.h"
 #include "app/motion_export.h"
-#include "app/job_inputs.h"
 #include "avatar/body/calibration.h"
 #include "runtime/frame_stats.h"
 #include "runtime/seated_stats.h"
@@ -46,6 +47,7 @@ struct XrCommand {
   xr::XrLoopOptions loop;
   runtime::SeatOptions seat;
   app::JobOptions shared;  // avatar, bone map, spine, user height, profile, IK budget
+  std::optional<avatar::BodyProfile> profile;  // shared.profile, once read
   std::string bodyMode, avatarArg, recordPath, statsPath;
   double budgetMs = 1.0;
 };
@@ -121,6 +123,7 @@ std::optional<int> parseCommand(app::Argv argv, XrCommand& c) {
     auto profile = avatar::loadProfile(c.shared.profile);
     if (!profile) return app::runtimeError("profile " + c.shared.profile + ": " + profile.error());
     c.shared.userHeight = float(profile->userHeight);
+    c.profile = std::move(profile).value();
   }
   // The standing eye height the placement and the solver take (avatar::kEyeHeightRatio).
   if (c.shared.userHeight > 0.0f) c.loop.placement.userEyeHeight = c.shared.userHeight * float(avatar::kEyeHeightRatio);
@@ -161,9 +164,13 @@ Result<bool> attachBody(const XrCommand& c, const avatar::AvatarAsset& asset, Bo
   // assumes 1.75 m unless --height gives the standing eye height.
   const float eye = c.loop.placement.userEyeHeight;
   bo.body.userHeight = eye > 0.0f ? eye / float(avatar::kEyeHeightRatio) : 0.0f;
-  if (!c.shared.profile.empty()) {
-    auto profile = avatar::loadProfile(c.shared.profile);
-    if (!profile) return Error{"profile " + c.shared.profile + ": " + profile.error()};
+  std::optional<avatar::BodyProfile> profile = c.profile;
+  if (!c.shared.profile.empty() && !profile) {  // not read yet: --user-height was given
+    auto loaded = avatar::loadProfile(c.shared.profile);
+    if (!loaded) return Error{"profile " + c.shared.profile + ": " + loaded.error()};
+    profile = std::move(loaded).value();
+  }
+  if (profile) {
     auto arms = app::profileArmScale(*profile, c.shared.profile, asset, bo.body.userHeight);
     if (!arms) return Error{arms.error()};
     bo.body.armScale = *arms;

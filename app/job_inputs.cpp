@@ -14,7 +14,7 @@ Result<double> profileArmScale(const avatar::BodyProfile& profile, const std::st
   ci.armSpan = profile.armSpan;
   auto onThis = avatar::calibrate(asset, ci);
   if (!onThis) return Error{"profile " + path + ": " + onThis.error()};
-  if (!(onThis->armLengthScale >= 0.5 && onThis->armLengthScale <= 2.0))
+  if (!avatar::plausibleArmScale(onThis->armLengthScale))
     return Error{"profile " + path + ": an arm span of " + std::to_string(profile.armSpan) +
                  " m gives arms outside half to twice this avatar's at the user's height"};
   return onThis->armLengthScale;

@@ -35,7 +35,7 @@ struct AvatarBodyOptions {
   bool pelvisRow = true;
   // The user's arm (shoulder to wrist) over the avatar's scaled to the user's height (from a
   // profile's arm_span_m: avatar::BodyProfile::armLengthScale; 1 = proportional). Hands are placed
-  // relative to the shoulders by 1 / armScale (tracker_targets_job.h). In [0.5, 2].
+  // relative to the shoulders by 1 / armScale (tracker_targets_job.h). avatar::plausibleArmScale.
   double armScale = 1.0;
   // The coupled spine (ik/spine, Raunhardt & Boulic 2008; default) or one uncoupled ball
   // joint per spine site with its vertebrae's summed ranges (the escape hatch).

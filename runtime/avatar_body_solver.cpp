@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "avatar/body/calibration.h"
 #include "avatar/glm_eigen.h"
 #include "runtime/budgeted_solve_job.h"
 #include "runtime/residuals_job.h"
@@ -27,7 +28,7 @@ double angleBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return
 
 Result<std::unique_ptr<AvatarBodySolver>> AvatarBodySolver::create(const avatar::AvatarAsset& avatar,
                                                                    const AvatarBodyOptions& options) {
-  if (!(options.armScale >= 0.5 && options.armScale <= 2.0))
+  if (!avatar::plausibleArmScale(options.armScale))
     return Error{"arm scale " + std::to_string(options.armScale) + " is outside 0.5-2 (user arm span over the avatar's)"};
   std::unique_ptr<AvatarBodySolver> s(new AvatarBodySolver(avatar));
   if (auto st = s->build(options); !st) return Error{st.error()};

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "avatar/body/calibration.h"
 #include "avatar/glm_eigen.h"
 #include "tracking/body_dimensions.h"
 
@@ -19,7 +20,7 @@ bool finite(const glm::quat& q) { return std::isfinite(q.w) && finite(glm::vec3(
 bool TrackerTargetsJob::Validate() const {
   if (!rig || !calibration || !sample || !targets) return false;
   if (!calibration->scaled() || !std::isfinite(calibration->scale) || !std::isfinite(calibration->legRatio)) return false;
-  if (!(armScale >= 0.5 && armScale <= 2.0)) return false;
+  if (!avatar::plausibleArmScale(armScale)) return false;
   for (double h : calibration->heightOffset)
     if (!std::isfinite(h)) return false;
   for (auto id : tracking::kAllTrackers)

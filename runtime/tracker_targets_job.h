@@ -26,7 +26,7 @@ struct TrackerTargetsJob {
   const BodyCalibration* calibration = nullptr;  // scaled()
   const tracking::GuardedSample* sample = nullptr;
   bool pelvisRow = true;  // AvatarBodyOptions::pelvisRow: a tracked pelvis pulls
-  double armScale = 1.0;  // AvatarBodyOptions::armScale, in [0.5, 2]
+  double armScale = 1.0;  // AvatarBodyOptions::armScale (avatar::plausibleArmScale)
   BodyTargets* targets = nullptr;  // out
 
   // Every pointer set, the calibration scaled with finite values, the sample's poses finite.

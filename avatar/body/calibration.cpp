@@ -8,6 +8,8 @@
 #include <tuple>
 
 namespace embody::avatar {
+bool plausibleArmScale(double ratio) { return std::isfinite(ratio) && ratio >= kMinArmScale && ratio <= kMaxArmScale; }
+
 bool plausibleBodyHeight(double metres) {
   return std::isfinite(metres) && metres >= kMinBodyHeight && metres <= kMaxBodyHeight;
 }
