@@ -48,11 +48,13 @@ TEST_CASE("device selection prefers discrete, then integrated, then lavapipe", "
 
 TEST_CASE("a device is created on lavapipe with the 1.3 features", "[gpu][device]") {
   test::TestInstance vk;
-  auto d = engine::Device::create(vk.instance(), "lavapipe");
+  auto d = engine::Device::create(vk.instance(), test::testDeviceSelector());
   REQUIRE(d);
   CHECK((*d)->owned());
-  CHECK((*d)->info().type == VK_PHYSICAL_DEVICE_TYPE_CPU);
-  CHECK_THAT((*d)->driverString(), Catch::Contains("llvmpipe"));
+  if (test::testDeviceSelector() == "lavapipe") {
+    CHECK((*d)->info().type == VK_PHYSICAL_DEVICE_TYPE_CPU);
+    CHECK_THAT((*d)->driverString(), Catch::Contains("llvmpipe"));
+  }
   CHECK(engine::missingRequiredFeatures((*d)->physical()).empty());
   CHECK((*d)->supportsSamples(VK_SAMPLE_COUNT_4_BIT));
 }
@@ -63,7 +65,7 @@ TEST_CASE("a device is created on lavapipe with the 1.3 features", "[gpu][device
 // COLOR_ATTACHMENT_OPTIMAL for xrReleaseSwapchainImage.
 TEST_CASE("an adopted device renders into externally owned images", "[gpu][device][xr]") {
   test::TestInstance vk;
-  const VkPhysicalDevice physical = vk.lavapipe();
+  const VkPhysicalDevice physical = vk.device();
   engine::RequiredDeviceFeatures features;
   const float priority = 1.0f;
   VkDeviceQueueCreateInfo q{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};

@@ -13,7 +13,7 @@
 namespace embody::test {
 
 GpuContext::GpuContext() {
-  auto d = engine::Device::create(vk.instance(), vk.lavapipe());
+  auto d = engine::Device::create(vk.instance(), vk.device());
   if (!d) FAIL("could not create a lavapipe device: " << d.error());
   device = std::move(d).value();
 }

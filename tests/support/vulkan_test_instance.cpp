@@ -1,6 +1,9 @@
 #include "tests/support/vulkan_test_instance.h"
 
 #include <catch2/catch.hpp>
+#include <cstdlib>
+
+#include "engine/device.h"
 
 namespace embody::test {
 
@@ -30,11 +33,16 @@ TestInstance::~TestInstance() {
   expectNoValidationMessages();
 }
 
-VkPhysicalDevice TestInstance::lavapipe() const {
-  for (const auto& d : instance_.physicalDevices())
-    if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU || d.name.find("llvmpipe") != std::string::npos) return d.handle;
-  FAIL("no lavapipe (llvmpipe) device found; install mesa-vulkan-drivers");
-  return VK_NULL_HANDLE;
+std::string testDeviceSelector() {
+  const char* env = std::getenv("EMBODY_TEST_DEVICE");
+  return env && *env ? env : "lavapipe";
+}
+
+VkPhysicalDevice TestInstance::device() const {
+  const auto& devices = instance_.physicalDevices();
+  auto chosen = engine::choosePhysicalDevice(devices, testDeviceSelector());
+  if (!chosen) FAIL(chosen.error() << (testDeviceSelector() == "lavapipe" ? "; install mesa-vulkan-drivers" : ""));
+  return devices[*chosen].handle;
 }
 
 std::vector<std::string> TestInstance::messages() const {

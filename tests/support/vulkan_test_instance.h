@@ -1,6 +1,6 @@
 #pragma once
-// Every Vulkan instance a test creates comes from here: lavapipe (CTest pins the loader to it),
-// the Khronos validation layer required (the test fails if it cannot load), and a messenger
+// Every Vulkan instance a test creates comes from here: lavapipe (the test main pins the loader to
+// it unless VK_DRIVER_FILES / VK_ICD_FILENAMES is set), the Khronos validation layer required (the test fails if it cannot load), and a messenger
 // that records every validation warning or error. Call expectNoValidationMessages() at the end
 // of a test; TestInstance's destructor also fails the test on any message not yet reported.
 #include <mutex>
@@ -10,6 +10,10 @@
 #include "engine/instance.h"
 
 namespace embody::test {
+
+// EMBODY_TEST_DEVICE, a --device selector ("nvidia", "1"), runs the GPU suites on other hardware
+// (docs/renderer.md, "On real hardware"); "lavapipe" when unset. Goldens are lavapipe's.
+std::string testDeviceSelector();
 
 class TestInstance {
  public:
@@ -21,8 +25,9 @@ class TestInstance {
 
   engine::Instance& instance() { return instance_; }
   VkInstance handle() const { return instance_.handle(); }
-  // The lavapipe physical device (REQUIREs that there is one).
-  VkPhysicalDevice lavapipe() const;
+  // The physical device the GPU tests run on (REQUIREs that there is one): lavapipe, or what
+  // testDeviceSelector() names.
+  VkPhysicalDevice device() const;
 
   std::vector<std::string> messages() const;
   // Fails the current test (with the messages) if validation reported anything.
