@@ -433,8 +433,10 @@ class BodyModelBuilder {
         int to = end;
         for (int e : regionEnd)
           if (from < e && to > e) to = e;
-        specs.push_back({sk_.joints[at(sb.joint)].name + (from == sb.firstLevel ? "" : "_" + std::string(vertebralJointName(from))),
-                         std::string(vertebralJointName(from)), std::string(vertebralJointName(to - 1)), true, true});
+        std::string name = sk_.joints[at(sb.joint)].name;
+        if (from != sb.firstLevel) name.append("_").append(vertebralJointName(from));
+        specs.push_back({std::move(name), std::string(vertebralJointName(from)), std::string(vertebralJointName(to - 1)),
+                         true, true});
         from = to;
       }
     }
