@@ -14,7 +14,7 @@ namespace embody::test {
 
 GpuContext::GpuContext() {
   auto d = engine::Device::create(vk.instance(), vk.device());
-  if (!d) FAIL("could not create a lavapipe device: " << d.error());
+  if (!d) FAIL("could not create the test device (" << testDeviceSelector() << "): " << d.error());
   device = std::move(d).value();
 }
 

@@ -38,10 +38,12 @@ std::string testDeviceSelector() {
   return env && *env ? env : "lavapipe";
 }
 
+bool testsOnLavapipe() { return testDeviceSelector() == "lavapipe"; }
+
 VkPhysicalDevice TestInstance::device() const {
   const auto& devices = instance_.physicalDevices();
   auto chosen = engine::choosePhysicalDevice(devices, testDeviceSelector());
-  if (!chosen) FAIL(chosen.error() << (testDeviceSelector() == "lavapipe" ? "; install mesa-vulkan-drivers" : ""));
+  if (!chosen) FAIL(chosen.error() << (testsOnLavapipe() ? "; install mesa-vulkan-drivers" : ""));
   return devices[*chosen].handle;
 }
 

@@ -14,6 +14,8 @@ namespace embody::test {
 // EMBODY_TEST_DEVICE, a --device selector ("nvidia", "1"), runs the GPU suites on other hardware
 // (docs/renderer.md, "On real hardware"); "lavapipe" when unset. Goldens are lavapipe's.
 std::string testDeviceSelector();
+// Whether the GPU tests run on lavapipe (checks that name lavapipe's driver apply only then).
+bool testsOnLavapipe();
 
 class TestInstance {
  public:
