@@ -29,6 +29,7 @@ test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS) $(CTEST_ARGS)
 
 bench: build
+	cmake --build $(BUILD) -j $(JOBS) --target embody_benchmarks
 	@bash scripts/bench.sh $(BUILD)
 
 # ASan + UBSan build of the whole suite; Mesa/LLVM leaks are suppressed (scripts/lsan.supp).
@@ -69,7 +70,8 @@ tsan: deps
 # the gcc replay in `make test` (ctest -R '^fuzz:').
 FUZZ_SECONDS ?= 60
 FUZZ_TARGETS ?= gltf vrm bone_map bvh trace spine profile xr_poses
-fuzz: deps
+fuzz:
+	@bash scripts/install-deps.sh --fuzz
 	CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEMBODY_FUZZ=ON \
 	  -DEMBODY_BUILD_TESTS=OFF -DEMBODY_BUILD_BENCH=OFF $(WERROR)
 	cmake --build build-fuzz -j $(JOBS) --target $(addprefix embody_fuzz_,$(FUZZ_TARGETS))

@@ -1,6 +1,10 @@
 #!/usr/bin/env bash
 # Installs exactly the Debian bookworm packages Embody needs. Idempotent: when everything is
 # present it only checks and returns (well under a second). Uses sudo when not root.
+#   scripts/install-deps.sh          what `make build/test/demo` need
+#   scripts/install-deps.sh --fuzz   that, plus clang and LLVM for `make fuzz` (libFuzzer): a few
+#                                    hundred MB that CI's `make test` does not need (its fuzz smoke
+#                                    is the gcc replay)
 set -euo pipefail
 
 PACKAGES=(
@@ -10,8 +14,12 @@ PACKAGES=(
   libopenxr-dev libopenxr-loader1 libopenxr-utils openxr-layer-corevalidation
   catch2 libglfw3-dev xvfb xauth libbenchmark-dev gnuplot-nox liborocos-kdl-dev
   clang-format
-  clang libclang-rt-14-dev llvm   # make fuzz: libFuzzer + sanitizer runtimes, llvm-symbolizer
 )
+case "${1:-}" in
+  --fuzz) PACKAGES+=(clang libclang-rt-14-dev llvm) ;;  # libFuzzer + sanitizer runtimes, llvm-symbolizer
+  "") ;;
+  *) echo "install-deps: unknown option '$1' (use --fuzz or nothing)" >&2; exit 2 ;;
+esac
 
 if [[ ! -r /etc/os-release ]] || ! grep -qE '^ID=debian' /etc/os-release; then
   echo "install-deps: this script supports Debian bookworm only." >&2
