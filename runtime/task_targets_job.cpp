@@ -1,5 +1,6 @@
 #include "runtime/task_targets_job.h"
 
+#include <algorithm>
 #include <cmath>
 
 
@@ -9,6 +10,42 @@ using tracking::TrackerId;
 using tracking::TrackerStatus;
 
 namespace {
+
+double smoothstep(double x) {
+  const double t = std::clamp(x, 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
+
+// Three-point mode: the trunk a head `drop` metres below its standing height implies, looking
+// `pitchDown` radians below the horizon, with a trunk `trunk` metres from hips to head pivot.
+//   - Looking at the floor (45 -> 80 degrees down) the sinking head is a bend at the hips
+//     (washing, picking something up): that share of the drop becomes a lean a of the trunk that
+//     lowers the head by as much, L (1 - cos a) = share * drop, the legs straight.
+//   - The rest of the drop is a crouch: beyond 0.05 trunk lengths (gait, posture) the trunk leans
+//     0.8 rad per trunk length of it (up to 45 degrees; a squat 0.35 m deep leans it about 24),
+//     the pelvis back over the heels.
+//   - The deeper the crouch the less the pelvis row pulls (`weight`, 1 down to 0 between 0.1 and
+//     0.4 trunk lengths of crouch): where the pelvis goes in a deep squat depends on the person,
+//     and a row that held it cost the squat crossed knees.
+// Measured over the eight eval clips (docs/eval.md); looking down by less than 45 degrees is
+// looking, not bending (a lower onset leant the crouch before a jump, cmu_131_03, 2 cm of head).
+struct InferredTrunk {
+  double lean = 0.0;    // radians, forward about the hips
+  double bend = 0.0;    // the part of it that bends over (looking down)
+  double weight = 1.0;  // of the pelvis row
+};
+InferredTrunk inferTrunk(double drop, double pitchDown, double trunk) {
+  constexpr double kDegree = 3.14159265358979323846 / 180.0;
+  InferredTrunk out;
+  if (!(drop > 0.0) || !(trunk > 0.0) || !std::isfinite(drop) || !std::isfinite(pitchDown)) return out;
+  const double bendShare = smoothstep((pitchDown - 45.0 * kDegree) / (35.0 * kDegree));
+  const double bend = std::acos(std::clamp(1.0 - bendShare * drop / trunk, 0.0, 1.0));
+  out.bend = bend;
+  const double crouch = (1.0 - bendShare) * drop / trunk;  // trunk lengths
+  out.lean = std::min(bend + std::min(0.8 * std::max(0.0, crouch - 0.05), 45.0 * kDegree), 90.0 * kDegree);
+  out.weight = 1.0 - smoothstep((crouch - 0.1) / 0.3);
+  return out;
+}
 
 // TaskTargetsJob::Run()'s steps over one frame's state.
 class TaskWriter {
@@ -81,9 +118,19 @@ void TaskWriter::setInferredLowerBody() {
   const double yaw = headingOf(headTurn, r.up, r.forward);
   const Eigen::Quaterniond heading = yawRotation(yaw, r.up);
   const Eigen::Vector3d headPivot = targets.point[headIndex] - targets.rotation[headIndex] * r.eyeInHead;
-  const Eigen::Vector3d hips = headPivot + heading * r.restHeadToHips;
+  const Eigen::Vector3d look = headTurn * r.forward;
+  const double pitchDown = std::asin(std::clamp(-r.up.dot(look), -1.0, 1.0));
+  const double drop = r.restHeight[headIndex] - (r.up.dot(headPivot) - r.floor);
+  const InferredTrunk trunk = inferTrunk(drop, pitchDown, r.restHeadToHips.norm());
+  const Eigen::Vector3d side = r.up.cross(heading * r.forward).normalized();
+  const Eigen::Quaterniond lean(Eigen::AngleAxisd(trunk.lean, side));
+  const Eigen::Vector3d pelvis = headPivot + lean * (heading * r.restHeadToHips);
   const size_t hipsIndex = size_t(tracking::index(TrackerId::Hips));
-  setPose(r.tasks.hipsPosition, r.tasks.hipsRotation, hips, heading * r.restRotation[hipsIndex], 1.0);
+  setPose(r.tasks.hipsPosition, r.tasks.hipsRotation, pelvis, lean * heading * r.restRotation[hipsIndex], trunk.weight);
+  // The feet step under the pelvis of the bend alone: bent over, they stand behind the head; the
+  // crouch's lean is left out, or a head near the floor looking up (a user lying down) planted
+  // them behind it and stood the body on its head (pelvis 0.79 m up instead of lying).
+  const Eigen::Vector3d hips = headPivot + Eigen::AngleAxisd(trunk.bend, side) * (heading * r.restHeadToHips);
 
   const double time = sample.pose.time;
   if (!planner.initialised()) planner.reset(hips, yaw, time);

@@ -341,6 +341,50 @@ TEST_CASE("TaskTargetsJob, three-point: both feet planted under the pelvis infer
   }
 }
 
+TEST_CASE("TaskTargetsJob, three-point: the pelvis row stands under the head, leans back when bending over, lets go in a squat",
+          "[runtime][jobs]") {
+  const BodyRig rig = rigFor(tracking::TrackerMask::threePoint());
+  REQUIRE(rig.tasks.hipsPosition >= 0);
+  REQUIRE(rig.tasks.hipsRotation >= 0);
+  const size_t head = at(TrackerId::Head);
+  const Eigen::Vector3d forward = rig.forward;  // the head is not turned: the heading is the rest's
+  struct Row {
+    bool enabled;
+    Eigen::Vector3d offset;  // target - head pivot
+  };
+  auto rowFor = [&](float headHeight, float pitchDownDegrees) {
+    tracking::GuardedSample sample = standingSample();
+    sample.pose[TrackerId::Head].position.y = headHeight;
+    sample.pose[TrackerId::Head].orientation = glm::angleAxis(glm::radians(-pitchDownDegrees), glm::vec3(1, 0, 0));
+    TaskState state(rig);
+    state.targets = targetsOf(rig, state.calibration, sample);
+    REQUIRE(state.job(sample).Run());
+    CHECK(state.out.refusedCalls == 0);
+    const Eigen::Vector3d pivot = state.targets.point[head] - state.targets.rotation[head] * rig.eyeInHead;
+    return Row{state.data.enabled(rig.tasks.hipsPosition), state.data.targetPosition(rig.tasks.hipsPosition) - pivot};
+  };
+  // Standing, looking ahead or down at the floor: the rest offset exactly, enabled.
+  for (float pitch : {0.0f, 60.0f}) {
+    const Row standing = rowFor(1.62f, pitch);
+    CHECK(standing.enabled);
+    CHECK((standing.offset - rig.restHeadToHips).norm() < 1e-9);
+  }
+  const double trunk = rig.restHeadToHips.norm();
+  // The head 40 cm lower looking 70 degrees down: bent over at the hips, the pelvis behind the
+  // head and hardly lower than standing (the legs straight).
+  const Row bent = rowFor(1.22f, 70.0f);
+  CHECK(bent.enabled);
+  CHECK(bent.offset.dot(forward) < -0.5 * trunk);
+  CHECK(std::abs(bent.offset.norm() - trunk) < 1e-9);
+  // The same depth looking ahead: a squat, deep enough that the row lets the pelvis go.
+  CHECK_FALSE(rowFor(1.22f, 0.0f).enabled);
+  // A shallow crouch (12 cm): still held, leaning a little forward (the pelvis behind the head).
+  const Row shallow = rowFor(1.50f, 0.0f);
+  CHECK(shallow.enabled);
+  CHECK(shallow.offset.dot(forward) < -0.01);
+  CHECK(shallow.offset.dot(forward) > -0.2 * trunk);
+}
+
 TEST_CASE("TaskTargetsJob, seated: the seat goes under the first tracked head and asks for one settle", "[runtime][jobs]") {
   const BodyRig rig = rigFor(tracking::TrackerMask::threePoint(), true);
   TaskState state(rig);

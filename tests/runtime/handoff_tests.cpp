@@ -184,8 +184,9 @@ TEST_CASE("IK thread between a tracking thread and a render thread: newest whole
 TEST_CASE("task layout: balance first, head, then hands, lower body inferred without feet") {
   const TaskLayout three = taskLayoutFor(tracking::TrackerMask::threePoint());
   CHECK(three.inferLowerBody);
-  CHECK(three.levels() == 5);  // feet, head, hands, orientations, then knee and elbow directions
-  int balance = 0, plants = 0, poles = 0;
+  // feet, head, hands, orientations, the pelvis inferred from the head, then knee and elbow directions
+  CHECK(three.levels() == 6);
+  int balance = 0, plants = 0, poles = 0, inferredHips = 0;
   for (const auto& t : three.tasks) {
     if (t.kind == TaskKind::LimbPole) {
       CHECK(t.priority == three.levels());
@@ -194,12 +195,17 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
     }
     if (t.kind == TaskKind::Balance) balance = t.priority;
     if (t.kind == TaskKind::FootPlant) ++plants;
+    if (t.kind == TaskKind::InferredHips) {
+      inferredHips = t.priority;
+      CHECK(t.weight == 0.1f);  // as soft as a tracked pelvis
+    }
     if (t.kind == TaskKind::TrackerPosition && t.tracker == tracking::TrackerId::Head) CHECK(t.priority == 2);
     if (t.kind == TaskKind::TrackerPosition && t.tracker == tracking::TrackerId::LeftHand) CHECK(t.priority == 3);
     CHECK((t.tracker != tracking::TrackerId::Hips || t.kind == TaskKind::Balance || t.kind == TaskKind::InferredHips));
   }
   CHECK(balance == 1);
   CHECK(plants == 2);
+  CHECK(inferredHips == 5);  // under the orientations, over the poles
   CHECK(poles == 4);  // both knees, both elbows
   const TaskLayout full = taskLayoutFor(tracking::TrackerMask::all());
   CHECK_FALSE(full.inferLowerBody);
