@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/smoothstep.h"
+
 namespace embody::runtime {
 
 namespace {
@@ -148,7 +150,7 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
       continue;
     }
     swinging = true;
-    const double u = phase * phase * (3.0 - 2.0 * phase);
+    const double u = smoothstep(phase);
     foot.position = s.from + u * (s.to - s.from) + up_ * (config_.liftHeight * scale_ * std::sin(kPi * phase));
     foot.yaw = s.fromYaw + u * wrapAngle(s.toYaw - s.fromYaw);
     foot.planted = false;

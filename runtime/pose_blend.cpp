@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <glm/gtc/quaternion.hpp>
 
+#include "core/smoothstep.h"
+
 namespace embody::runtime {
 
 void blendPoses(const avatar::SkeletonPose& from, const avatar::SkeletonPose& to, float t, avatar::SkeletonPose& out) {
@@ -35,7 +37,7 @@ void PoseFade::apply(double time, avatar::SkeletonPose& pose) {
     active_ = false;
     return;
   }
-  const double w = u * u * (3.0 - 2.0 * u);
+  const double w = smoothstep(u);
   blendPoses(from_, pose, float(w), pose);
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/smoothstep.h"
 
 namespace embody::runtime {
 
@@ -10,11 +11,6 @@ using tracking::TrackerId;
 using tracking::TrackerStatus;
 
 namespace {
-
-double smoothstep(double x) {
-  const double t = std::clamp(x, 0.0, 1.0);
-  return t * t * (3.0 - 2.0 * t);
-}
 
 // Three-point mode: the trunk a head `drop` metres below its standing height implies, looking
 // `pitchDown` radians below the horizon, with a trunk `trunk` metres from hips to head pivot.

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <glm/gtc/constants.hpp>
 
+#include "core/smoothstep.h"
+
 namespace embody::tracking {
 
 namespace {
@@ -26,11 +28,6 @@ constexpr std::array<SyntheticMotionInfo, 7> kMotions = {{
 
 glm::quat yawPitch(float yaw, float pitch) {
   return glm::angleAxis(yaw, glm::vec3(0, 1, 0)) * glm::angleAxis(pitch, glm::vec3(1, 0, 0));
-}
-
-float smoothstep(float u) {
-  u = std::clamp(u, 0.0f, 1.0f);
-  return u * u * (3.0f - 2.0f * u);
 }
 
 // Spherical interpolation of two unit directions (they are never antipodal in the scripts).

@@ -9,6 +9,7 @@
 #include <map>
 
 #include "avatar/avatar_loader.h"
+#include "core/smoothstep.h"
 
 namespace embody::avatar {
 namespace {
@@ -23,11 +24,6 @@ Influences lerp(const Influences& a, const Influences& b, float t) {
   for (auto [j, w] : m)
     if (w > 1e-6f) out.emplace_back(j, w);
   return out;
-}
-
-float smoothstep(float e0, float e1, float x) {
-  const float t = std::clamp((x - e0) / (e1 - e0), 0.0f, 1.0f);
-  return t * t * (3.0f - 2.0f * t);
 }
 
 // Piecewise-linear profile through (x, value) points, clamped at the ends.
