@@ -71,11 +71,11 @@ TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
   // them their second-order pull on the levels above, stay small (docs/runtime.md).
   if (trackers.has(TrackerId::Hips)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Hips, 5, 0.1f});
   // 5 in three-point mode: the pelvis inferred from the head (task_targets_job.cpp: under it with
-  // the rest offset, turned with its heading, the trunk leant forward when the head sinks while
-  // looking at the floor), with the tracked pelvis's weight and for the same reasons. Without it
-  // the pelvis went wherever the minimum-norm step left it: over the eight eval clips at 90 Hz,
-  // 4 iterations, MPJPE 9.70 -> 8.81 cm, upper body 5.81 -> 4.52, root 12.1 -> 7.8, collapsed
-  // frames 22 -> 0 (docs/eval.md).
+  // the rest offset, turned with its heading, the trunk leant forward when the head sinks, let go
+  // in a deep squat), with the tracked pelvis's weight and for the same reasons. Without it the
+  // pelvis went wherever the minimum-norm step left it: over the eight eval clips at 90 Hz, 4
+  // iterations, MPJPE 9.70 -> 9.03 cm, upper body 5.81 -> 4.74, root 12.1 -> 7.7, collapsed
+  // frames 22 -> 0; hands 0.58 -> 0.67, head 1.37 -> 1.46 (docs/eval.md).
   if (l.inferLowerBody) l.tasks.push_back({TaskKind::InferredHips, TrackerId::Hips, 5, 0.1f});
   // Lowest: where knees and elbows point (pole_tasks.h). Every tracker leaves each limb a free
   // turn about its root-to-end line; these take only that freedom, so they never pull a tracked

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "core/smoothstep.h"
 
@@ -31,14 +32,13 @@ struct InferredTrunk {
   double weight = 1.0;  // of the pelvis row
 };
 InferredTrunk inferTrunk(double drop, double pitchDown, double trunk) {
-  constexpr double kDegree = 3.14159265358979323846 / 180.0;
+  constexpr double kDegree = std::numbers::pi / 180.0;
   InferredTrunk out;
   if (!(drop > 0.0) || !(trunk > 0.0) || !std::isfinite(drop) || !std::isfinite(pitchDown)) return out;
   const double bendShare = smoothstep((pitchDown - 45.0 * kDegree) / (35.0 * kDegree));
-  const double bend = std::acos(std::clamp(1.0 - bendShare * drop / trunk, 0.0, 1.0));
-  out.bend = bend;
+  out.bend = std::acos(std::clamp(1.0 - bendShare * drop / trunk, 0.0, 1.0));
   const double crouch = (1.0 - bendShare) * drop / trunk;  // trunk lengths
-  out.lean = std::min(bend + std::min(0.8 * std::max(0.0, crouch - 0.05), 45.0 * kDegree), 90.0 * kDegree);
+  out.lean = std::min(out.bend + std::min(0.8 * std::max(0.0, crouch - 0.05), 45.0 * kDegree), 90.0 * kDegree);
   out.weight = 1.0 - smoothstep((crouch - 0.1) / 0.3);
   return out;
 }
@@ -120,13 +120,14 @@ void TaskWriter::setInferredLowerBody() {
   const InferredTrunk trunk = inferTrunk(drop, pitchDown, r.restHeadToHips.norm());
   const Eigen::Vector3d side = r.up.cross(heading * r.forward).normalized();
   const Eigen::Quaterniond lean(Eigen::AngleAxisd(trunk.lean, side));
-  const Eigen::Vector3d pelvis = headPivot + lean * (heading * r.restHeadToHips);
+  const Eigen::Vector3d restOffset = heading * r.restHeadToHips;
+  const Eigen::Vector3d pelvis = headPivot + lean * restOffset;
   const size_t hipsIndex = size_t(tracking::index(TrackerId::Hips));
   setPose(r.tasks.hipsPosition, r.tasks.hipsRotation, pelvis, lean * heading * r.restRotation[hipsIndex], trunk.weight);
   // The feet step under the pelvis of the bend alone: bent over, they stand behind the head; the
   // crouch's lean is left out, or a head near the floor looking up (a user lying down) planted
   // them behind it and stood the body on its head (pelvis 0.79 m up instead of lying).
-  const Eigen::Vector3d hips = headPivot + Eigen::AngleAxisd(trunk.bend, side) * (heading * r.restHeadToHips);
+  const Eigen::Vector3d hips = headPivot + Eigen::AngleAxisd(trunk.bend, side) * restOffset;
 
   const double time = sample.pose.time;
   if (!planner.initialised()) planner.reset(hips, yaw, time);
