@@ -139,6 +139,7 @@ void Workspace::sizeActiveSet() {
   tmp_n.setZero(n);
   tmp_n2.setZero(n);
   y.setZero(n);
+  guard_full.setZero(n);
   previous_task_step.setZero(n);
 }
 
@@ -157,6 +158,10 @@ void Workspace::sizeLevelScratch(const Model& model) {
   for (auto* v : {&level_factor_inv, &level_factor2_inv}) v->reserve(levels);
   level_perm.reserve(levels);
   for (auto* v : {&level_res, &level_coef, &level_tmp}) v->reserve(levels);
+  for (auto* v : {&level_step, &level_previous_step, &warm_saved_level_step}) v->reserve(levels);
+  warm_saved_level_step_set.assign(levels, 0);
+  level_step_set.assign(levels, 0);
+  level_has_previous.assign(levels, 0);
   for (const Model::Level& level : model.levels) {
     const int m = level.rows;
     level_j.emplace_back(Eigen::MatrixXd::Zero(m, n));
@@ -172,6 +177,9 @@ void Workspace::sizeLevelScratch(const Model& model) {
     level_inverse.emplace_back(Eigen::MatrixXd::Zero(m, m));
     level_perm.emplace_back(Eigen::VectorXi::Zero(m));
     level_y.emplace_back(Eigen::VectorXd::Zero(m));
+    level_step.emplace_back(Eigen::VectorXd::Zero(n));
+    level_previous_step.emplace_back(Eigen::VectorXd::Zero(n));
+    warm_saved_level_step.emplace_back(Eigen::VectorXd::Zero(n));
     level_svd.emplace_back(m, n, Eigen::ComputeThinU | Eigen::ComputeThinV);
     max_level_rows = std::max(max_level_rows, m);
     std::vector<char> used(n, 0);
@@ -270,8 +278,7 @@ Status Data::setConfiguration(const Eigen::VectorXd& q) {
     return fail("configuration has " + std::to_string(q.size()) + " entries, the model " + std::to_string(ws_->n));
   if (!q.allFinite()) return fail("configuration is not finite");
   ws_->q = q;
-  ws_->has_previous_step = false;
-  ws_->step_scale = 1.0;
+  detail::forgetSteps(*ws_);
   return Status::success();
 }
 

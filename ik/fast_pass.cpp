@@ -233,6 +233,8 @@ void levelStep(const FastLevel& f, Workspace& w, const SolveOptions& o, const Ei
   }
   if (const double cap = levelStepScale(dz.norm(), o); cap < 1.0) dz *= cap;
   z += dz;
+  w.level_step[k].head(r) = dz;  // for the oscillation guard
+  w.level_step_set[k] = 1;
 }
 
 // Ĵᵀ = J̃ᵀ - W (J̃W)ᵀ into `jt` (r x m), non-zero on the rows marked in w.row_mark; the marked rows
@@ -355,6 +357,8 @@ void fastPass(const Model& model, Workspace& w, const SolveOptions& o) {
   // the end. The compensated errors use J Δq = J Δq0 + J̃ z.
   auto z = w.small_z.head(r);
   z.setZero();
+  w.level_step_reduced = !maskMode;
+  std::fill(w.level_step_set.begin(), w.level_step_set.end(), 0);
   auto jdq0 = w.small_rows.head(w.rows);
   if (w.rank > 0)
     jdq0.noalias() = w.jacobian * w.dq0;

@@ -10,6 +10,8 @@ namespace embody::ik::detail {
 void referencePass(const Model& model, Workspace& w, const SolveOptions& o) {
   w.dq = w.dq0;
   w.projector = w.projector0;
+  w.level_step_reduced = false;
+  std::fill(w.level_step_set.begin(), w.level_step_set.end(), 0);
   for (size_t k = 0; k < model.levels.size(); ++k) {
     const Model::Level& level = model.levels[k];
     if (!levelActive(level, w)) continue;
@@ -37,7 +39,10 @@ void referencePass(const Model& model, Workspace& w, const SolveOptions& o) {
       coef(i) = kept && denom > 0 ? coef(i) * sigma / denom : 0.0;
     }
     if (const double cap = levelStepScale(coef.head(p).norm(), o); cap < 1.0) coef.head(p) *= cap;  // |V c| = |c|
-    w.dq.noalias() += svd.matrixV() * coef.head(p);
+    Eigen::VectorXd& contribution = w.level_step[k];
+    contribution.noalias() = svd.matrixV() * coef.head(p);
+    w.level_step_set[k] = 1;
+    w.dq += contribution;
     for (int i = 0; i < p; ++i)
       if (sv(i) > o.rank_tolerance) w.projector.noalias() -= svd.matrixV().col(i) * svd.matrixV().col(i).transpose();
   }

@@ -90,8 +90,16 @@ struct Workspace {
   int null_groups_cols = -1;
 
   Eigen::VectorXd dq0, dq, tmp_n, tmp_n2, y;
-  // Oscillation guard: the task part of the previous step and the current step scale.
-  Eigen::VectorXd previous_task_step;
+  // Oscillation guard (iteration.cpp): each level's contribution to the last pass's Δq (in the
+  // pass's coordinates: n for the reference path, z for the fast path; `level_step_set` says
+  // which levels took one); per level the previous iteration's contribution in joint space and
+  // whether there is one; the task part of the previous step and the current step scale.
+  std::vector<Eigen::VectorXd> level_step;
+  std::vector<char> level_step_set;
+  bool level_step_reduced = false;  // level_step holds z (fast path, dense mode): Δq = Δq0 + N z
+  std::vector<Eigen::VectorXd> level_previous_step;
+  std::vector<char> level_has_previous;
+  Eigen::VectorXd previous_task_step, guard_full;
   double step_scale = 1.0;
   bool has_previous_step = false;
 
@@ -173,6 +181,8 @@ struct Workspace {
   // iteration of the failed release (held rows are not released again until the multiplier
   // doubles or kRetryAfter iterations have passed; warm_active_set.cpp).
   Eigen::VectorXd warm_saved_dq, warm_saved_dq0;  // n
+  std::vector<Eigen::VectorXd> warm_saved_level_step;  // the same step's level contributions, joint space
+  std::vector<char> warm_saved_level_step_set;
   std::vector<int> warm_released_rows;            // reserved to the inequality count
   std::vector<double> warm_deciding;              // per carried row: the deciding multiplier
   std::vector<char> warm_undecided;               // per carried row (scratch)

@@ -90,5 +90,11 @@ void clearCarriedActiveSet(Workspace& w);
 // The iteration after kinematics(): clamping loop, oscillation guard, q += Δq. False (q
 // unchanged) if the step came out non-finite.
 bool step(const Model& model, Workspace& w, const SolveOptions& o);
+// The last pass's level contributions (the oscillation guard's input), kept in joint space with
+// the step they made (warm_saved_dq) and put back when that step is.
+void saveLevelSteps(Workspace& w);
+void restoreLevelSteps(Workspace& w);
+// Forgets the oscillation guard's history (every level back to full steps): a new configuration.
+void forgetSteps(Workspace& w);
 
 }  // namespace embody::ik::detail

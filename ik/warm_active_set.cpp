@@ -161,6 +161,7 @@ bool releaseCarriedRows(const Model& model, Workspace& w, const SolveOptions& o)
   w.warm_one_at_a_time = false;
   w.warm_saved_dq = w.dq;  // the step with every carried row kept, should the release be undone
   w.warm_saved_dq0 = w.dq0;
+  saveLevelSteps(w);
   w.warm_released_rows.clear();
   std::vector<int>& carried = w.carried;
   carried = w.report.active_clamps;  // the carried rows in basis order (no allocation)
@@ -212,6 +213,7 @@ bool confirmRelease(const Model& model, Workspace& w, const SolveOptions& o) {
     w.carried_count = static_cast<int>(w.report.active_clamps.size());
     w.dq = w.warm_saved_dq;
     w.dq0 = w.warm_saved_dq0;
+    restoreLevelSteps(w);
     return false;
   }
   w.warm_one_at_a_time = false;

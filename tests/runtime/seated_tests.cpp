@@ -321,10 +321,11 @@ TEST_CASE("seated: synthetic:seated through the IK stage sits, reaches and sways
   const runtime::StatsSummary s = rec.summary();
   INFO(j.dump() << " head p95 " << s.headErrorP95 << " hands p95 " << s.handErrorP95);
   CHECK(s.nonFiniteFrames == 0);
-  // Measured 20.0 / 18.4 mm at 30 Hz (One Euro position beta 40; 19.6 / 18.3 with beta 15), the
-  // same with 100 or 300 iterations a frame: the sway's extremes, not convergence.
-  CHECK(s.headErrorP95 < 0.025);
-  CHECK(s.handErrorP95 < 0.025);
+  // Measured 7.1 / 9.5 mm at 30 Hz. With one oscillation-guard scale for the whole task part of
+  // the step (until 2026-11-26) 20.0 / 18.4 mm, the same with 100 or 300 iterations a frame: a
+  // cycle in the lower levels at the sway's extremes held the head and hands back (docs/ik.md).
+  CHECK(s.headErrorP95 < 0.012);
+  CHECK(s.handErrorP95 < 0.012);
   CHECK(j["seated"]["hip_joint_drift_max_m"].get<double>() < 0.01);
   CHECK(j["seated"]["ankle_drift_max_m"].get<double>() < 0.003);
   CHECK(j["seated"]["sole_height_m"][0].get<double>() > -0.01);
