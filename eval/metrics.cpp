@@ -139,8 +139,12 @@ Metrics score(const JointTrack& solved, const JointTrack& clip, const ScoredSkel
       velocity += glm::length(vs - vc), ++velocityCount;
     }
   m.mpjve = velocityCount ? velocity / double(velocityCount) : 0.0;
-  m.jitter = differenceNorm(solved, sk.groups[kAll], fps, 3);
-  m.clipJitter = differenceNorm(clip, sk.groups[kAll], fps, 3);
+  for (int g = 0; g < kGroupCount; ++g) {
+    m.groupJitter[size_t(g)] = differenceNorm(solved, sk.groups[size_t(g)], fps, 3);
+    m.clipGroupJitter[size_t(g)] = differenceNorm(clip, sk.groups[size_t(g)], fps, 3);
+  }
+  m.jitter = m.groupJitter[kAll];
+  m.clipJitter = m.clipGroupJitter[kAll];
 
   double skate = 0.0, clipSkate = 0.0;
   for (int f = 1; f < frames; ++f)

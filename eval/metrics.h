@@ -8,7 +8,9 @@
 // - MPJRE: mean GEODESIC angle between world joint rotations, 2 acos |<q_s, q_c>| (not
 //   AvatarPoser's mean absolute axis-angle component).
 // - MPJVE: mean norm of the joint velocity difference (backward differences × fps).
-// - Jitter: mean norm of the third backward difference × fps³ (solution and clip).
+// - Jitter: mean norm of the third backward difference × fps³ (solution and clip), over every
+//   scored joint and per group (which part of the body shakes: a root alternating from frame to
+//   frame shows in the root's figure, not only diluted in the mean).
 // - Foot skating: mean horizontal speed of a solved foot over the frames where the clip's foot
 //   is in contact (its sole point within 5 cm of the floor, y = 0, and slower than 20 cm/s).
 // - Reverse bends: frames where a solved knee or elbow, bent by more than 15°, bends the other
@@ -67,7 +69,8 @@ struct Metrics {
   std::array<GroupError, kGroupCount> mpjpe{};
   double mpjreDegrees = 0.0;
   double mpjve = 0.0;                                // m/s
-  double jitter = 0.0, clipJitter = 0.0;             // m/s³
+  double jitter = 0.0, clipJitter = 0.0;             // m/s³, every scored joint (= groupJitter[kAll])
+  std::array<double, kGroupCount> groupJitter{}, clipGroupJitter{};  // m/s³ per group (0 for an empty one)
   double footSkating = 0.0, clipFootSkating = 0.0;   // m/s, over contact frames
   int contactFrames = 0;
   int kneeReverseFrames = 0, elbowReverseFrames = 0;

@@ -22,6 +22,9 @@ nlohmann::json metricsJson(const MethodRun& r) {
   j["mpjve_cm_s"] = cm(m.mpjve);
   j["jitter_m_s3"] = m.jitter;
   j["clip_jitter_m_s3"] = m.clipJitter;
+  for (int g = 0; g < kGroupCount; ++g)
+    j["jitter_by_group_m_s3"][groupName(Group(g))] = {{"solution", m.groupJitter[size_t(g)]},
+                                                      {"clip", m.clipGroupJitter[size_t(g)]}};
   j["foot_skating_cm_s"] = cm(m.footSkating);
   j["clip_foot_skating_cm_s"] = cm(m.clipFootSkating);
   j["contact_frames"] = m.contactFrames;

@@ -87,6 +87,24 @@ TEST_CASE("eval metrics: jitter of a cubic is its third derivative", "[eval]") {
   }
 }
 
+TEST_CASE("eval metrics: jitter per group finds the joint that shakes", "[eval]") {
+  // The solution's root alternates +-d from frame to frame (a period-2 cycle); the rest is still.
+  // Its third difference is d (1 + 3 + 3 + 1) = 8 d every frame: root jitter 8 d fps^3, hands 0,
+  // the mean over the three joints 8 d fps^3 / 3; the clip's is 0 everywhere.
+  const double fps = 90.0, d = 0.001;
+  const JointTrack clip = chain(12);
+  JointTrack solved = clip;
+  for (int f = 0; f < 12; ++f) solved.position[size_t(f) * 3].x = f % 2 == 0 ? d : -d;
+  const Metrics m = score(solved, clip, chainSkeleton(), fps);
+  const double root = 8.0 * d * fps * fps * fps;
+  CHECK(m.groupJitter[kRoot] == Approx(root));
+  CHECK(m.groupJitter[kHands] == 0.0);
+  CHECK(m.groupJitter[kFeet] == 0.0);  // an empty group
+  CHECK(m.groupJitter[kAll] == Approx(root / 3.0));
+  CHECK(m.jitter == m.groupJitter[kAll]);
+  for (int g = 0; g < kGroupCount; ++g) CHECK(m.clipGroupJitter[size_t(g)] == 0.0);
+}
+
 TEST_CASE("eval metrics: a solved foot sliding while the clip's is planted", "[eval]") {
   // Joint 0 = ankle at 3 cm (in contact), joint 1 a toe on the floor; the solution slides 10 cm/s.
   JointTrack clip;
