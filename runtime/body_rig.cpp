@@ -329,7 +329,15 @@ void RigBuilder::addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks) {
 
 void RigBuilder::useSameBody(const AvatarBodyOptions::SameBody& same) {
   // (the calibration's scale is 1: BodyCalibration::sameBody)
+  // The floor is the tracking space's, y = 0, where the clip stands (tracking/bvh_avatar.h), not
+  // the rest mesh's lowest point (a capsule's radius under the lowest joint): the rest heights
+  // are measured from it too, so a head where the clip's stands is at its rest height (no drop,
+  // no crouch) and the planted ankles are where the clip's stand.
+  const double restFloor = r.floor;  // the heights were measured from it until now
+  for (double& h : r.restHeight) h += restFloor;
+  r.avatarEyeHeight += restFloor;
   r.floor = 0.0;
+  r.legs.floor = 0.0;
   r.fromTracking = Eigen::Quaterniond::Identity();
   const size_t head = size_t(tracking::index(TrackerId::Head));
   r.eyeInHead = r.restRotation[head].conjugate() * same.eyeOffset;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 
 #include "avatar/avatar_loader.h"
 #include "avatar/procedural/capsule_mesh.h"
@@ -11,6 +13,8 @@ namespace embody::tracking {
 namespace {
 
 using avatar::BvhGlobal;
+
+constexpr double kMaxRestLift = 0.15;  // metres
 using avatar::HumanBone;
 
 // The clip's joints at one file frame, in tracking space.
@@ -43,11 +47,43 @@ Status checkStanding(const avatar::AvatarAsset& asset) {
   return Status::success();
 }
 
+// How high the clip's ankles stand: the lower ankle's height over the trace's frames, at the
+// 5th percentile (its standing frames, as the floor's own estimate, bvh_source.cpp). NaN without
+// both feet.
+double standingAnkleHeight(const Trace& trace) {
+  std::vector<double> lower;
+  lower.reserve(trace.samples.size());
+  if (trace.trackers.has(TrackerId::LeftFoot) && trace.trackers.has(TrackerId::RightFoot))
+    for (const PoseSample& s : trace.samples)
+      if (s[TrackerId::LeftFoot].valid && s[TrackerId::RightFoot].valid)
+        lower.push_back(std::min(s[TrackerId::LeftFoot].position.y, s[TrackerId::RightFoot].position.y));
+  if (lower.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto k = lower.begin() + std::ptrdiff_t(lower.size() / 20);
+  std::nth_element(lower.begin(), k, lower.end());
+  return *k;
+}
+
+// How far above the floor the rest pose stands (tracking/bvh_avatar.h): its lower ankle at the
+// height the clip's ankles stand at (`standingAnkle`), where the body solver plants an ankle.
+// Standing the rest's lowest joint on the floor instead trusts the clip's lowest joint to be the
+// sole, and it is not: cgspeed's toe end sites hang 2.8 cm under the ankle at rest but 4-9 cm in
+// the motion, so `cmu_131_02`'s ankles stand 10.2 cm above the floor and the rest's 2.8; a
+// three-point body planted its feet 7 cm low and bent its trunk to make up the eyes' height
+// (docs/eval.md, session 10). 0 without feet, or when the two differ by more than 15 cm.
+double restLift(const std::vector<BvhGlobal>& rest, const BvhMapping& m, double lowest, double standingAnkle) {
+  const int left = m.joint[size_t(index(TrackerId::LeftFoot))], right = m.joint[size_t(index(TrackerId::RightFoot))];
+  if (left < 0 || right < 0 || !std::isfinite(standingAnkle)) return 0.0;
+  const double ankle = std::min((m.toXr * rest[size_t(left)].position * m.scale).y,
+                                (m.toXr * rest[size_t(right)].position * m.scale).y) - lowest;
+  const double lift = standingAnkle - ankle;
+  return std::abs(lift) <= kMaxRestLift ? lift : 0.0;
+}
+
 // The avatar from the clip's joints with the rest pose of `frame` (empty: every channel zero):
-// rotations and offsets turned into tracking axes, standing on the floor over the origin (the rest
-// pose's lowest joint at y = 0), a capsule per bone, mapped, and checked to be a standing body.
-Status buildSkeleton(const avatar::BvhClip& clip, const BvhMapping& m, std::span<const float> frame,
-                     avatar::AvatarAsset& asset) {
+// rotations and offsets turned into tracking axes, standing over the origin with its ankles at
+// `standingAnkle` (restLift), a capsule per bone, mapped, and checked to be a standing body.
+Status buildSkeleton(const avatar::BvhClip& clip, const BvhMapping& m, std::span<const float> frame, double standingAnkle,
+                     avatar::AvatarAsset& asset, double& lift) {
   asset = avatar::AvatarAsset();
   asset.format = avatar::AvatarFormat::Procedural;
   std::vector<BvhGlobal> rest;
@@ -55,6 +91,8 @@ Status buildSkeleton(const avatar::BvhClip& clip, const BvhMapping& m, std::span
   const glm::dquat q = glm::quat_cast(m.toXr);
   double lowest = 1e300;
   for (const auto& g : rest) lowest = std::min(lowest, (m.toXr * g.position * m.scale).y);
+  lift = restLift(rest, m, lowest, standingAnkle);
+  lowest -= lift;
   for (size_t j = 0; j < clip.joints.size(); ++j) {
     const avatar::BvhJoint& b = clip.joints[j];
     avatar::Joint joint;
@@ -100,10 +138,11 @@ Result<BvhAvatar> buildBvhAvatar(avatar::BvhClip clip, const BvhTrackerOptions& 
   // The skeleton's rest pose: the zero-channel pose when it is a standing body (CMU, most tools),
   // else the clip's first frame (CC_Base exports point the legs up at zero channels; their first
   // frame is the performer standing or a T-pose). A clip standing in neither is refused.
-  Status built = buildSkeleton(clip, m, {}, out.asset);
+  const double standingAnkle = standingAnkleHeight(*trace);
+  Status built = buildSkeleton(clip, m, {}, standingAnkle, out.asset, out.restLift);
   if (!built && clip.frameCount > 0) {
     const std::string zeroChannels = built.error();
-    built = buildSkeleton(clip, m, clip.frame(0), out.asset);
+    built = buildSkeleton(clip, m, clip.frame(0), standingAnkle, out.asset, out.restLift);
     if (!built)
       return Error{"the clip cannot be an avatar: its zero-channel pose is " + zeroChannels + ", its first frame is " +
                    built.error()};
@@ -111,6 +150,12 @@ Result<BvhAvatar> buildBvhAvatar(avatar::BvhClip clip, const BvhTrackerOptions& 
     turnReferences(clip, clip.frame(0), out.mapping);
   }
   if (!built) return Error{"the clip cannot be an avatar: " + built.error()};
+  if (std::abs(out.restLift) >= 0.005) {
+    char note[160];
+    std::snprintf(note, sizeof note, "rest pose %s %.1f cm: its ankles stand where the clip's do",
+                  out.restLift > 0 ? "lifted" : "lowered", 100.0 * std::abs(out.restLift));
+    out.mapping.notes.push_back(note);
+  }
   out.trace = std::move(trace).value();
   out.clip = std::move(clip);
   return out;

@@ -2,8 +2,8 @@
 // Any BVH clip as an avatar (`--avatar CLIP.bvh`, `embody eval`): the skeleton is the clip's
 // hierarchy (End Sites included, named "<parent>_End"; skeleton joint i = clip joint i), the
 // rest pose its offsets with every channel zero, in tracking space as the clip's trackers are
-// (tracking/bvh_source.h: metres, +Y up, facing -Z; the rest pose stands on the floor, y = 0, over
-// the origin), mapped to the humanoid like any avatar (names, else topology), with a
+// (tracking/bvh_source.h: metres, +Y up, facing -Z; the rest pose stands over the origin with its
+// ankles as high above the floor, y = 0, as the clip's stand: `restLift`), mapped to the humanoid like any avatar (names, else topology), with a
 // generated mesh: one capsule per bone, skinned to the bone's joint, so it renders.
 //
 // Because the avatar and the trackers share one space and one scale, the clip's own joints can
@@ -27,6 +27,9 @@ struct BvhAvatar {
   // The skeleton's rest pose is the clip's first frame: its zero-channel pose is not a standing
   // body (CC_Base exports). mapping.reference and eyeOffset are then at that frame too.
   bool restFromFirstFrame = false;
+  // Metres the rest pose stands above (negative: below) its lowest joint on the floor, so that its
+  // ankles are as high as the clip's standing ankles (bvh_avatar.cpp: restLift).
+  double restLift = 0.0;
 };
 
 // Fails (one line) when the clip has no frames, or neither its zero-channel pose nor its first

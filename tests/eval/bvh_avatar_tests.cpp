@@ -1,7 +1,9 @@
 // A BVH clip as an avatar, the clip's joints resampled, and solved motion written back onto the
 // clip's hierarchy (tracking/bvh_avatar.h, tracking/bvh_export.h, avatar/bvh/bvh_writer.h).
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <numbers>
 
 #include "avatar/bvh/bvh_writer.h"
 #include "test_paths.h"
@@ -277,6 +279,39 @@ TEST_CASE("BVH avatar: the clip's skeleton in tracking space, mapped, with a cap
   CHECK(g[size_t(head)][3].y - g[size_t(foot)][3].y == Approx(155.0 * a->mapping.scale).margin(1e-4));
   // Tracking space faces -Z with +X to the right: the left hand lies at -X.
   CHECK(g[size_t(a->clip.find("LeftHand"))][3].x < g[size_t(a->clip.find("RightHand"))][3].x);
+}
+
+TEST_CASE("BVH avatar: the rest pose stands its ankles as high as the clip's stand", "[eval][bvh]") {
+  // A clip standing still with both feet pitched 30 degrees toes-down: its end sites (0, -5, 12)
+  // under the ankles drop to -5 cos 30 - 12 sin 30 = -10.33 units, so the clip's floor (its lowest
+  // points) lies 10.33 units under the ankles, where the rest pose's lowest joints lie 5 under
+  // them. Stood on its lowest joint, the rest would plant the ankles 5.33 units too low.
+  avatar::BvhClip still = clip();
+  const size_t n = size_t(still.channelCount);
+  for (size_t f = 1; f < still.frameCount; ++f)
+    std::copy_n(still.values.begin(), n, still.values.begin() + std::ptrdiff_t(f * n));
+  using C = avatar::BvhChannel;
+  for (size_t f = 0; f < still.frameCount; ++f)
+    for (const char* foot : {"LeftFoot", "RightFoot"}) set(still, f, foot, C::Xrotation, 30.0f);
+  auto a = tracking::buildBvhAvatar(still, {});
+  REQUIRE(a);
+  const double drop = 5.0 * std::cos(std::numbers::pi / 6) + 12.0 * std::sin(std::numbers::pi / 6) - 5.0;  // 5.33 units
+  CHECK(a->restLift == Approx(drop * a->mapping.scale).margin(1e-5));
+  std::vector<glm::mat4> g;
+  avatar::computeGlobals(a->asset.skeleton, avatar::SkeletonPose::rest(a->asset.skeleton), g);
+  const double restAnkle = g[size_t(a->clip.find("LeftFoot"))][3].y;
+  const double clipAnkle = a->trace.samples[0][tracking::TrackerId::LeftFoot].position.y;
+  CHECK(restAnkle == Approx(clipAnkle).margin(1e-5));
+  CHECK(a->trace.samples[0][tracking::TrackerId::RightFoot].position.y == Approx(clipAnkle).margin(1e-5));
+  CHECK(std::find_if(a->mapping.notes.begin(), a->mapping.notes.end(),
+                     [](const std::string& s) { return s.rfind("rest pose lifted", 0) == 0; }) != a->mapping.notes.end());
+  // Feet as at rest: the rest's lowest joints on the floor, as before.
+  avatar::BvhClip flat = still;
+  for (size_t f = 0; f < flat.frameCount; ++f)
+    for (const char* foot : {"LeftFoot", "RightFoot"}) set(flat, f, foot, C::Xrotation, 0.0f);
+  auto b = tracking::buildBvhAvatar(flat, {});
+  REQUIRE(b);
+  CHECK(b->restLift == Approx(0.0).margin(1e-6));
 }
 
 TEST_CASE("BVH avatar: a clip that is not a standing body is refused with one line", "[eval][bvh]") {
