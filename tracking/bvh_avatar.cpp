@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 
 #include "avatar/avatar_loader.h"
+#include "core/percentile.h"
 #include "avatar/procedural/capsule_mesh.h"
 
 namespace embody::tracking {
@@ -13,9 +13,9 @@ namespace embody::tracking {
 namespace {
 
 using avatar::BvhGlobal;
+using avatar::HumanBone;
 
 constexpr double kMaxRestLift = 0.15;  // metres
-using avatar::HumanBone;
 
 // The clip's joints at one file frame, in tracking space.
 void jointsAtFrame(const avatar::BvhClip& clip, const BvhMapping& m, size_t frame, std::vector<BvhGlobal>& out) {
@@ -48,8 +48,8 @@ Status checkStanding(const avatar::AvatarAsset& asset) {
 }
 
 // How high the clip's ankles stand: the lower ankle's height over the trace's frames, at the
-// 5th percentile (its standing frames, as the floor's own estimate, bvh_source.cpp). NaN without
-// both feet.
+// floor's percentile (its standing frames, as the floor's own estimate, bvh_source.cpp). NaN
+// without both feet.
 double standingAnkleHeight(const Trace& trace) {
   std::vector<double> lower;
   lower.reserve(trace.samples.size());
@@ -57,10 +57,7 @@ double standingAnkleHeight(const Trace& trace) {
     for (const PoseSample& s : trace.samples)
       if (s[TrackerId::LeftFoot].valid && s[TrackerId::RightFoot].valid)
         lower.push_back(std::min(s[TrackerId::LeftFoot].position.y, s[TrackerId::RightFoot].position.y));
-  if (lower.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const auto k = lower.begin() + std::ptrdiff_t(lower.size() / 20);
-  std::nth_element(lower.begin(), k, lower.end());
-  return *k;
+  return percentileByRank(lower, kFloorPercentile);  // NaN for none
 }
 
 // How far above the floor the rest pose stands (tracking/bvh_avatar.h): its lower ankle at the

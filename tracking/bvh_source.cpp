@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/percentile.h"
 #include "tracking/body_dimensions.h"
 
 namespace embody::tracking {
@@ -103,10 +104,7 @@ References references(const BvhClip& clip, const BvhMapping& m) {
 // Robust to outliers in up to 1 frame in 20; a clip standing on the floor in fewer frames (a jump
 // sequence) is still placed on the lowest of the frames it stands in.
 double floorHeight(std::vector<double>& lowestPerFrame) {
-  if (lowestPerFrame.empty()) return 0.0;
-  const auto k = lowestPerFrame.begin() + std::ptrdiff_t(lowestPerFrame.size() / 20);
-  std::nth_element(lowestPerFrame.begin(), k, lowestPerFrame.end());
-  return *k;
+  return lowestPerFrame.empty() ? 0.0 : percentileByRank(lowestPerFrame, kFloorPercentile);
 }
 
 // Every motion frame's trackers (times from 0 at frame 0), and the floor (floorHeight).

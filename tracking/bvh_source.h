@@ -20,6 +20,10 @@
 
 namespace embody::tracking {
 
+// The rank over a clip's frames at which its floor (each frame's lowest point) and its standing
+// ankle height (tracking/bvh_avatar.h) are read: low, yet robust to outliers in 1 frame in 20.
+inline constexpr double kFloorPercentile = 0.05;
+
 struct BvhTrackerOptions {
   float userHeight = 1.75f;
   double scale = 0.0;  // metres per file unit; 0 = fit the performer's height to userHeight

@@ -5,6 +5,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "avatar/bvh/bvh.h"
+#include "core/percentile.h"
 #include "test_paths.h"
 #include "tracking/body_dimensions.h"
 #include "tracking/bvh_source.h"
@@ -277,4 +278,16 @@ TEST_CASE("the CMU walk: 524 frames at 120 Hz, a plausible head height, about 3.
   CHECK(std::hypot(d.x, d.z) == Approx(3.85).margin(0.1));
   // Fitted to 1.75 m the same walk is proportionally longer.
   CHECK(std::hypot(walked.x, walked.z) == Approx(3.85 * map.scale / 0.0564).margin(0.15));
+}
+
+TEST_CASE("percentileByRank: the value at rank floor(p n), as the BVH floor reads it", "[tracking][bvh]") {
+  std::vector<double> v;
+  for (int i = 99; i >= 0; --i) v.push_back(double(i));  // 100 values, reversed
+  CHECK(embody::percentileByRank(v, 0.05) == 5.0);
+  CHECK(embody::percentileByRank(v, 0.0) == 0.0);
+  CHECK(embody::percentileByRank(v, 1.0) == 99.0);  // rank clamped to the last value
+  std::vector<double> three{3.0, 1.0, 2.0};
+  CHECK(embody::percentileByRank(three, 0.05) == 1.0);  // floor(0.15) = rank 0: the lowest
+  std::vector<double> none;
+  CHECK(std::isnan(embody::percentileByRank(none, 0.05)));
 }
