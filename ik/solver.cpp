@@ -22,7 +22,7 @@ class SteadyClock final : public Clock {
 };
 
 bool validOptions(const SolveOptions& o) {
-  return o.max_iterations >= 0 && std::isfinite(o.damping_max) && o.damping_max >= 0 &&
+  return o.max_iterations >= 0 && o.min_iterations >= 0 && std::isfinite(o.damping_max) && o.damping_max >= 0 &&
          std::isfinite(o.damping_eps) && o.damping_eps > 0 && std::isfinite(o.rank_tolerance) &&
          o.rank_tolerance > 0 && std::isfinite(o.inequality_tolerance) && o.inequality_tolerance >= 0 &&
          !(o.max_level_step < 0) && !std::isnan(o.max_level_step);
@@ -94,7 +94,7 @@ const SolveReport& solve(const Model& model, Data& data, const SolveOptions& opt
   report.stop = StopReason::IterationCap;
   kinematics(model, data, true);
   for (;;) {
-    if (allSatisfied(w)) {
+    if (report.iterations >= options.min_iterations && allSatisfied(w)) {
       report.stop = StopReason::Converged;
       break;
     }

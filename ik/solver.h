@@ -42,6 +42,9 @@ const Clock& steadyClock();
 struct SolveOptions {
   Path path = Path::Fast;
   int max_iterations = 100;
+  // Iterations run even when every task is already within its tolerance (then a new frame's
+  // targets move the body every frame instead of only once the error exceeds a tolerance).
+  int min_iterations = 0;
   int max_clamp_passes = 16;    // clamping-loop cap per iteration
   bool clamping = true;         // false: inequalities are ignored (tests of the priority loop)
   // Warm active set: each iteration's clamping loop starts from the rows pinned in the previous

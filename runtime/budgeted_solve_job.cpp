@@ -51,6 +51,10 @@ bool BudgetedSolveJob::Run() const {
   while (!converged && !broken && iterations < iterationCap) {
     // Not even the retargeting fits: no iteration (the first one otherwise always runs).
     if (!fixed && (clock->now() >= deadline || !budget.startIteration())) break;
+    // The frame's first iteration runs even when every task is within its tolerance: the
+    // targets moved, and a body that waited for an error above a tolerance (a hand's orientation:
+    // 0.05 rad) followed a slowly turning hand in 3-degree snaps with still frames between.
+    o.min_iterations = iterations == 0 ? 1 : 0;
     const ik::SolveReport& report = ik::solve(*model, *data, o);
     iterations += report.iterations;
     if (report.converged()) converged = true;

@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <functional>
+#include <numbers>
 
 #include "avatar/procedural/default_avatar.h"
 #include "runtime/avatar_body_solver.h"
@@ -344,5 +345,51 @@ TEST_CASE("hands held still beyond reach: the body comes to rest, no frame-to-fr
     INFO((threePoint ? "three-point" : "all trackers") << ": worst hand motion a frame in the last second "
                                                           << worstLate * 1e3 << " mm");
     CHECK(worstLate < 1e-4);
+  }
+}
+
+// A hand turning slowly while nothing else moves (a user standing still, turning a wrist): the
+// solved hand turns every frame, not in steps. A solve stops as soon as every task is within its
+// tolerance (a hand's orientation: 0.05 rad), so a frame whose targets moved less than that took
+// no iteration at all and the hand snapped by a tolerance's worth every few frames.
+TEST_CASE("a hand turning slowly turns every frame, not in steps") {
+  for (const bool threePoint : {true, false}) {
+    const tracking::TrackerMask mask = threePoint ? tracking::TrackerMask::threePoint() : tracking::TrackerMask::all();
+    auto src = open("synthetic:idle", mask);
+    AvatarBodyOptions o = optionsFor(mask);
+    o.maxIterations = 4;
+    auto solver = AvatarBodySolver::create(defaultAvatar(), o);
+    REQUIRE(solver.ok());
+    AvatarBodySolver& s = **solver;
+    ManualClock clock;
+    IkStageConfig cfg;
+    cfg.guard.userHeight = 1.75f;
+    IkStage stage(s, clock, cfg);
+    SolvedFrame frame;
+    frame.pose = avatar::SkeletonPose::rest(defaultAvatar().skeleton);
+    const tracking::PoseSample still = src->sample(0.0);
+    const double rate = 0.2 * std::numbers::pi / 180.0;  // radians a frame: 18 degrees a second at 90 Hz
+    const ik::JointId hand = s.trackerJoint(TrackerId::RightHand);
+    Eigen::Quaterniond previous = Eigen::Quaterniond::Identity();
+    double largest = 0.0, smallest = 1e9;
+    for (int i = 0; i < 270; ++i) {
+      tracking::PoseSample sample = still;
+      sample.time = i / 90.0;
+      const double angle = i < 90 ? 0.0 : rate * (i - 90);  // still for a second, then turning
+      sample[TrackerId::RightHand].orientation =
+          glm::angleAxis(float(angle), glm::vec3(0.0f, 1.0f, 0.0f)) * still[TrackerId::RightHand].orientation;
+      stage.process(sample, frame);
+      const Eigen::Quaterniond q(s.data().jointFrame(hand).rotation());
+      if (i >= 135) {  // turning for half a second: the filter's lag has settled
+        const double step = q.angularDistance(previous);
+        largest = std::max(largest, step);
+        smallest = std::min(smallest, step);
+      }
+      previous = q;
+    }
+    INFO((threePoint ? "three-point" : "all trackers") << ": per-frame turn of the hand " << smallest * 180 / std::numbers::pi
+                                                         << " to " << largest * 180 / std::numbers::pi << " degrees, target 0.2");
+    CHECK(smallest > 0.5 * rate);
+    CHECK(largest < 2.0 * rate);
   }
 }
