@@ -484,3 +484,23 @@ TEST_CASE("J N over the coupled dofs' task rows equals the dense product, fast e
     CHECK(equalityViolation(model, data.q()) < 1e-12);
   }
 }
+
+TEST_CASE("min_iterations: a solve whose tasks are all within tolerance still takes that many iterations") {
+  const Model& model = humanoid();
+  Data data(model);
+  kinematics(model, data, false);
+  // Targets 0.05 mm off the current values: within every task's tolerance (0.1 mm by default).
+  test::setTargetsToTaskValues(model, data, data, [] { return Eigen::Vector3d(5e-5, 0.0, 0.0); });
+  SolveOptions o;
+  o.max_iterations = 10;
+  const Eigen::VectorXd start = data.q();
+  CHECK(solve(model, data, o).iterations == 0);  // converged before the first iteration
+  CHECK(data.q() == start);
+  o.min_iterations = 1;
+  const SolveReport& r = solve(model, data, o);
+  CHECK(r.iterations == 1);
+  CHECK(r.converged());
+  CHECK(data.q() != start);  // it moved toward the targets
+  o.min_iterations = -1;
+  CHECK(solve(model, data, o).stop == StopReason::InvalidState);
+}
