@@ -65,9 +65,9 @@ struct AvatarBodyOptions {
   // in tracking space, tracking/bvh_avatar.h): tracking space is avatar space (scale 1, floor at
   // y = 0, no turn), no height or stride calibration, and the trackers' rest references are the
   // source's (tracking::BvhMapping), so a perfect solve puts every joint where the clip's is.
-  // Joint markers (embody eval --trackers full, the paper's §5.2.3): a pose task (position and
-  // orientation) on every avatar joint an IK joint pivots at, one level below the tracker layout;
-  // targets from setMarkers() before each solve. They do not come from a tracking source: no
+  // Joint markers (embody eval --trackers full, the paper's §5.2.3): on every avatar joint an IK
+  // joint pivots at, a position task one level below the tracker layout and an orientation task
+  // one level lower (body_rig.cpp says why); targets from setMarkers() before each solve. They do not come from a tracking source: no
   // filter, no loss guard.
   bool jointMarkers = false;
   struct SameBody {

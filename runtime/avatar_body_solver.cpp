@@ -267,13 +267,14 @@ void AvatarBodySolver::guardAgainstCollapse(const tracking::GuardedSample& targe
 }
 
 void AvatarBodySolver::setMarkers(const std::vector<glm::dvec3>& positions, const std::vector<glm::dquat>& rotations) {
-  for (const auto& [a, task] : rig_.tasks.marker) {
-    if (size_t(a) >= positions.size() || size_t(a) >= rotations.size()) continue;
-    const glm::dvec3& p = positions[size_t(a)];
-    const glm::dquat& r = rotations[size_t(a)];
-    const int j = rig_.body.ikJointOfAvatar[size_t(a)];
+  for (const BodyTasks::JointMarker& m : rig_.tasks.marker) {
+    const size_t a = size_t(m.avatarJoint);
+    if (a >= positions.size() || a >= rotations.size()) continue;
+    const glm::dvec3& p = positions[a];
+    const glm::dquat& r = rotations[a];
+    const int j = rig_.body.ikJointOfAvatar[a];
     const Eigen::Quaterniond world = Eigen::Quaterniond(r.w, r.x, r.y, r.z).normalized() * rig_.body.ikRestRotation[size_t(j)];
-    setTaskPose(rig_.body.model, *data_, task, -1, Eigen::Vector3d(p.x, p.y, p.z), world, 1.0, refusedCalls_);
+    setTaskPose(rig_.body.model, *data_, m.position, m.orientation, Eigen::Vector3d(p.x, p.y, p.z), world, 1.0, refusedCalls_);
   }
 }
 

@@ -305,25 +305,40 @@ void RigBuilder::addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskDesc>& 
   }
 }
 
-// --trackers full (embody eval): a pose marker on every mapped avatar joint, one level below the
-// layout's lowest.
+// --trackers full (embody eval): a marker on every mapped avatar joint, its position one level below
+// the layout's lowest and its orientation one level lower still. Positions say where every bone
+// points; the orientations then settle what they leave free, the turn about each bone. On one
+// level a rotation row weighs a radian as a position row weighs a metre, so where the coupled spine
+// cannot take the clip's shape its orientation rows outweighed centimetres of position: on the
+// CMU walk the pelvis turned 8 degrees off the clip's to share the spine's orientation error, and
+// moved the hips and knees 1-4 cm (docs/eval.md).
 void RigBuilder::addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks) {
   int lowest = 1;
   for (const TaskSpec& spec : r.layout.tasks)
     if (spec.kind != TaskKind::LimbPole) lowest = std::max(lowest, spec.priority);  // no poles with markers
+  auto add = [&](ik::TaskDesc t) {
+    tasks.push_back(std::move(t));
+    return ik::TaskId(tasks.size() - 1);
+  };
   for (size_t a = 0; a < avatar_.skeleton.joints.size(); ++a) {
     const int j = r.body.ikJointOfAvatar[a];
     if (j < 0 || r.body.avatarJoint[size_t(j)] != int(a)) continue;
     ik::TaskDesc t;
     t.name = "marker_" + avatar_.skeleton.joints[a].name;
-    t.type = ik::TaskType::Pose;
     t.joint = j;
     t.position_tolerance = 5e-4;
     t.rotation_tolerance = 0.01;
-    t.level = lowest;  // layout priority lowest + 1 = solver level lowest
     t.weight = 1.0f;
-    tasks.push_back(std::move(t));
-    r.tasks.marker.emplace_back(int(a), ik::TaskId(tasks.size() - 1));
+    BodyTasks::JointMarker m;
+    m.avatarJoint = int(a);
+    t.type = ik::TaskType::Position;
+    t.level = lowest;  // layout priority lowest + 1 = solver level lowest
+    m.position = add(t);
+    t.type = ik::TaskType::Orientation;
+    t.name += "_rotation";
+    t.level = lowest + 1;
+    m.orientation = add(t);
+    r.tasks.marker.push_back(m);
   }
 }
 

@@ -38,7 +38,12 @@ struct BodyTasks {
   // Seated mode, per side (0 = left), and the pelvis.
   std::array<ik::TaskId, 2> seatHip{-1, -1}, seatKnee{-1, -1};
   ik::TaskId seatPelvis = -1;
-  std::vector<std::pair<int, ik::TaskId>> marker;  // joint markers: avatar joint, its pose task
+  // Joint markers: the avatar joint, its position task, and one level lower its orientation task.
+  struct JointMarker {
+    int avatarJoint = -1;
+    ik::TaskId position = -1, orientation = -1;
+  };
+  std::vector<JointMarker> marker;
 };
 
 struct BodyRig {

@@ -122,10 +122,11 @@ TEST_CASE("embody eval: plots and the contact sheet", "[cli][eval]") {
 }
 
 TEST_CASE("embody eval --trackers full: the clip driven on its own skeleton", "[cli][eval]") {
-  // The marked joints land on the clip's: head and feet within 1 cm. With the limb limits around
-  // the neutral pose the walk scores 1.13 cm coupled, 0.32 uncoupled (2.49 / 1.78 with limits
-  // around CMU's T-pose); the coupled spine spreading a turn over its vertebrae where the clip
-  // turns one joint is most of the rest (docs/eval.md). This guards the figure from getting worse.
+  // Import, solve and export agree: every joint within 1 cm on average (#13's bar). The walk
+  // scores 0.86 cm coupled, 0.15 uncoupled; the coupled spine spreading a turn over its vertebrae
+  // where the clip turns one joint is the rest (docs/eval.md). With each marker a pose task on one
+  // level it scored 1.14 / 0.32: the orientation rows of a spine the coupling cannot shape turned
+  // the pelvis 8 degrees off the clip's.
   EMBODY_REQUIRE_SHARED_ASSET(clip, "cmu_12_01_walk.bvh");
   const fs::path out = outDir("eval_walk_full");
   const auto j = evalMetrics(evalArgs(clip, "full", out), out);
@@ -134,7 +135,7 @@ TEST_CASE("embody eval --trackers full: the clip driven on its own skeleton", "[
     const auto& e = j["methods"][m]["mpjpe_cm"];
     CHECK(e["head"]["mean"].get<double>() <= 1.0);
     CHECK(e["feet"]["mean"].get<double>() <= 1.0);
-    CHECK(e["all"]["mean"].get<double>() <= 1.5);
+    CHECK(e["all"]["mean"].get<double>() <= 1.0);
     CHECK(e["all"]["mean"].get<double>() < j["methods"]["naive"]["mpjpe_cm"]["all"]["mean"].get<double>() / 3.0);
   }
 }

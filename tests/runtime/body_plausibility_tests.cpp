@@ -250,13 +250,14 @@ TEST_CASE("limb poles sit below the trackers, joint markers replace them", "[run
     auto s = AvatarBodySolver::create(defaultAvatar(), o);
     REQUIRE(s.ok());
     const ik::Model& m = (*s)->body().model;
-    int count = 0, poleLevel = -1, markerLevel = -1, lowestTracker = -1;
+    int count = 0, poleLevel = -1, markerLevel = -1, markerRotationLevel = -1, lowestTracker = -1;
     for (const auto& t : m.tasks) {
       if (t.desc.name.rfind("pole_", 0) == 0) ++count, poleLevel = t.desc.level;
-      else if (t.desc.name.rfind("marker_", 0) == 0) markerLevel = t.desc.level;
+      else if (t.desc.name.rfind("marker_", 0) == 0 && t.desc.type == ik::TaskType::Position) markerLevel = t.desc.level;
+      else if (t.desc.name.rfind("marker_", 0) == 0 && t.desc.type == ik::TaskType::Orientation) markerRotationLevel = t.desc.level;
       else lowestTracker = std::max(lowestTracker, t.desc.level);
     }
-    return std::array<int, 4>{count, poleLevel, markerLevel, lowestTracker};
+    return std::array<int, 5>{count, poleLevel, markerLevel, lowestTracker, markerRotationLevel};
   };
   CHECK(poles(false, false)[0] == 2);    // the default: knees only
   const auto without = poles(false);
@@ -264,7 +265,8 @@ TEST_CASE("limb poles sit below the trackers, joint markers replace them", "[run
   CHECK(without[1] > without[3]);       // below every tracker task
   const auto with = poles(true);
   CHECK(with[0] == 0);                  // a marker says where the knee is: no pole pulls it off
-  CHECK(with[2] == with[3] + 1);        // the markers right below the trackers
+  CHECK(with[2] == with[3] + 1);        // the markers' positions right below the trackers
+  CHECK(with[4] == with[2] + 1);        // and their orientations below those
 }
 
 TEST_CASE("a head lying on the floor is not stood up: no standing seed, a stall only restarts the solve cold", "[runtime][plausibility]") {
