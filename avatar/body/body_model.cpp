@@ -90,7 +90,11 @@ const std::vector<LimbSpec>& limbSpecs() {
       {Kind::Hand, B::leftHand, B::rightHand, T::Ball, {-1.2, -0.25, -0.6}, {1.2, 0.25, 0.6}, false, kHand, kHandCom},
       {Kind::UpperLeg, B::leftUpperLeg, B::rightUpperLeg, T::Ball, {-0.5, -0.7, -0.5}, {2.1, 0.7, 0.8}, true, kThigh, kThighCom},
       {Kind::Knee, B::leftLowerLeg, B::rightLowerLeg, T::Revolute, {kMinHingeBend}, {2.4}, false, kShank, kShankCom},
-      {Kind::Ankle, B::leftFoot, B::rightFoot, T::Ball, {-0.9, -0.5, -0.5}, {0.6, 0.5, 0.5}, false, kFoot, kFootCom},
+      // The foot's turn about the sole's normal (z, ±34°) also stands for the shank's own rotation,
+      // which the knee's hinge lacks (30-40° with the knee bent): at ±29° a dancer's turned-out
+      // feet were met by turning the whole leg (docs/eval.md, Session 11). Inversion / eversion
+      // (y) ±34°, AAOS's 35° / 15° without the side's sign.
+      {Kind::Ankle, B::leftFoot, B::rightFoot, T::Ball, {-0.9, -0.6, -0.6}, {0.6, 0.6, 0.6}, false, kFoot, kFootCom},
       {Kind::Toes, B::leftToes, B::rightToes, T::Revolute, {-0.6}, {0.6}},
   };
   return specs;
