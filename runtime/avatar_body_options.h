@@ -67,8 +67,8 @@ struct AvatarBodyOptions {
   // source's (tracking::BvhMapping), so a perfect solve puts every joint where the clip's is.
   // Joint markers (embody eval --trackers full, the paper's §5.2.3): on every avatar joint an IK
   // joint pivots at, a position task one level below the tracker layout and an orientation task
-  // one level lower (body_rig.cpp says why); targets from setMarkers() before each solve. They do not come from a tracking source: no
-  // filter, no loss guard.
+  // one level lower (body_rig.cpp says why); targets from setMarkers() before each solve. They
+  // do not come from a tracking source: no filter, no loss guard.
   bool jointMarkers = false;
   struct SameBody {
     bool enabled = false;

@@ -93,7 +93,8 @@ const std::vector<LimbSpec>& limbSpecs() {
       // The foot's turn about the sole's normal (z, ±34°) also stands for the shank's own rotation,
       // which the knee's hinge lacks (30-40° with the knee bent): at ±29° a dancer's turned-out
       // feet were met by turning the whole leg (docs/eval.md, Session 11). Inversion / eversion
-      // (y) ±34°, AAOS's 35° / 15° without the side's sign.
+      // (y) ±34° (AAOS: 35° / 15°; one range for both signs, as +y inverts one foot and everts
+      // the other).
       {Kind::Ankle, B::leftFoot, B::rightFoot, T::Ball, {-0.9, -0.6, -0.6}, {0.6, 0.6, 0.6}, false, kFoot, kFootCom},
       {Kind::Toes, B::leftToes, B::rightToes, T::Revolute, {-0.6}, {0.6}},
   };
