@@ -27,6 +27,10 @@ struct SolveResult {
   // Distance in metres between each tracker's target and the body part it drives after the
   // solve; negative where the tracker drives no task.
   std::array<float, tracking::kTrackerCount> residual{-1, -1, -1, -1, -1, -1};
+  // Angle in radians between each tracked tracker's orientation (as the joint's target) and the
+  // joint's, whether or not an orientation task drives it: a pelvis free to turn shows here;
+  // negative where the tracker drives no task.
+  std::array<float, tracking::kTrackerCount> turnResidual{-1, -1, -1, -1, -1, -1};
   // Per tracker: whether its target is within the avatar's reach (hands: the arm's reach from
   // the shoulder). Hand errors count only where it is: an out-of-reach target cannot be met.
   std::array<bool, tracking::kTrackerCount> reachable{true, true, true, true, true, true};

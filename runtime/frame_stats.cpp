@@ -34,19 +34,22 @@ StatsSummary StatsRecorder::summary() const {
   s.iterationsMean = iterations / static_cast<double>(frames_.size());
   for (auto id : tracking::kAllTrackers) {
     const auto i = static_cast<size_t>(tracking::index(id));
-    std::vector<double> r;
+    std::vector<double> r, turn;
     size_t tracked = 0;
     for (const auto& f : frames_) {
       if (f.residual[i] >= 0.0f) r.push_back(f.residual[i]);
+      if (f.turnResidual[i] >= 0.0f) turn.push_back(f.turnResidual[i] * 180.0 / 3.14159265358979323846);
       tracked += f.status[i] == tracking::TrackerStatus::Tracked ? 1 : 0;
     }
     s.residualP95[i] = r.empty() ? -1.0 : percentile(r, 95);
+    s.turnResidualP95Deg[i] = turn.empty() ? -1.0 : percentile(turn, 95);
     s.trackedFraction[i] = static_cast<double>(tracked) / static_cast<double>(frames_.size());
   }
   std::vector<double> head, hands;
   for (const auto& f : frames_) {
     bool finite = std::isfinite(f.ikSeconds);
     for (float r : f.residual) finite = finite && std::isfinite(r);
+    for (float r : f.turnResidual) finite = finite && std::isfinite(r);
     s.nonFiniteFrames += finite ? 0 : 1;
     const float h = f.residual[static_cast<size_t>(tracking::index(tracking::TrackerId::Head))];
     if (h >= 0.0f) head.push_back(h);
@@ -76,6 +79,7 @@ void toJson(nlohmann::json& j, const StatsSummary& s) {
     const auto i = static_cast<size_t>(tracking::index(id));
     nlohmann::json t = {{"tracked_fraction", s.trackedFraction[i]}};
     if (s.residualP95[i] >= 0.0) t["residual_p95_m"] = s.residualP95[i];
+    if (s.turnResidualP95Deg[i] >= 0.0) t["turn_error_p95_deg"] = s.turnResidualP95Deg[i];
     trackers[std::string(tracking::trackerKey(id))] = t;
   }
   j["trackers"] = trackers;

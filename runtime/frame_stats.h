@@ -19,6 +19,7 @@ struct FrameStats {
   bool converged = false;
   bool deadlineMiss = false;  // returned after the deadline
   std::array<float, tracking::kTrackerCount> residual{-1, -1, -1, -1, -1, -1};  // metres, < 0: no task
+  std::array<float, tracking::kTrackerCount> turnResidual{-1, -1, -1, -1, -1, -1};  // radians, < 0: no task
   std::array<bool, tracking::kTrackerCount> reachable{true, true, true, true, true, true};
   std::array<tracking::TrackerStatus, tracking::kTrackerCount> status{};
   double renderSeconds = 0.0;  // filled in by the render side when it has drawn the frame
@@ -34,6 +35,7 @@ struct StatsSummary {
   // Per tracker: p95 of the residual over frames where it drove a task (-1: never), and the
   // fraction of frames it was live-tracked.
   std::array<double, tracking::kTrackerCount> residualP95{-1, -1, -1, -1, -1, -1};
+  std::array<double, tracking::kTrackerCount> turnResidualP95Deg{-1, -1, -1, -1, -1, -1};  // degrees
   std::array<double, tracking::kTrackerCount> trackedFraction{};
   // stats.json "tracking": p95 of the head residual, and of both hands' residuals on frames where
   // the hand's target is within reach (-1: none).
@@ -59,7 +61,7 @@ double percentile(std::vector<double>& values, double p);
 
 // {"frames", "ik": {budget_ms, p50_ms, p99_ms, max_ms, deadline_misses, iterations_mean},
 //  "tracking": {head_error_p95_m, hand_error_p95_m, hand_frames_out_of_reach, non_finite_frames},
-//  "trackers": {"head": {"tracked_fraction", "residual_p95_m"}, ...}, "render": {"p50_ms"}}
+//  "trackers": {"head": {"tracked_fraction", "residual_p95_m", "turn_error_p95_deg"}, ...}, "render": {"p50_ms"}}
 void toJson(nlohmann::json& j, const StatsSummary& s);
 
 }  // namespace embody::runtime

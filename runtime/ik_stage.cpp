@@ -40,6 +40,7 @@ const FrameStats& IkStage::process(const tracking::PoseSample& sample, SolvedFra
   s.deadlineMiss = config_.fixedIterations == 0 && end > deadline;
   s.residual = r.residual;
   s.reachable = r.reachable;
+  s.turnResidual = r.turnResidual;
   s.status = out.targets.status;
   s.renderSeconds = 0.0;
   return s;

@@ -24,6 +24,8 @@ bool ResidualsJob::Run() const {
     const Eigen::Vector3d actual = id == TrackerId::Head ? Eigen::Vector3d(d.jointFrame(r.body.head) * r.eyeInHead)
                                                          : Eigen::Vector3d(jointPosition(r.joint[i]));
     result->residual[i] = float((actual - targets->point[i]).norm());
+    if (targets->weight[i] > 0.0)
+      result->turnResidual[i] = float(targets->rotation[i].angularDistance(Eigen::Quaterniond(d.jointFrame(r.joint[i]).rotation())));
     if (id == TrackerId::LeftHand || id == TrackerId::RightHand) {
       const ik::JointId shoulder = r.shoulder(id == TrackerId::LeftHand ? tracking::Side::Left : tracking::Side::Right);
       result->reachable[i] = (targets->point[i] - jointPosition(shoulder)).norm() <= r.armReach;

@@ -2,7 +2,8 @@
 // Residuals and reach after a solve (SolveResult's per-tracker figures), in avatar metres: each
 // enabled tracker position task's target against the body part it drives (the head's eye point,
 // the other trackers' joint pivots); for the hands, whether the target is within the arm's reach
-// from the shoulder. Trackers without an enabled position task keep -1. No allocation.
+// from the shoulder; the angle between each live tracker's orientation target and its joint's
+// orientation. Trackers without an enabled position task keep -1. No allocation.
 //
 //   ResidualsJob job{&rig, &data, &targets, &result};
 //   if (job.Run()) ... result.residual, result.reachable

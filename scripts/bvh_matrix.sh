@@ -4,8 +4,10 @@
 # built from the project's own Mixamo fixture (tests/tracking/fixtures/mixamo.bvh exported as a
 # skinned .glb, so no third-party file is needed) and (3) the clip's own skeleton. Prints one
 # markdown row per clip and avatar: frames, head and hand error p95 (the solved body against the
-# trackers) and the frames in which the solved body stands the right way up (eyes above pelvis
-# above ankles: stats.json's body.upright_frames). Contact sheets are in OUT/CLIP/AVATAR/.
+# trackers), how far the avatar's pelvis is turned off the pelvis tracker's orientation (p95,
+# degrees: stats.json's trackers.hips.turn_error_p95_deg) and the frames in which the solved body
+# stands the right way up (eyes above pelvis above ankles: stats.json's body.upright_frames).
+# Contact sheets are in OUT/CLIP/AVATAR/.
 #
 #   scripts/bvh_matrix.sh [BUILD] [OUT] CLIP.bvh...      (default: build out/bvh_matrix ../shared clips)
 set -euo pipefail
@@ -28,9 +30,11 @@ mixamo="$out/mixamo_avatar.glb"
 # The value of a numeric field of stats.json ("name": value), in millimetres.
 mm() { grep -o "\"$1\": *[-0-9.e+]*" "$2" | head -1 | awk -F: '{ printf "%.1f", $2 * 1000 }'; }
 field() { grep -o "\"$1\": *[-0-9.e+a-z]*" "$2" | head -1 | awk -F': *' '{ print $2 }'; }
+# The pelvis tracker's turn error in degrees (stats.json trackers.hips), blank without one.
+pelvisTurn() { sed -n '/"hips": {/,/}/p' "$1" | grep -o '"turn_error_p95_deg": *[0-9.e+-]*' | awk -F': *' '{ printf "%.1f", $2 }'; }
 
-echo "| clip | avatar | frames | head p95 mm | hand p95 mm | upright frames |"
-echo "|---|---|---|---|---|---|"
+echo "| clip | avatar | frames | head p95 mm | hand p95 mm | pelvis turn p95 deg | upright frames |"
+echo "|---|---|---|---|---|---|---|"
 for clip in "${clips[@]}"; do
   name=$(basename "$clip" .bvh)
   for avatar in default "$mixamo" "$clip"; do
@@ -39,11 +43,11 @@ for clip in "${clips[@]}"; do
     mkdir -p "$out/$name"
     if ! "$embody" render --avatar "$avatar" --motion "$clip" --fps "$fps" --ik-iterations "$iterations" \
         --size 160x160 --out "$dir" >"$dir.log" 2>&1; then
-      echo "| $name | $label | $(grep -m1 error: "$dir.log" || tail -1 "$dir.log") | | | |"
+      echo "| $name | $label | $(grep -m1 error: "$dir.log" || tail -1 "$dir.log") | | | | |"
       continue
     fi
     s="$dir/stats.json"
     echo "| $name | $label | $(field frames "$s") | $(mm head_error_p95_m "$s") | $(mm hand_error_p95_m "$s") |" \
-         "$(field upright_frames "$s") |"
+         "$(pelvisTurn "$s") | $(field upright_frames "$s") |"
   done
 done

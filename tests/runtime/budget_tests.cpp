@@ -1,6 +1,7 @@
 // Budgeted solving with an injected clock: stop before the deadline, overshoot by at most one
 // iteration, count misses; warm starts; statistics.
 #include <catch2/catch.hpp>
+#include <numbers>
 #include <nlohmann/json.hpp>
 
 #include "fake_solver.h"
@@ -75,6 +76,7 @@ TEST_CASE("a solver that ignores the deadline is counted as a miss, and the summ
       SolveResult r;
       r.iterations = 7;
       r.residual = {0.004f, 0.01f, 0.02f, -1, -1, -1};
+      r.turnResidual = {0.0f, float(std::numbers::pi / 6.0), -1, -1, -1, -1};  // the left hand 30 degrees off
       return r;
     }
   } slow(clock);
@@ -97,6 +99,8 @@ TEST_CASE("a solver that ignores the deadline is counted as a miss, and the summ
   CHECK(sum.renderP50Ms == Approx(4.0));
   CHECK(sum.residualP95[0] == Approx(0.004));
   CHECK(sum.residualP95[3] == -1.0);
+  CHECK(sum.turnResidualP95Deg[1] == Approx(30.0));  // radians in, degrees out
+  CHECK(sum.turnResidualP95Deg[2] == -1.0);
   CHECK(sum.trackedFraction[0] == Approx(1.0));
   nlohmann::json j;
   toJson(j, sum);
@@ -105,6 +109,9 @@ TEST_CASE("a solver that ignores the deadline is counted as a miss, and the summ
   CHECK(j["ik"]["p99_ms"].get<double>() == Approx(2.5));
   CHECK(j["trackers"]["left"]["residual_p95_m"].get<double>() == Approx(0.01));
   CHECK_FALSE(j["trackers"]["hips"].contains("residual_p95_m"));
+  CHECK(j["trackers"]["left"]["turn_error_p95_deg"].get<double>() == Approx(30.0));
+  CHECK(j["trackers"]["head"]["turn_error_p95_deg"].get<double>() == 0.0);
+  CHECK_FALSE(j["trackers"]["right"].contains("turn_error_p95_deg"));
   CHECK(j["render"]["p50_ms"].get<double>() == Approx(4.0));
 }
 
