@@ -51,7 +51,7 @@ TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
   // the stance foot), so a static balance row would hold the tracked body back.
   if (l.inferLowerBody) l.tasks.push_back({TaskKind::Balance, TrackerId::Hips, 1, 1.0f});
   // The head position (the eyes): the user's viewpoint; a mismatch is seen at once in first
-  // person. Its orientation is a level lower (4): in first person the view turns with the HMD
+  // person. Its orientation is lower (4, or 5 with a tracked pelvis): in first person the view turns with the HMD
   // whatever the avatar's head does, and sharing a level with the position would let the
   // orientation rows trade eye position for head angle (least squares) whenever the trunk is
   // short of reach.
@@ -59,17 +59,33 @@ TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
   // 3: hand positions.
   for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
     if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerPosition, hand, 3, 1.0f});
-  // 4: orientations, which matter less than positions.
-  if (trackers.has(TrackerId::Head)) l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, 4, 1.0f});
+  // 4: orientations, which matter less than positions; the head's a level lower with a tracked
+  // pelvis (below).
+  const bool pelvis = trackers.has(TrackerId::Hips);
+  if (trackers.has(TrackerId::Head))
+    l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Head, pelvis ? 5 : 4, 1.0f});
   for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand})
     if (trackers.has(hand)) l.tasks.push_back({TaskKind::TrackerOrientation, hand, 4, 1.0f});
-  // 5: a tracked pelvis, over the ground only, the softest level: its height follows from the
-  // head and the legs, whose proportions differ between user and avatar, and when the scaled
-  // performer's trunk is longer than the avatar's the pelvis must yield, not the head. Strict
-  // priorities keep it from disturbing anything above to first order; its weight 0.1 damps it
-  // (a row scaled by √w is damped as if λ were λ/√w), so while it conflicts its steps, and with
-  // them their second-order pull on the levels above, stay small (docs/runtime.md).
-  if (trackers.has(TrackerId::Hips)) l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Hips, 5, 0.1f});
+  // A tracked pelvis. 4: its position, over the ground only: its height follows from the head and
+  // the legs, whose proportions differ between user and avatar, and when the scaled performer's
+  // trunk is longer than the avatar's the pelvis must yield, not the head. Strict priorities keep
+  // it from disturbing anything above to first order; its weight 0.1 damps it (a row scaled by √w
+  // is damped as if λ were λ/√w), so while it conflicts its steps, and with them their
+  // second-order pull on the levels above, stay small (docs/runtime.md).
+  // 5: its orientation, on one level with the head's. Without it nothing held the pelvis's turn
+  // (each leg's swivel and the spine's torsion leave it free) and the minimum-norm steps turned it
+  // 38-96 degrees (p95, stats.json trackers.hips.turn_error_p95_deg) off the tracker's. Under the
+  // head's orientation it was still 58-87 degrees off where the performer turned the head further
+  // from the pelvis than the coupled spine twists: the pelvis took the rest. On one level the two
+  // share it. Below the position, which it would otherwise pull off where the coupled spine cannot
+  // take the performer's shape (the root 1.0 -> 3.5 cm). `embody eval --trackers 6` (8 clips,
+  // 90 Hz, 4 iterations) MPJPE 2.63 -> 1.85 cm, every clip within 2.6 cm; --trackers 4 8.12 ->
+  // 7.77 cm; scripts/bvh_matrix.sh pelvis turn p95 on the default avatar 39-70 -> 8-23 degrees
+  // (docs/runtime.md, "Six trackers: the pelvis's turn").
+  if (pelvis) {
+    l.tasks.push_back({TaskKind::TrackerPosition, TrackerId::Hips, 4, 0.1f});
+    l.tasks.push_back({TaskKind::TrackerOrientation, TrackerId::Hips, 5, 1.0f});
+  }
   // 5 in three-point mode: the pelvis inferred from the head (task_targets_job.cpp: under it with
   // the rest offset, turned with its heading, the trunk leant forward when the head sinks, let go
   // in a deep squat), with the tracked pelvis's weight and for the same reasons. Without it the

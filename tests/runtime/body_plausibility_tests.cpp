@@ -396,3 +396,36 @@ TEST_CASE("a hand turning slowly turns every frame, not in steps") {
     CHECK(largest < 2.0 * rate);
   }
 }
+
+TEST_CASE("a tracked pelvis turning in place turns the avatar's pelvis with it, the feet staying planted") {
+  // Six trackers; the pelvis tracker turns 20 degrees about the vertical over a second and holds,
+  // everything else still. Before the pelvis's orientation was a task nothing made the pelvis
+  // follow: it stayed where the minimum-norm steps left it (docs/runtime.md, "Six trackers").
+  const double turn = 20.0 * std::numbers::pi / 180.0;
+  Eigen::Quaterniond start = Eigen::Quaterniond::Identity();
+  double finalError = 1e9, footDrift = 0.0;
+  Eigen::Vector3d footStart = Eigen::Vector3d::Zero();
+  holdStill(
+      tracking::TrackerMask::all(), 270,
+      [&](int i, tracking::PoseSample& sample) {
+        const double angle = i < 90 ? 0.0 : turn * std::min(1.0, (i - 90) / 90.0);
+        sample[TrackerId::Hips].orientation =
+            glm::angleAxis(float(angle), glm::vec3(0.0f, 1.0f, 0.0f)) * sample[TrackerId::Hips].orientation;
+      },
+      [&](int i, const AvatarBodySolver& s) {
+        const Eigen::Quaterniond q(s.data().jointFrame(s.trackerJoint(TrackerId::Hips)).rotation());
+        const Eigen::Vector3d foot = s.jointPosition(s.trackerJoint(TrackerId::LeftFoot));
+        if (i == 89) {
+          start = q;
+          footStart = foot;
+        }
+        if (i > 89) footDrift = std::max(footDrift, (foot - footStart).norm());
+        // The turn the avatar's pelvis made since the tracker began turning, against the tracker's.
+        const Eigen::Quaterniond expected = Eigen::Quaterniond(Eigen::AngleAxisd(turn, s.up())) * start;
+        if (i == 269) finalError = q.angularDistance(expected);
+      });
+  INFO("pelvis " << finalError * 180 / std::numbers::pi << " degrees off the tracker's turn, left foot moved "
+                 << footDrift * 1e3 << " mm");
+  CHECK(finalError < 3.0 * std::numbers::pi / 180.0);
+  CHECK(footDrift < 0.005);
+}

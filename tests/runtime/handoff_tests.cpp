@@ -212,17 +212,20 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
   for (const auto& t : full.tasks) CHECK((t.kind != TaskKind::FootPlant && t.kind != TaskKind::InferredHips));
   CHECK(full.describe().find("2  position left_foot") != std::string::npos);
   // All trackers: the eyes first, the tracked feet next (they yield to the eyes when the avatar's
-  // legs cannot reach both), hands next, orientations below positions, the tracked pelvis the
-  // softest level (it yields to head and hands when proportions differ).
-  int headPos = 0, headRot = 0, handPos = 0, hips = 0;
+  // legs cannot reach both), hands next, orientations below positions; the tracked pelvis's
+  // position with the hands' orientations (it yields to head and hands when proportions differ),
+  // its orientation one level lower, on one level with the head's (they share what the coupled
+  // spine cannot twist), the poles below everything.
+  int headPos = 0, headRot = 0, handPos = 0, handRot = 0, hipsPos = 0, hipsRot = 0;
   for (const auto& t : full.tasks) {
     if (t.kind == TaskKind::LimbPole) {
       CHECK(t.priority == full.levels());  // below everything a tracker drives
       continue;
     }
-    if (t.tracker == tracking::TrackerId::Head) (t.kind == TaskKind::TrackerPosition ? headPos : headRot) = t.priority;
-    if (t.tracker == tracking::TrackerId::LeftHand && t.kind == TaskKind::TrackerPosition) handPos = t.priority;
-    if (t.tracker == tracking::TrackerId::Hips) hips = t.priority;
+    const bool position = t.kind == TaskKind::TrackerPosition;
+    if (t.tracker == tracking::TrackerId::Head) (position ? headPos : headRot) = t.priority;
+    if (t.tracker == tracking::TrackerId::LeftHand) (position ? handPos : handRot) = t.priority;
+    if (t.tracker == tracking::TrackerId::Hips) (position ? hipsPos : hipsRot) = t.priority;
   }
   int footPos = 0;
   for (const auto& t : full.tasks)
@@ -230,9 +233,15 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
   CHECK(headPos == 1);
   CHECK(footPos == 2);
   CHECK(handPos == 3);
-  CHECK(headRot > handPos);
-  CHECK(hips == full.levels() - 1);
-  CHECK(hips > headRot);
+  CHECK(handRot == 4);
+  CHECK(hipsPos == handRot);
+  CHECK(hipsRot == hipsPos + 1);
+  CHECK(headRot == hipsRot);
+  CHECK(hipsRot == full.levels() - 1);
+  // Without a tracked pelvis the head's orientation stays with the hands'.
+  const TaskLayout noPelvis = taskLayoutFor(tracking::TrackerMask::threePoint());
+  for (const auto& t : noPelvis.tasks)
+    if (t.kind == TaskKind::TrackerOrientation) CHECK(t.priority == 4);
   CHECK(statusWeight(tracking::TrackerStatus::Absent) == 0.0f);
   CHECK(statusWeight(tracking::TrackerStatus::Held) == 1.0f);
 }
