@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <nlohmann/json.hpp>
 
 namespace embody::runtime {
@@ -38,7 +39,7 @@ StatsSummary StatsRecorder::summary() const {
     size_t tracked = 0;
     for (const auto& f : frames_) {
       if (f.residual[i] >= 0.0f) r.push_back(f.residual[i]);
-      if (f.turnResidual[i] >= 0.0f) turn.push_back(f.turnResidual[i] * 180.0 / 3.14159265358979323846);
+      if (f.turnResidual[i] >= 0.0f) turn.push_back(f.turnResidual[i] * 180.0 / std::numbers::pi);
       tracked += f.status[i] == tracking::TrackerStatus::Tracked ? 1 : 0;
     }
     s.residualP95[i] = r.empty() ? -1.0 : percentile(r, 95);
