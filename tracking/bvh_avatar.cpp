@@ -5,8 +5,8 @@
 #include <cstdio>
 
 #include "avatar/avatar_loader.h"
-#include "core/percentile.h"
 #include "avatar/procedural/capsule_mesh.h"
+#include "core/percentile.h"
 
 namespace embody::tracking {
 

@@ -3,8 +3,9 @@
 // hierarchy (End Sites included, named "<parent>_End"; skeleton joint i = clip joint i), the
 // rest pose its offsets with every channel zero, in tracking space as the clip's trackers are
 // (tracking/bvh_source.h: metres, +Y up, facing -Z; the rest pose stands over the origin with its
-// ankles as high above the floor, y = 0, as the clip's stand: `restLift`), mapped to the humanoid like any avatar (names, else topology), with a
-// generated mesh: one capsule per bone, skinned to the bone's joint, so it renders.
+// ankles as high above the floor, y = 0, as the clip's stand: `restLift`), mapped to the humanoid
+// like any avatar (names, else topology), with a generated mesh: one capsule per bone, skinned to
+// the bone's joint, so it renders.
 //
 // Because the avatar and the trackers share one space and one scale, the clip's own joints can
 // be set beside the solved body joint by joint (bvhJointsAt), and a solved pose can be written
