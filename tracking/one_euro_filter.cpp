@@ -10,6 +10,30 @@ float oneEuroAlpha(float cutoffHz, float dt) {
   return 1.0f / (1.0f + tau / dt);
 }
 
+float NoiseEstimate::update(const glm::vec3& velocity, float dt) {
+  if (steps_ >= 2) {
+    const glm::vec3 d3 = (velocity - 2.0f * previous_[0] + previous_[1]) * dt;
+    // The mean of the samples so far until there are a window's worth, then exponential.
+    samples_ = std::min(samples_ + 1, 1 << 20);
+    variance_ += std::max(dt / (window_ + dt), 1.0f / static_cast<float>(samples_)) * (glm::dot(d3, d3) / 60.0f - variance_);
+  }
+  previous_[1] = previous_[0];
+  previous_[0] = velocity;
+  steps_ = std::min(steps_ + 1, 2);
+  return deviation();
+}
+
+float NoiseEstimate::deviation() const { return std::sqrt(std::max(variance_, 0.0f)); }
+
+float oneEuroCutoff(const OneEuroParams& p, float speed, float noise) {
+  const float cutoff = p.minCutoff + p.beta * speed;
+  if (!(p.referenceNoise > 0.0f)) return cutoff;
+  // Capped where alpha is 1 to float precision at any tracking rate (and for a silent signal).
+  constexpr float kMaxCutoff = 1e5f;
+  const float ratio = p.referenceNoise / std::max(noise, p.referenceNoise / std::sqrt(kMaxCutoff));
+  return std::max(cutoff, p.minCutoff * ratio * ratio);
+}
+
 glm::vec3 OneEuroVec3::filter(const glm::vec3& x, float dt) {
   if (!primed_) {
     x_ = raw_ = x;
@@ -18,9 +42,10 @@ glm::vec3 OneEuroVec3::filter(const glm::vec3& x, float dt) {
     return x_;
   }
   if (!(dt > 0.0f)) return x_;
-  velocity_ += oneEuroAlpha(p_.derivativeCutoff, dt) * ((x - raw_) / dt - velocity_);
+  const glm::vec3 rawVelocity = (x - raw_) / dt;
+  velocity_ += oneEuroAlpha(p_.derivativeCutoff, dt) * (rawVelocity - velocity_);
   raw_ = x;
-  const float cutoff = p_.minCutoff + p_.beta * glm::length(velocity_);
+  const float cutoff = oneEuroCutoff(p_, glm::length(velocity_), noise_.update(rawVelocity, dt));
   x_ += oneEuroAlpha(cutoff, dt) * (x - x_);
   return x_;
 }
@@ -43,7 +68,7 @@ glm::quat OneEuroQuat::filter(const glm::quat& qIn, float dt) {
   const glm::vec3 omega = s > 1e-6f ? glm::vec3(d.x, d.y, d.z) / s * (angle / dt) : glm::vec3(0.0f);
   velocity_ += oneEuroAlpha(p_.derivativeCutoff, dt) * (omega - velocity_);
   raw_ = q;
-  const float cutoff = p_.minCutoff + p_.beta * glm::length(velocity_);
+  const float cutoff = oneEuroCutoff(p_, glm::length(velocity_), noise_.update(omega, dt));
   q_ = glm::normalize(glm::slerp(q_, q, oneEuroAlpha(cutoff, dt)));
   return q_;
 }

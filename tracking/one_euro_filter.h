@@ -2,6 +2,9 @@
 // The One Euro filter (Casiez, Roussel & Vogel, CHI 2012): a low-pass filter whose cutoff rises
 // with speed, so jitter at rest is removed while fast motion keeps little lag.
 //   cutoff = minCutoff + beta * |filtered speed|,   alpha = 1 / (1 + tau / dt),  tau = 1 / (2 pi cutoff)
+// With a reference noise the cutoff is also at least minCutoff * (reference / measured noise)^2:
+// a first-order low-pass leaves a residual noise variance of about s^2 pi cutoff dt, so this keeps
+// a quieter source's residual at the reference source's, and a clean one is barely delayed.
 // Positions use speed in m/s, orientations angular speed in rad/s (the quaternion is slerped).
 #include "tracking/tracker.h"
 
@@ -11,6 +14,13 @@ struct OneEuroParams {
   float minCutoff = 1.0f;         // Hz, the cutoff at rest: lower removes more jitter
   float beta = 0.0f;              // cutoff increase per unit of speed: higher cuts lag at speed
   float derivativeCutoff = 1.0f;  // Hz, for the speed estimate
+  // The noise (standard deviation per axis, metres or radians) the cutoffs above are tuned for;
+  // 0: they apply whatever the noise. Otherwise the filter measures the signal's own noise
+  // (NoiseEstimate) and smooths no more than that noise needs: the cutoff is at least
+  // minCutoff * (referenceNoise / measured)^2, which leaves a quieter source's residual jitter
+  // where the tuned cutoffs leave a `referenceNoise` one's, with less lag. It never smooths less
+  // than the plain filter would at referenceNoise and above.
+  float referenceNoise = 0.0f;
 };
 
 struct TrackerFilterParams {
@@ -19,21 +29,54 @@ struct TrackerFilterParams {
   // 1 mm jitter 4.3x less instead of 4.8x (0.3 mm: 4.9x instead of 5.1x), for 3.9 mm of lag at
   // 1 m/s instead of 9.9 mm, which was most of a hand's error against motion capture (embody eval,
   // three trackers, eight clips: hands 1.45 -> 0.84 cm; docs/eval.md).
-  OneEuroParams position{1.0f, 40.0f, 1.0f};
+  // Positions are tuned for that 1 mm and smooth a cleaner source (a headset runtime's own
+  // filtered poses, motion capture) less: `embody eval --trackers 3`, eight clips, hands 0.55 ->
+  // 0.47 cm (cmu_131_02 0.51 -> 0.21). Orientations keep their cutoffs whatever the noise: adapted
+  // too, one clip's spinning jump (cmu_131_03) went 9.2 -> 11.3 cm where positions alone leave it
+  // at 9.2 (docs/tracking.md, "One Euro filter").
+  OneEuroParams position{1.0f, 40.0f, 1.0f, 0.001f};
   OneEuroParams orientation{1.0f, 3.0f, 1.0f};
 };
+
+// The white noise on a tracker's signal, from its third differences: per axis, white noise of
+// standard deviation s gives E|d3|^2 = 20 s^2 (1 + 9 + 9 + 1), while smooth motion gives
+// d3 = jerk * dt^3 (0.14 mm at 100 m/s^3 and 90 Hz). The mean of |d3|^2 / 60 (three axes) over
+// the samples so far, exponential over `window` seconds once there are that many; the prior until
+// the first one. A reset breaks the history, not the measured level (it is the device's).
+class NoiseEstimate {
+ public:
+  explicit NoiseEstimate(float prior = 0.0f, float window = 1.0f) : variance_(prior * prior), window_(window) {}
+  // `velocity`: this step's raw difference over dt. Returns the standard deviation per axis.
+  float update(const glm::vec3& velocity, float dt);
+  float deviation() const;
+  void restart() { steps_ = 0; }  // a broken history (a gap, a glitch); the noise level stays
+
+ private:
+  glm::vec3 previous_[2]{glm::vec3(0.0f), glm::vec3(0.0f)};
+  int steps_ = 0, samples_ = 0;
+  float variance_;
+  float window_;
+};
+
+// The One Euro cutoff for `speed`, raised where the measured noise is below the reference.
+float oneEuroCutoff(const OneEuroParams& p, float speed, float noise);
 
 float oneEuroAlpha(float cutoffHz, float dt);
 
 class OneEuroVec3 {
  public:
-  explicit OneEuroVec3(OneEuroParams p = {}) : p_(p) {}
+  explicit OneEuroVec3(OneEuroParams p = {}) : p_(p), noise_(p.referenceNoise) {}
   glm::vec3 filter(const glm::vec3& x, float dt);
-  void reset() { primed_ = false; }
+  void reset() {
+    primed_ = false;
+    noise_.restart();
+  }
   bool primed() const { return primed_; }
+  float noise() const { return noise_.deviation(); }  // measured (the prior until measured)
 
  private:
   OneEuroParams p_;
+  NoiseEstimate noise_;
   glm::vec3 x_{0.0f}, raw_{0.0f};
   glm::vec3 velocity_{0.0f};  // low-passed per component, so zero-mean jitter averages out
   bool primed_ = false;
@@ -41,12 +84,17 @@ class OneEuroVec3 {
 
 class OneEuroQuat {
  public:
-  explicit OneEuroQuat(OneEuroParams p = {}) : p_(p) {}
+  explicit OneEuroQuat(OneEuroParams p = {}) : p_(p), noise_(p.referenceNoise) {}
   glm::quat filter(const glm::quat& q, float dt);
-  void reset() { primed_ = false; }
+  void reset() {
+    primed_ = false;
+    noise_.restart();
+  }
+  float noise() const { return noise_.deviation(); }
 
  private:
   OneEuroParams p_;
+  NoiseEstimate noise_;
   glm::quat q_{1, 0, 0, 0}, raw_{1, 0, 0, 0};
   glm::vec3 velocity_{0.0f};  // angular velocity, low-passed per component
   bool primed_ = false;
