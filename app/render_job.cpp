@@ -306,8 +306,11 @@ int runRenderJob(const RenderJob& job) {
   const runtime::StatsSummary sum = loop.stats.summary();
   writeStats(job, source.name(), inputs->userHeight, sum, **solver, ik.samplesSkipped(), loop.seated, loop.upright);
   std::printf("wrote %d frames, contact_sheet.png and stats.json to %s\n", job.writeFrames ? frames : 0, job.out.c_str());
-  std::printf("ik: p50 %.2f ms, p99 %.2f ms (budget %.2f ms), %zu deadline misses, %.1f iterations\n", sum.ikP50Ms,
+  std::printf("ik: p50 %.2f ms, p99 %.2f ms (budget %.2f ms), %zu deadline misses, %.1f iterations", sum.ikP50Ms,
               sum.ikP99Ms, sum.budgetMs, sum.deadlineMisses, sum.iterationsMean);
+  if (sum.startupMs >= 0.0)
+    std::printf("; start-up solve %.1f ms (%d iterations, once, outside the budget)", sum.startupMs, sum.startupIterations);
+  std::printf("\n");
   std::printf("tracking: head error p95 %s, hand error p95 %s; body upright in %zu of %zu frames; render p50 %.1f ms\n",
               millimetres(sum.headErrorP95).c_str(), millimetres(sum.handErrorP95).c_str(), loop.upright.upright,
               loop.upright.frames, sum.renderP50Ms);

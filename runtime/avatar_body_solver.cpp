@@ -57,7 +57,7 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   const Clock& clock = *request.clock;
   const tracking::GuardedSample& sample = *request.targets;
   calibrate(sample);
-  setTargets(sample);
+  const bool seatSettled = setTargets(sample);
   if (!solvedOnce_ && !rig_.layout.seated) seedStanding(sample);
 
   const bool cold = !solvedOnce_ || reseeded_;
@@ -79,6 +79,8 @@ SolveResult AvatarBodySolver::solve(const SolveRequest& request, avatar::Skeleto
   const TimePoint solvedAt = clock.now();
   result.iterations = solved.iterations;
   result.converged = solved.converged;
+  // Outside the budget (only a budgeted solve has one): a new seat, or the first live solve.
+  result.settled = request.fixedIterations == 0 && (seatSettled || solveJob.settleFirst);
 
   keepLastGood(solved.broken);
   solvedOnce_ = true;
@@ -98,7 +100,8 @@ void AvatarBodySolver::calibrate(const tracking::GuardedSample& sample) {
     calibration_ = calibration_.withHeights(rig_, sample);
 }
 
-void AvatarBodySolver::setTargets(const tracking::GuardedSample& sample) {
+// Returns whether a new seat was settled outside the budget.
+bool AvatarBodySolver::setTargets(const tracking::GuardedSample& sample) {
   TrackerTargetsJob trackers;
   trackers.rig = &rig_;
   trackers.calibration = &calibration_;
@@ -124,6 +127,7 @@ void AvatarBodySolver::setTargets(const tracking::GuardedSample& sample) {
   refusedCalls_ += out.refusedCalls;
   // A new seat before the first solve: sit down and reach the first targets outside the budget.
   if (out.settleSeat) (void)settle(rig_.body.model, *data_, {}, kSeatSettleIterations);
+  return out.settleSeat;
 }
 
 // Never publish a broken configuration: fall back to the last good one.

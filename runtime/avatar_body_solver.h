@@ -117,7 +117,7 @@ class AvatarBodySolver final : public BodySolver {
   // solve()'s steps around the jobs: the calibration on the first samples, the targets and tasks,
   // the fallback to the last good configuration.
   void calibrate(const tracking::GuardedSample& sample);
-  void setTargets(const tracking::GuardedSample& sample);
+  bool setTargets(const tracking::GuardedSample& sample);
   void keepLastGood(bool broken);
   // Standing start: the root under the head, facing the head's and hands' heading (body_seed.h).
   // False (nothing changed) without a live head or under a head lower than the standing pelvis.

@@ -34,6 +34,9 @@ struct SolveResult {
   // Per tracker: whether its target is within the avatar's reach (hands: the arm's reach from
   // the shoulder). Hand errors count only where it is: an out-of-reach target cannot be met.
   std::array<bool, tracking::kTrackerCount> reachable{true, true, true, true, true, true};
+  // This budgeted solve first settled outside the budget, once by design: the body's start (the
+  // first live solve from the rest pose, a new seat). Its time is the start-up's, not a frame's.
+  bool settled = false;
 };
 
 class BodySolver {

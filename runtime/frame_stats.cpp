@@ -22,17 +22,22 @@ StatsSummary StatsRecorder::summary() const {
   std::vector<double> ik, render;
   double iterations = 0.0;
   for (const auto& f : frames_) {
-    ik.push_back(f.ikSeconds * 1e3);
     if (f.renderSeconds > 0.0) render.push_back(f.renderSeconds * 1e3);
+    s.budgetMs = f.budgetSeconds * 1e3;
+    if (f.startup) {
+      s.startupMs = std::max(s.startupMs, f.ikSeconds * 1e3);
+      s.startupIterations = std::max(s.startupIterations, f.iterations);
+      continue;
+    }
+    ik.push_back(f.ikSeconds * 1e3);
     iterations += f.iterations;
     s.deadlineMisses += f.deadlineMiss ? 1 : 0;
-    s.budgetMs = f.budgetSeconds * 1e3;
   }
-  s.ikMaxMs = *std::max_element(ik.begin(), ik.end());
+  s.ikMaxMs = ik.empty() ? 0.0 : *std::max_element(ik.begin(), ik.end());
   s.ikP50Ms = percentile(ik, 50);
   s.ikP99Ms = percentile(ik, 99);
   s.renderP50Ms = percentile(render, 50);
-  s.iterationsMean = iterations / static_cast<double>(frames_.size());
+  s.iterationsMean = ik.empty() ? 0.0 : iterations / static_cast<double>(ik.size());
   for (auto id : tracking::kAllTrackers) {
     const auto i = static_cast<size_t>(tracking::index(id));
     std::vector<double> r, turn;
@@ -71,6 +76,10 @@ void toJson(nlohmann::json& j, const StatsSummary& s) {
   j["ik"] = {{"budget_ms", s.budgetMs},          {"p50_ms", s.ikP50Ms},
              {"p99_ms", s.ikP99Ms},              {"max_ms", s.ikMaxMs},
              {"deadline_misses", s.deadlineMisses}, {"iterations_mean", s.iterationsMean}};
+  if (s.startupMs >= 0.0) {
+    j["ik"]["startup_ms"] = s.startupMs;
+    j["ik"]["startup_iterations"] = s.startupIterations;
+  }
   j["tracking"] = {{"head_error_p95_m", s.headErrorP95},
                    {"hand_error_p95_m", s.handErrorP95},
                    {"hand_frames_out_of_reach", s.handFramesOutOfReach},

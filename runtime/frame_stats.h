@@ -17,7 +17,8 @@ struct FrameStats {
   double budgetSeconds = 0.0;
   int iterations = 0;
   bool converged = false;
-  bool deadlineMiss = false;  // returned after the deadline
+  bool deadlineMiss = false;  // returned after the deadline (a start-up solve never counts)
+  bool startup = false;       // the body's start, settled outside the budget once (SolveResult::settled)
   std::array<float, tracking::kTrackerCount> residual{-1, -1, -1, -1, -1, -1};  // metres, < 0: no task
   std::array<float, tracking::kTrackerCount> turnResidual{-1, -1, -1, -1, -1, -1};  // radians, < 0: no task
   std::array<bool, tracking::kTrackerCount> reachable{true, true, true, true, true, true};
@@ -28,9 +29,13 @@ struct FrameStats {
 struct StatsSummary {
   size_t frames = 0;
   double budgetMs = 0.0;
+  // Per frame, over the frames after start-up (the start-up solve runs outside the budget by
+  // design: its time and iterations are startupMs and startupIterations, -1 / 0 without one).
   double ikP50Ms = 0.0, ikP99Ms = 0.0, ikMaxMs = 0.0;
   size_t deadlineMisses = 0;
   double iterationsMean = 0.0;
+  double startupMs = -1.0;
+  int startupIterations = 0;
   double renderP50Ms = 0.0;
   // Per tracker: p95 of the residual over frames where it drove a task (-1: never), and the
   // fraction of frames it was live-tracked.
@@ -59,7 +64,8 @@ class StatsRecorder {
 // Nearest-rank percentile (p in 0..100) of the values; 0 for none. Reorders `values`.
 double percentile(std::vector<double>& values, double p);
 
-// {"frames", "ik": {budget_ms, p50_ms, p99_ms, max_ms, deadline_misses, iterations_mean},
+// {"frames", "ik": {budget_ms, p50_ms, p99_ms, max_ms, deadline_misses, iterations_mean[,
+//  startup_ms, startup_iterations]},
 //  "tracking": {head_error_p95_m, hand_error_p95_m, hand_frames_out_of_reach, non_finite_frames},
 //  "trackers": {"head": {"tracked_fraction", "residual_p95_m", "turn_error_p95_deg"}, ...}, "render": {"p50_ms"}}
 void toJson(nlohmann::json& j, const StatsSummary& s);

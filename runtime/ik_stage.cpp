@@ -37,7 +37,8 @@ const FrameStats& IkStage::process(const tracking::PoseSample& sample, SolvedFra
   s.budgetSeconds = config_.budgetSeconds;
   s.iterations = r.iterations;
   s.converged = r.converged;
-  s.deadlineMiss = config_.fixedIterations == 0 && end > deadline;
+  s.startup = r.settled;
+  s.deadlineMiss = config_.fixedIterations == 0 && !r.settled && end > deadline;
   s.residual = r.residual;
   s.reachable = r.reachable;
   s.turnResidual = r.turnResidual;
