@@ -31,9 +31,9 @@ struct TrackerFilterParams {
   // three trackers, eight clips: hands 1.45 -> 0.84 cm; docs/eval.md).
   // Positions are tuned for that 1 mm and smooth a cleaner source (a headset runtime's own
   // filtered poses, motion capture) less: `embody eval --trackers 3`, eight clips, hands 0.55 ->
-  // 0.47 cm (cmu_131_02 0.51 -> 0.21). Orientations keep their cutoffs whatever the noise: adapted
-  // too, one clip's spinning jump (cmu_131_03) went 9.2 -> 11.3 cm where positions alone leave it
-  // at 9.2 (docs/tracking.md, "One Euro filter").
+  // 0.42 cm (cmu_131_02 0.51 -> 0.05). Orientations keep their cutoffs whatever the noise: adapted
+  // too, one clip's spinning jump (cmu_131_03) went 9.1 -> 11.3 cm (docs/tracking.md, "One Euro
+  // filter").
   OneEuroParams position{1.0f, 40.0f, 1.0f, 0.001f};
   OneEuroParams orientation{1.0f, 3.0f, 1.0f};
 };
@@ -72,7 +72,6 @@ class OneEuroVec3 {
     noise_.restart();
   }
   bool primed() const { return primed_; }
-  float noise() const { return noise_.deviation(); }  // measured (the prior until measured)
 
  private:
   OneEuroParams p_;
@@ -90,7 +89,6 @@ class OneEuroQuat {
     primed_ = false;
     noise_.restart();
   }
-  float noise() const { return noise_.deviation(); }
 
  private:
   OneEuroParams p_;
