@@ -107,7 +107,6 @@ void FootPlanner::reset(const Eigen::Vector3d& centre, double yaw, double time) 
   lastTime_ = time;
   lastLanding_ = time - 1.0;
   lastFoot_ = -1;
-  steps_ = 0;
   initialised_ = true;
   buildSupport();
 }

@@ -61,7 +61,7 @@ class FootPlanner {
   const std::array<FootTarget, 2>& feet() const { return feet_; }
   bool initialised() const { return initialised_; }
   void restart() { initialised_ = false; }  // the next update() plants both feet afresh
-  int steps() const { return steps_; }
+  int steps() const { return steps_; }  // since construction: a re-plant (reset) keeps the count
   int lastStepFoot() const { return lastFoot_; }
   // Balance: whether the ground projection of `point` is over the support polygon (the planted
   // feet plus the landing spot of a swinging foot), and the nearest point of it (`margin` inside).

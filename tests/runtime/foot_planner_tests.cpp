@@ -64,3 +64,18 @@ TEST_CASE("foot planner: turning on the spot while drifting sideways keeps the f
   CHECK(steps >= 2);
   CHECK(narrowest >= 0.1 - 1e-9);
 }
+
+TEST_CASE("foot planner: re-planting the feet (a re-seed) keeps the count of steps taken", "[runtime]") {
+  // stats.json body.steps counts the run's steps: a collapse guard's re-seed re-plants the feet
+  // (reset) and once zeroed the count, so a run with a re-seed reported only the steps after it.
+  FootPlanner p = planner();
+  for (int i = 0; i <= 90; ++i) {
+    const double t = i / 90.0;
+    const Eigen::Vector3d c(0.0, 0.9, 1.0 * t);
+    p.update(t, c, 0.0, c);
+  }
+  const int before = p.steps();
+  REQUIRE(before >= 2);
+  p.reset(Eigen::Vector3d(0.0, 0.9, 1.0), 0.0, 1.0);
+  CHECK(p.steps() == before);
+}
