@@ -3,6 +3,7 @@
 // CesiumMan), three-point mode with procedural stepping, tracking loss, and the deadline with an
 // injected clock.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -225,6 +226,52 @@ TEST_CASE("three-point jump: a head above what straight legs reach lifts both fe
     CHECK(std::abs(landed[k] - standing[k]) < 0.005);   // back on the floor
   }
   CHECK(eyeErrorAtTop < 0.02);
+}
+
+TEST_CASE("three-point turning on the spot: the body steps round with the head, never re-seeded, head and hands on target") {
+  // Standing idle, the head and hands turned about the vertical through the head: half a turn in
+  // 0.6 s (looking behind), back, then a full turn the other way in 2 s. The feet must step round
+  // (the legs would otherwise cross, or twist past the hips' range), the pelvis and trunk follow
+  // the head. A pirouette (two turns in 1.2 s) still crosses the legs and is re-seeded once
+  // (docs/eval.md, "Session 13").
+  auto src = open("synthetic:idle", tracking::TrackerMask::threePoint());
+  AvatarBodyOptions o;
+  o.userHeight = 1.75f;
+  o.trackers = tracking::TrackerMask::threePoint();
+  auto smooth = [](double x) {
+    x = std::clamp(x, 0.0, 1.0);
+    return x * x * (3.0 - 2.0 * x);
+  };
+  auto yaw = [&](double t) {
+    if (t < 2.6) return M_PI * smooth((t - 1.0) / 0.6);
+    if (t < 4.0) return M_PI * (1.0 - smooth((t - 2.6) / 0.6));
+    return -2.0 * M_PI * smooth((t - 4.0) / 2.0);
+  };
+  const double fps = 90.0;
+  glm::vec3 pivot(0.0f);
+  int recoveries = 0;
+  const Run r = drive(
+      defaultAvatar(), *src, o, int(7.0 * fps), fps, kGenerousBudget,
+      [&](tracking::PoseSample& s) {
+        if (s.time == 0.0) pivot = glm::vec3(s[TrackerId::Head].position.x, 0.0f, s[TrackerId::Head].position.z);
+        const glm::quat turn = glm::angleAxis(float(yaw(s.time)), glm::vec3(0, 1, 0));
+        for (auto id : {TrackerId::Head, TrackerId::LeftHand, TrackerId::RightHand}) {
+          s[id].position = pivot + turn * (s[id].position - pivot);
+          s[id].orientation = turn * s[id].orientation;
+        }
+      },
+      [&](const AvatarBodySolver& s, const SolvedFrame&) { recoveries = s.collapseGuard().recoveries(); });
+  const size_t head = size_t(tracking::index(TrackerId::Head));
+  INFO("steps " << r.steps << ", re-seeds " << recoveries << ", head p95 " << r.summary.headErrorP95 << " m, hands p95 "
+                << r.summary.handErrorP95 << " m, head turned off the headset's " << r.summary.turnResidualP95Deg[head]
+                << " degrees p95, hand targets out of reach " << r.summary.handFramesOutOfReach << " frames");
+  CHECK(r.nonFinitePoses == 0);
+  CHECK(recoveries == 0);
+  CHECK(r.steps >= 6);
+  CHECK(r.summary.headErrorP95 <= 0.005);
+  CHECK(r.summary.handErrorP95 <= 0.005);
+  CHECK(r.summary.handFramesOutOfReach == 0);
+  CHECK(r.summary.turnResidualP95Deg[head] < 5.0);
 }
 
 TEST_CASE("hands lost for 1 s: within arm's reach of the shoulder every frame, at most 3 m/s when tracking returns") {
