@@ -68,18 +68,12 @@ TEST_CASE("a solver given a deadline returns by the deadline plus at most one it
 
 TEST_CASE("a solver that ignores the deadline is counted as a miss, and the summary reports it") {
   ManualClock clock;
-  struct Slow final : BodySolver {
-    ManualClock& c;
-    explicit Slow(ManualClock& clock) : c(clock) {}
-    SolveResult solve(const SolveRequest&, avatar::SkeletonPose&) override {
-      c.advance(2.5e-3);
-      SolveResult r;
-      r.iterations = 7;
-      r.residual = {0.004f, 0.01f, 0.02f, -1, -1, -1};
-      r.turnResidual = {0.0f, float(std::numbers::pi / 6.0), -1, -1, -1, -1};  // the left hand 30 degrees off
-      return r;
-    }
-  } slow(clock);
+  test::ScriptedSolver slow(clock, [](int, SolveResult& r) {
+    r.iterations = 7;
+    r.residual = {0.004f, 0.01f, 0.02f, -1, -1, -1};
+    r.turnResidual = {0.0f, float(std::numbers::pi / 6.0), -1, -1, -1, -1};  // the left hand 30 degrees off
+    return 2.5e-3;
+  });
   IkStage stage(slow, clock, {});
   SolvedFrame frame;
   StatsRecorder rec;
@@ -120,19 +114,11 @@ TEST_CASE("the start-up solve, settled outside the budget once by design, is rep
   // solve), the next ones take 0.5 ms, one of them 1.5 ms: one miss, the per-frame figures over
   // the frames after start-up, the start-up on its own.
   ManualClock clock;
-  struct Settling final : BodySolver {
-    ManualClock& c;
-    int calls = 0;
-    explicit Settling(ManualClock& clock) : c(clock) {}
-    SolveResult solve(const SolveRequest&, avatar::SkeletonPose&) override {
-      SolveResult r;
-      r.settled = calls == 0;
-      r.iterations = r.settled ? 40 : 2;
-      c.advance(r.settled ? 6e-3 : calls == 5 ? 1.5e-3 : 0.5e-3);
-      ++calls;
-      return r;
-    }
-  } settling(clock);
+  test::ScriptedSolver settling(clock, [](int call, SolveResult& r) {
+    r.settled = call == 0;
+    r.iterations = r.settled ? 40 : 2;
+    return r.settled ? 6e-3 : call == 5 ? 1.5e-3 : 0.5e-3;
+  });
   IkStage stage(settling, clock, {});
   SolvedFrame frame;
   StatsRecorder rec;

@@ -41,6 +41,25 @@ class FakeSolver final : public runtime::BodySolver {
   int maxIterations_;
 };
 
+// A solver that ignores the budget: its call n (0-based) fills in the result with `script(n, r)`
+// and takes the seconds the script returns on `clock`.
+class ScriptedSolver final : public runtime::BodySolver {
+ public:
+  using Script = std::function<double(int call, runtime::SolveResult& result)>;
+  ScriptedSolver(runtime::ManualClock& clock, Script script) : clock_(clock), script_(std::move(script)) {}
+
+  runtime::SolveResult solve(const runtime::SolveRequest&, avatar::SkeletonPose&) override {
+    runtime::SolveResult r;
+    clock_.advance(script_(calls_++, r));
+    return r;
+  }
+
+ private:
+  runtime::ManualClock& clock_;
+  Script script_;
+  int calls_ = 0;
+};
+
 inline avatar::SkeletonPose posedSkeleton(int joints) {
   avatar::SkeletonPose p;
   p.local.resize(static_cast<size_t>(joints));
