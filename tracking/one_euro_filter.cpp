@@ -25,9 +25,10 @@ float NoiseEstimate::update(const glm::vec3& velocity, float dt) {
 
 float NoiseEstimate::deviation() const { return std::sqrt(std::max(variance_, 0.0f)); }
 
-float oneEuroCutoff(const OneEuroParams& p, float speed, float noise) {
+float oneEuroCutoff(const OneEuroParams& p, float speed, NoiseEstimate& estimate, const glm::vec3& velocity, float dt) {
   const float cutoff = p.minCutoff + p.beta * speed;
   if (!(p.referenceNoise > 0.0f)) return cutoff;
+  const float noise = estimate.update(velocity, dt);
   // Capped where alpha is 1 to float precision at any tracking rate (and for a silent signal).
   constexpr float kMaxCutoff = 1e5f;
   const float ratio = p.referenceNoise / std::max(noise, p.referenceNoise / std::sqrt(kMaxCutoff));
@@ -45,7 +46,7 @@ glm::vec3 OneEuroVec3::filter(const glm::vec3& x, float dt) {
   const glm::vec3 rawVelocity = (x - raw_) / dt;
   velocity_ += oneEuroAlpha(p_.derivativeCutoff, dt) * (rawVelocity - velocity_);
   raw_ = x;
-  const float cutoff = oneEuroCutoff(p_, glm::length(velocity_), noise_.update(rawVelocity, dt));
+  const float cutoff = oneEuroCutoff(p_, glm::length(velocity_), noise_, rawVelocity, dt);
   x_ += oneEuroAlpha(cutoff, dt) * (x - x_);
   return x_;
 }
@@ -68,7 +69,7 @@ glm::quat OneEuroQuat::filter(const glm::quat& qIn, float dt) {
   const glm::vec3 omega = s > 1e-6f ? glm::vec3(d.x, d.y, d.z) / s * (angle / dt) : glm::vec3(0.0f);
   velocity_ += oneEuroAlpha(p_.derivativeCutoff, dt) * (omega - velocity_);
   raw_ = q;
-  const float cutoff = oneEuroCutoff(p_, glm::length(velocity_), noise_.update(omega, dt));
+  const float cutoff = oneEuroCutoff(p_, glm::length(velocity_), noise_, omega, dt);
   q_ = glm::normalize(glm::slerp(q_, q, oneEuroAlpha(cutoff, dt)));
   return q_;
 }

@@ -58,8 +58,10 @@ class NoiseEstimate {
   float window_;
 };
 
-// The One Euro cutoff for `speed`, raised where the measured noise is below the reference.
-float oneEuroCutoff(const OneEuroParams& p, float speed, float noise);
+// The One Euro cutoff for `speed`, raised where the noise `estimate` measures (updated with this
+// step's raw `velocity`; only with a reference noise, the one case that reads it) is below the
+// reference.
+float oneEuroCutoff(const OneEuroParams& p, float speed, NoiseEstimate& estimate, const glm::vec3& velocity, float dt);
 
 float oneEuroAlpha(float cutoffHz, float dt);
 
