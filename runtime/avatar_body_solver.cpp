@@ -120,6 +120,7 @@ bool AvatarBodySolver::setTargets(const tracking::GuardedSample& sample) {
   tasks.solvedOnce = solvedOnce_;
   tasks.targets = &targets_;
   tasks.planner = &planner_;
+  tasks.heading = &heading_;
   tasks.seat = &seat_;
   tasks.data = data_.get();
   tasks.output = &out;
@@ -188,6 +189,10 @@ bool AvatarBodySolver::seedStanding(const tracking::GuardedSample& targets) {
   in.up = rig_.up;
   in.forward = rig_.forward;
   in.headPivot = targets_.point[h] - targets_.rotation[h] * rig_.eyeInHead;
+  // The forward's ground projection, not faceHeadingOf: a seed is only planted under a standing
+  // head, and with a start yaw half a degree either way the all-trackers body held with its hands
+  // beyond reach fell into a cycle (a 4 mm jump every 60-180 frames; docs/runtime.md, "Known
+  // limits"), which the start from this yaw happens not to.
   in.headYaw = headingOf(targets_.rotation[h] * rig_.restRotation[h].conjugate(), rig_.up, rig_.forward);
   for (auto id : {TrackerId::LeftHand, TrackerId::RightHand}) {
     const size_t i = size_t(tracking::index(id));
@@ -268,6 +273,7 @@ void AvatarBodySolver::guardAgainstCollapse(const tracking::GuardedSample& targe
   fade_.start(pose, time, options_.recoveryBlendSeconds);  // `pose` is still the heap
   lastGoodQ_ = data_->q();
   planner_.restart();
+  heading_.reset();
 }
 
 void AvatarBodySolver::setMarkers(const std::vector<glm::dvec3>& positions, const std::vector<glm::dquat>& rotations) {
@@ -299,6 +305,7 @@ void AvatarBodySolver::resetWarmStart() {
   guard_.reset();
   fade_ = PoseFade{};
   planner_.restart();
+  heading_.reset();
 }
 
 }  // namespace embody::runtime

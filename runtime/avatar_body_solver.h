@@ -135,6 +135,7 @@ class AvatarBodySolver final : public BodySolver {
   // Per-frame state the jobs carry: the targets, the stepping feet, the seat.
   BodyTargets targets_;
   FootPlanner planner_;
+  BodyHeading heading_;
   SeatState seat_;
   Eigen::VectorXd lastGoodQ_;
   CollapseGuard guard_;

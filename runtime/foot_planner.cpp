@@ -52,12 +52,30 @@ Eigen::Vector2d nearestOnSegment(const Eigen::Vector2d& p, const Eigen::Vector2d
 
 Eigen::Quaterniond yawRotation(double yaw, const Eigen::Vector3d& up) { return Eigen::Quaterniond(Eigen::AngleAxisd(yaw, up)); }
 
-double headingOf(const Eigen::Quaterniond& q, const Eigen::Vector3d& up, const Eigen::Vector3d& forward) {
-  const Eigen::Vector3d f = q * forward;
+namespace {
+// The heading of direction `f` on the ground (0 when it is vertical).
+double headingOfDirection(const Eigen::Vector3d& f, const Eigen::Vector3d& up, const Eigen::Vector3d& forward) {
   const Eigen::Vector3d side = up.cross(forward);
   const double x = f.dot(forward), y = f.dot(side);
   if (x * x + y * y < 1e-12) return 0.0;
   return std::atan2(y, x);
+}
+}  // namespace
+
+double headingOf(const Eigen::Quaterniond& q, const Eigen::Vector3d& up, const Eigen::Vector3d& forward) {
+  return headingOfDirection(q * forward, up, forward);
+}
+
+double faceHeadingOf(const Eigen::Quaterniond& q, const Eigen::Vector3d& up, const Eigen::Vector3d& forward) {
+  // Looking down (or up) the turned forward's ground projection shrinks and, past the vertical,
+  // flips; a head bent over and turned to look at one leg swings it far round (turned 35 degrees
+  // about its own up at 55 degrees down, it reads 51 degrees). The turned up vector points the way
+  // the face does there, so it is blended in by how far the forward leaves the ground plane (as
+  // tracking::headingOf does in tracking space: 29 degrees for that head). With the forward alone
+  // the user washing the legs in cmu_002_10 had the inferred pelvis turned 60-130 degrees from
+  // theirs and the knees pointing backwards for 264 frames (docs/eval.md, "Session 14").
+  const Eigen::Vector3d f = q * forward;
+  return headingOfDirection(f - f.dot(up) * (q * up), up, forward);
 }
 
 void FootPlanner::configure(const FootPlannerConfig& config, const FootShape& shape, const Eigen::Vector3d& up,

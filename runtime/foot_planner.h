@@ -99,8 +99,14 @@ class FootPlanner {
 };
 
 // Heading (radians about `up`, 0 = `forward`, positive turning towards `up x forward`) of a
-// rotation that maps `forward` somewhere; the rotation about `up` by an angle.
+// rotation that maps `forward` somewhere: where its forward points on the ground (0 when straight
+// up or down). For a body segment: the pelvis's heading, the feet's.
 double headingOf(const Eigen::Quaterniond& q, const Eigen::Vector3d& up, const Eigen::Vector3d& forward);
+// The same for a head's turn: where the face points, also looking straight down or past the
+// vertical (the turned `up` fills in as the forward leaves the ground plane). Not for the pelvis:
+// its up vector brings its roll into the heading, and the knee poles taken from it made a body
+// reaching beyond both arms' span cycle by 0.6 mm a frame.
+double faceHeadingOf(const Eigen::Quaterniond& q, const Eigen::Vector3d& up, const Eigen::Vector3d& forward);
 Eigen::Quaterniond yawRotation(double yaw, const Eigen::Vector3d& up);
 
 }  // namespace embody::runtime

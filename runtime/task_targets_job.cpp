@@ -18,9 +18,14 @@ namespace {
 //   - Looking at the floor (45 -> 80 degrees down) the sinking head is a bend at the hips
 //     (washing, picking something up): that share of the drop becomes a lean a of the trunk that
 //     lowers the head by as much, L (1 - cos a) = share * drop, the legs straight.
-//   - The rest of the drop is a crouch: beyond 0.05 trunk lengths (gait, posture) the trunk leans
-//     0.8 rad per trunk length of it (up to 45 degrees; a squat 0.35 m deep leans it about 24),
-//     the pelvis back over the heels.
+//   - A head sunk far (0.3 -> 0.7 trunk lengths) looking down by 35 -> 60 degrees is bent over
+//     too: people reach low by stooping and bend the knees only for the rest. In cmu_002_10
+//     (washing the legs, the head 0.5 of the body's height down, looking 42-63 degrees down) the
+//     pelvis sank only 0.16-0.38 of the head's drop; taken as a crouch, the inferred pelvis sank
+//     twice as far and, with its row let go, under half its standing height (14 frames).
+//   - What the bend does not take (it stops at 90 degrees) is a crouch: beyond 0.05 trunk lengths
+//     (gait, posture) the trunk leans 0.8 rad per trunk length of it (up to 45 degrees; a squat
+//     0.35 m deep leans it about 24), the pelvis back over the heels.
 //   - The deeper the crouch the less the pelvis row pulls (`weight`, 1 down to 0 between 0.1 and
 //     0.4 trunk lengths of crouch): where the pelvis goes in a deep squat depends on the person,
 //     and a row that held it cost the squat crossed knees.
@@ -35,13 +40,31 @@ InferredTrunk inferTrunk(double drop, double pitchDown, double trunk) {
   constexpr double kDegree = std::numbers::pi / 180.0;
   InferredTrunk out;
   if (!(drop > 0.0) || !(trunk > 0.0) || !std::isfinite(drop) || !std::isfinite(pitchDown)) return out;
-  const double bendShare = smoothstep((pitchDown - 45.0 * kDegree) / (35.0 * kDegree));
+  const double looking = smoothstep((pitchDown - 45.0 * kDegree) / (35.0 * kDegree));
+  const double reaching = smoothstep((pitchDown - 35.0 * kDegree) / (25.0 * kDegree)) * smoothstep((drop / trunk - 0.3) / 0.4);
+  const double bendShare = std::max(looking, reaching);
   out.bend = std::acos(std::clamp(1.0 - bendShare * drop / trunk, 0.0, 1.0));
-  const double crouch = (1.0 - bendShare) * drop / trunk;  // trunk lengths
+  const double crouch = std::max(0.0, drop / trunk - (1.0 - std::cos(out.bend)));  // trunk lengths
   out.lean = std::min(out.bend + std::min(0.8 * std::max(0.0, crouch - 0.05), 45.0 * kDegree), 90.0 * kDegree);
   out.weight = 1.0 - smoothstep((crouch - 0.1) / 0.3);
   return out;
 }
+
+// How far (radians) the head looks below the horizon, from its turn off the rest pose: the tilt
+// of its up vector, signed by whether the face points down (fully beyond 0.2 of it). The forward's
+// own elevation shrinks when a bent-over head turns to look at one leg: with the head 55 degrees
+// down turning 35 degrees to a leg (body_plausibility_tests), the pitch read that way fell from
+// 53 to 40 degrees, the bend below took the drop for a crouch and let the pelvis row go (weight
+// 0.9 -> 0) and back, and the pelvis sank to 0.41 of its standing height.
+double headPitchDown(const Eigen::Quaterniond& headTurn, const Eigen::Vector3d& up, const Eigen::Vector3d& forward) {
+  const double faceDown = -up.dot(headTurn * forward);
+  const double tilt = std::acos(std::clamp(up.dot(headTurn * up), -1.0, 1.0));
+  return tilt * std::clamp(faceDown / 0.2, -1.0, 1.0);
+}
+
+// Bent over by this much or more (radians), the head may look this far to either side of the
+// body's heading (upright: not at all, the body turns with the head; smoothly in between).
+constexpr double kBentNeckTurn = std::numbers::pi / 4.0;
 
 // TaskTargetsJob::Run()'s steps over one frame's state.
 class TaskWriter {
@@ -111,28 +134,36 @@ void TaskWriter::scaleStrides() {
 void TaskWriter::setInferredLowerBody() {
   const size_t headIndex = size_t(tracking::index(TrackerId::Head));
   const Eigen::Quaterniond headTurn = targets.rotation[headIndex] * r.restRotation[headIndex].conjugate();
-  const double yaw = headingOf(headTurn, r.up, r.forward);
-  const Eigen::Quaterniond heading = yawRotation(yaw, r.up);
+  const double time = sample.pose.time;
   const Eigen::Vector3d headPivot = targets.point[headIndex] - targets.rotation[headIndex] * r.eyeInHead;
-  const Eigen::Vector3d look = headTurn * r.forward;
-  const double pitchDown = std::asin(std::clamp(-r.up.dot(look), -1.0, 1.0));
+  const double pitchDown = headPitchDown(headTurn, r.up, r.forward);
   const double drop = r.restHeight[headIndex] - (r.up.dot(headPivot) - r.floor);
   const InferredTrunk trunk = inferTrunk(drop, pitchDown, r.restHeadToHips.norm());
+  const double neckTurn = kBentNeckTurn * smoothstep(trunk.bend / kBentNeckTurn);
+  const double yaw = job_.heading->update(faceHeadingOf(headTurn, r.up, r.forward), neckTurn);
+  const Eigen::Quaterniond heading = yawRotation(yaw, r.up);
   const Eigen::Vector3d side = r.up.cross(heading * r.forward).normalized();
   const Eigen::Quaterniond lean(Eigen::AngleAxisd(trunk.lean, side));
   const Eigen::Vector3d restOffset = heading * r.restHeadToHips;
   const Eigen::Vector3d pelvis = headPivot + lean * restOffset;
   const size_t hipsIndex = size_t(tracking::index(TrackerId::Hips));
   setPose(r.tasks.hipsPosition, r.tasks.hipsRotation, pelvis, lean * heading * r.restRotation[hipsIndex], trunk.weight);
-  // The feet step under the pelvis of the bend alone: bent over, they stand behind the head; the
-  // crouch's lean is left out, or a head near the floor looking up (a user lying down) planted
-  // them behind it and stood the body on its head (pelvis 0.79 m up instead of lying).
-  const Eigen::Vector3d hips = headPivot + Eigen::AngleAxisd(trunk.bend, side) * restOffset;
+  // The feet step under the body's centre of mass for the bend alone. Bent over, the pelvis goes
+  // behind the heels and the trunk ahead of the toes: with the legs about 0.35 of the body's mass
+  // and the upper body's centre 0.45 of the way from hips to head, the mass balances over a point
+  // about 0.4 of the way from the pelvis to the head (cmu_002_10: 0.42), so the feet stay 0.4 of
+  // the way back from where the bend put the hips to where upright hips would be. Under the bent
+  // pelvis itself the feet stepped 50 cm back each time the user reached down. The crouch's lean
+  // is left out, or a head near the floor looking up (a user lying down) planted them behind it
+  // and stood the body on its head (pelvis 0.79 m up instead of lying).
+  constexpr double kBalancePoint = 0.4;
+  const Eigen::Vector3d bentHips = headPivot + Eigen::AngleAxisd(trunk.bend, side) * restOffset;
+  const Eigen::Vector3d behind = headPivot + restOffset - bentHips;
+  const Eigen::Vector3d underFeet = bentHips + kBalancePoint * (behind - r.up * r.up.dot(behind));
 
-  const double time = sample.pose.time;
-  if (!planner.initialised()) planner.reset(hips, yaw, time);
-  const Eigen::Vector3d com = job_.solvedOnce ? Eigen::Vector3d(d.centerOfMass()) : hips;
-  const auto& feet = planner.update(time, hips, yaw, com);
+  if (!planner.initialised()) planner.reset(underFeet, yaw, time);
+  const Eigen::Vector3d com = job_.solvedOnce ? Eigen::Vector3d(d.centerOfMass()) : underFeet;
+  const auto& feet = planner.update(time, underFeet, yaw, com);
   // A jump: a head higher than straight legs on the floor can hold it lifts both feet by the
   // difference (the planner keeps their places on the ground). Without it a jumping user's body
   // stayed planted and its head sank up to 26 cm below the HMD (cmu_131_03, docs/eval.md).
@@ -158,7 +189,7 @@ void TaskWriter::setSeatedTargets() {
     // The seat goes under the first tracked head, facing where it looks.
     const Eigen::Quaterniond headTurn = targets.rotation[headIndex] * r.restRotation[headIndex].conjugate();
     const double seatHeight = job_.seatHeight > 0.0f ? calibration.scale * double(job_.seatHeight) : -1.0;
-    seat.pose = placeSeat(r.legs, targets.point[headIndex], headingOf(headTurn, r.up, r.forward), seatHeight);
+    seat.pose = placeSeat(r.legs, targets.point[headIndex], faceHeadingOf(headTurn, r.up, r.forward), seatHeight);
     seat.placed = true;
     if (!job_.solvedOnce) {
       // Start the cold solve with the hips over the seat: the legs then only fold.
@@ -249,7 +280,7 @@ void setTaskPose(const ik::Model& model, ik::Data& d, ik::TaskId position, ik::T
 }
 
 bool TaskTargetsJob::Validate() const {
-  if (!rig || !calibration || !sample || !targets || !planner || !seat || !data || !output) return false;
+  if (!rig || !calibration || !sample || !targets || !planner || !heading || !seat || !data || !output) return false;
   if (data->q().size() != rig->body.model.dofs || !calibration->scaled() || !std::isfinite(sample->pose.time)) return false;
   for (size_t i = 0; i < tracking::kTrackerCount; ++i)
     if (!targets->point[i].allFinite() || !targets->rotation[i].coeffs().allFinite() || !std::isfinite(targets->weight[i]))

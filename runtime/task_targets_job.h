@@ -16,6 +16,7 @@
 #include "runtime/body_calibration.h"
 #include "runtime/body_rig.h"
 #include "runtime/body_targets.h"
+#include "runtime/body_heading.h"
 #include "runtime/foot_planner.h"
 #include "runtime/seated_pose.h"
 
@@ -46,6 +47,7 @@ struct TaskTargetsJob {
   bool solvedOnce = false;   // the body has been solved since the last warm-start reset
   BodyTargets* targets = nullptr;  // in: the trackers'; out: the feet replaced (planner, seat, strides)
   FootPlanner* planner = nullptr;  // in-out (three-point mode)
+  BodyHeading* heading = nullptr;  // in-out (three-point mode)
   SeatState* seat = nullptr;       // in-out (seated mode)
   ik::Data* data = nullptr;        // in-out: the rig's model's data (task state; seated: the root)
   TaskTargetsOutput* output = nullptr;

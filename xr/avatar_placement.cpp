@@ -7,9 +7,8 @@
 namespace embody::xr {
 
 float headingOf(const Pose& p) {
-  const glm::vec3 f = p.orientation * glm::vec3(0.0f, 0.0f, -1.0f);
-  if (f.x * f.x + f.z * f.z < 1e-8f) return 0.0f;  // looking straight up or down: no heading
-  return std::atan2(-f.x, -f.z);
+  const glm::quat h = tracking::headingOf(p.orientation);  // a rotation about +Y by the heading
+  return 2.0f * std::atan2(h.y, h.w);
 }
 
 AvatarPlacement::AvatarPlacement(const glm::vec3& avatarEye, const glm::vec3& avatarForward,

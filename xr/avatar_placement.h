@@ -49,7 +49,8 @@ class AvatarPlacement {
   Pose recenter_;
 };
 
-// Yaw (radians about +Y) of a pose's forward (-Z) direction; 0 faces -Z.
+// Yaw (radians about +Y) of a pose's forward (-Z) direction; 0 faces -Z. Looking down or up the
+// pose's up vector fills in (tracking::headingOf), so a head looking at the floor has one too.
 float headingOf(const Pose& p);
 
 }  // namespace embody::xr

@@ -84,6 +84,7 @@ struct TaskState {
   BodyCalibration calibration;
   BodyTargets targets;
   FootPlanner planner;
+  BodyHeading heading;
   SeatState seat;
   ik::Data data;
   TaskTargetsOutput out;
@@ -101,6 +102,7 @@ struct TaskState {
     j.solvedOnce = solvedOnce;
     j.targets = &targets;
     j.planner = &planner;
+    j.heading = &heading;
     j.seat = &seat;
     j.data = &data;
     j.output = &out;
@@ -280,6 +282,9 @@ TEST_CASE("TaskTargetsJob: Validate rejects missing pointers, a data of another 
   CHECK(job.Validate());
   TaskTargetsJob bad = job;
   bad.planner = nullptr;
+  CHECK_FALSE(bad.Validate());
+  bad = job;
+  bad.heading = nullptr;
   CHECK_FALSE(bad.Validate());
   bad = job;
   bad.output = nullptr;

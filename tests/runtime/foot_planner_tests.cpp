@@ -1,7 +1,9 @@
 // The three-point foot planner on its own (runtime/foot_planner.h): where feet land.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <numbers>
 
+#include "runtime/body_heading.h"
 #include "runtime/foot_planner.h"
 
 using namespace embody::runtime;
@@ -78,4 +80,42 @@ TEST_CASE("foot planner: re-planting the feet (a re-seed) keeps the count of ste
   REQUIRE(before >= 2);
   p.reset(Eigen::Vector3d(0.0, 0.9, 1.0), 0.0, 1.0);
   CHECK(p.steps() == before);
+}
+
+TEST_CASE("faceHeadingOf: a head looking down, past the vertical or bent over and turned to a leg keeps its heading",
+          "[runtime]") {
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY(), forward = Eigen::Vector3d::UnitZ(), left = up.cross(forward);
+  const double deg = std::numbers::pi / 180.0;
+  const auto turn = [&](double yaw, double pitchDown, double lookAside) {
+    return Eigen::Quaterniond(Eigen::AngleAxisd(yaw * deg, up) * Eigen::AngleAxisd(pitchDown * deg, left) *
+                              Eigen::AngleAxisd(lookAside * deg, up));
+  };
+  for (double yaw : {-150.0, -40.0, 0.0, 40.0, 170.0}) {
+    INFO("yaw " << yaw);
+    // Level, looking down, straight down and past the vertical (a head bent far over): the same.
+    for (double pitch : {0.0, 55.0, 89.9, 90.0, 120.0, -60.0})
+      CHECK(std::remainder(faceHeadingOf(turn(yaw, pitch, 0.0), up, forward) - yaw * deg, 2 * std::numbers::pi) ==
+            Approx(0.0).margin(1e-9));
+  }
+  // Bent over 55 degrees and turned 35 degrees about its own up to look at a leg: the forward's
+  // ground projection alone reads 51 degrees; with the up vector blended in, 29.
+  CHECK(faceHeadingOf(turn(0.0, 55.0, 35.0), up, forward) / deg == Approx(29.4).margin(0.2));
+  CHECK(headingOf(turn(0.0, 55.0, 35.0), up, forward) / deg == Approx(50.7).margin(0.2));
+  CHECK(std::abs(std::remainder(headingOf(turn(40.0, 120.0, 0.0), up, forward) / deg - 40.0, 360.0)) == Approx(180.0));
+}
+
+TEST_CASE("BodyHeading: the head's heading upright, a neck's turn of slack when bent over", "[runtime]") {
+  const double deg = std::numbers::pi / 180.0;
+  BodyHeading h;
+  CHECK(h.update(10 * deg, 45 * deg) == Approx(10 * deg));  // the first call takes the head's
+  CHECK(h.update(40 * deg, 45 * deg) == Approx(10 * deg));  // within the neck's turn: the body stays
+  CHECK(h.update(70 * deg, 45 * deg) == Approx(25 * deg));  // beyond it: dragged along
+  CHECK(h.update(-20 * deg, 45 * deg) == Approx(25 * deg));
+  CHECK(h.update(0.0, 0.0) == Approx(0.0).margin(1e-12));   // upright: the head's own
+  // Across +-180 degrees the shorter way round.
+  CHECK(h.update(170 * deg, 0.0) == Approx(170 * deg));
+  CHECK(std::remainder(h.update(-160 * deg, 45 * deg) - 170 * deg, 2 * std::numbers::pi) == Approx(0.0).margin(1e-12));
+  CHECK(std::remainder(h.update(-100 * deg, 45 * deg) - (-145 * deg), 2 * std::numbers::pi) == Approx(0.0).margin(1e-12));
+  h.reset();
+  CHECK(h.update(-100 * deg, 45 * deg) == Approx(-100 * deg));
 }
