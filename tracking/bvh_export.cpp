@@ -45,6 +45,36 @@ SolvedMotionBvh SolvedMotionBvh::forAvatar(const avatar::AvatarAsset& asset, dou
   return out;
 }
 
+// A joint the body moves that has no position channels of its own keeps its file offset when read
+// back. CC_Base clips carry the body's motion on the root (RL_BoneRoot, position channels) and
+// turn CC_Base_Hip under it (rotation channels only), while the solver moves the hips: written
+// as they were, the solved body walked on the spot (the root frozen where the clip began). Such a
+// joint's displacement goes to the root's position: the whole hierarchy moves with it, as in the
+// clip. One floating joint is expected (the hips); a second, independent one could not be kept.
+void SolvedMotionBvh::carryTranslationsToRoot() {
+  const size_t n = clip_.joints.size();
+  for (size_t b = 0; b < n; ++b) {
+    const avatar::BvhJoint& joint = clip_.joints[b];
+    const int p = joint.parent;
+    if (p < 0 || joint.endSite || !posed_[b] || !posed_[size_t(p)]) continue;
+    bool hasPosition = false;
+    for (BvhChannel c : joint.channels) hasPosition = hasPosition || c < BvhChannel::Xrotation;
+    if (hasPosition) continue;
+    const glm::dvec3 readBack = position_[size_t(p)] + world_[size_t(p)] * joint.offset;
+    const glm::dvec3 moved = position_[b] - readBack;
+    if (glm::length(moved) < 1e-6 * (1.0 + glm::length(joint.offset))) continue;
+    int root = int(b);
+    while (clip_.joints[size_t(root)].parent >= 0) root = clip_.joints[size_t(root)].parent;
+    bool rootHasPosition = false;
+    for (BvhChannel c : clip_.joints[size_t(root)].channels) rootHasPosition = rootHasPosition || c < BvhChannel::Xrotation;
+    if (!rootHasPosition) return;
+    // Every joint between the root and this one (and the root) moves by the same amount: they stay
+    // where their offsets put them above it.
+    for (int a = p; a >= 0; a = clip_.joints[size_t(a)].parent) position_[size_t(a)] += moved;
+    return;
+  }
+}
+
 void SolvedMotionBvh::reserve(size_t frames) { clip_.values.reserve(frames * size_t(clip_.channelCount)); }
 
 void SolvedMotionBvh::add(const avatar::SkeletonPose& pose) {
@@ -52,6 +82,7 @@ void SolvedMotionBvh::add(const avatar::SkeletonPose& pose) {
   const size_t n = clip_.joints.size();
   world_.assign(n, glm::dquat(1, 0, 0, 0));
   position_.assign(n, glm::dvec3(0.0));
+  posed_.assign(n, 0);
   const glm::dmat3 toFile = glm::transpose(toAvatar_);
   const glm::dquat qToFile = glm::quat_cast(toFile);
   for (size_t j = 0; j < bvhOfJoint_.size(); ++j) {
@@ -63,7 +94,9 @@ void SolvedMotionBvh::add(const avatar::SkeletonPose& pose) {
     const glm::dquat delta = glm::quat_cast(r) * glm::conjugate(restRotation_[j]);
     world_[size_t(b)] = glm::normalize(qToFile * delta * glm::conjugate(qToFile));
     position_[size_t(b)] = toFile * (glm::dvec3(globals_[j][3]) - shift_) / scale_;
+    posed_[size_t(b)] = 1;
   }
+  carryTranslationsToRoot();
   const size_t base = clip_.values.size();
   clip_.values.resize(base + size_t(clip_.channelCount), 0.0f);
   for (size_t b = 0; b < n; ++b) {

@@ -42,6 +42,8 @@ class SolvedMotionBvh {
   std::vector<glm::mat4> globals_;
   std::vector<glm::dquat> world_;
   std::vector<glm::dvec3> position_;
+  std::vector<char> posed_;  // clip joints a skeleton joint wrote this frame
+  void carryTranslationsToRoot();
 };
 
 }  // namespace embody::tracking

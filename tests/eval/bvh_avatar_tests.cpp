@@ -435,3 +435,56 @@ TEST_CASE("BVH export: the CMU walk's own poses round-trip through the avatar", 
                          a->clip.values.begin() + std::ptrdiff_t((a->mapping.firstFrame + frames) * size_t(a->clip.channelCount)));
   requireSameGlobals(out.clip(), expected, 1e-2);
 }
+
+TEST_CASE("BVH export: hips moved under a root that carries the motion (CC_Base) move the root", "[eval][bvh]") {
+  // As RL_BoneRoot over CC_Base_Hip: the root has the position channels, the hips only rotation
+  // ones. The solver moves the hips; written as they were, the file kept the root where the clip
+  // began and the body walked on the spot.
+  std::string text = kClip;
+  text.replace(text.find("ROOT Hips"), 9, "ROOT BoneRoot\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition Zrotation "
+                                          "Xrotation Yrotation\n  JOINT Hips");
+  const size_t hipsChannels = text.find("CHANNELS 6", text.find("JOINT Hips"));
+  text.replace(hipsChannels, 10 + std::string(" Xposition Yposition Zposition").size(), "CHANNELS 3");
+  text.replace(text.find("MOTION"), 6, "}\nMOTION");
+  int channels = 0;
+  for (size_t p = text.find("CHANNELS"); p != std::string::npos; p = text.find("CHANNELS", p + 1)) channels += text[p + 9] - '0';
+  for (int f = 0; f < 3; ++f) {
+    for (int k = 0; k < channels; ++k) text += k ? " 0" : "0";
+    text += "\n";
+  }
+  auto parsed = avatar::parseBvh(text, "rooted.bvh");
+  REQUIRE(parsed);
+  auto a = tracking::buildBvhAvatar(std::move(parsed).value(), {});
+  REQUIRE(a);
+  const avatar::Skeleton& sk = a->asset.skeleton;
+  const int hips = sk.find("Hips");
+  REQUIRE(hips >= 0);
+  auto out = tracking::SolvedMotionBvh::forBvhAvatar(*a);
+  std::vector<avatar::SkeletonPose> poses;
+  for (int f = 0; f < 3; ++f) {
+    avatar::SkeletonPose pose = avatar::SkeletonPose::rest(sk);
+    // Walked 0.4 m a frame along the avatar's forward and sunk 5 cm, turned and bent a little.
+    pose.local[size_t(hips)].translation += glm::vec3(0.05f * float(f), -0.05f, 0.4f * float(f));
+    pose.local[size_t(hips)].rotation = glm::angleAxis(0.3f * float(f), glm::vec3(0, 1, 0)) * pose.local[size_t(hips)].rotation;
+    poses.push_back(pose);
+    out.add(pose);
+  }
+  auto reparsed = avatar::parseBvh(avatar::formatBvh(out.clip()), "exported.bvh");
+  REQUIRE(reparsed);
+  std::vector<glm::mat4> g;
+  std::vector<avatar::BvhGlobal> read;
+  const glm::dmat3 toFile = glm::transpose(a->mapping.toXr);
+  for (int f = 0; f < 3; ++f) {
+    avatar::computeGlobals(sk, poses[size_t(f)], g);
+    avatar::bvhGlobals(*reparsed, reparsed->frame(size_t(f)), read);
+    for (size_t j = 0; j < reparsed->joints.size(); ++j) {
+      // The root is where the motion went (it carries the hips, as the clip's does).
+      if (reparsed->joints[j].endSite || reparsed->joints[j].parent < 0) continue;
+      const int s = sk.find(reparsed->joints[j].name);
+      REQUIRE(s >= 0);
+      const glm::dvec3 want = toFile * (glm::dvec3(g[size_t(s)][3]) - a->mapping.shift) / a->mapping.scale;
+      INFO("frame " << f << " joint " << reparsed->joints[j].name);
+      CHECK(glm::distance(read[j].position, want) < 1e-3);
+    }
+  }
+}
