@@ -122,6 +122,8 @@ void FootPlanner::reset(const Eigen::Vector3d& centre, double yaw, double time) 
   }
   lastCentre_ = ground(centre);
   velocity_.setZero();
+  lastHeight_ = up_.dot(centre);
+  verticalSpeed_ = 0.0;
   lastTime_ = time;
   lastLanding_ = time - 1.0;
   lastFoot_ = -1;
@@ -137,16 +139,27 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
   if (dt > 0.0 && dt < 0.5) {
     const double a = 1.0 - std::exp(-dt / config_.velocitySmoothing);
     velocity_ += a * ((centre - lastCentre_) / dt - velocity_);
+    verticalSpeed_ += a * ((up_.dot(centreIn) - lastHeight_) / dt - verticalSpeed_);
   } else if (dt >= 0.5) {
     velocity_.setZero();
+    verticalSpeed_ = 0.0;
   }
   lastCentre_ = centre;
+  lastHeight_ = up_.dot(centreIn);
   lastTime_ = time;
   const double step = config_.stepSeconds;
+  // Walking keeps the head's height; reaching down or standing up moves the inferred centre too
+  // (forward with the head, then back once the bend is recognised), and taken for walking it made
+  // a user picking something up shuffle: 6 steps, the feet 24 cm from where they stood
+  // (body_plausibility_tests). So the body moves only while the centre's vertical speed stays
+  // under `maxClimb` of its ground speed, and only a moving body's landing spots lead it.
+  const double groundSpeed = velocity_.norm();
+  const bool moving = groundSpeed > config_.movingSpeed * scale_ && std::abs(verticalSpeed_) < config_.maxClimb * groundSpeed;
+  const Eigen::Vector3d lead = moving ? velocity_ : Eigen::Vector3d::Zero();
   // Where a foot landing after `remaining` seconds should go: under the body then, half a step
   // ahead of it while it moves.
   auto landing = [&](int f, double remaining) {
-    return uncrossed(f, standSpot(f, centre + velocity_ * (remaining + 0.5 * step), yaw), yaw);
+    return uncrossed(f, standSpot(f, centre + lead * (remaining + 0.5 * step), yaw), yaw);
   };
 
   // Swinging feet move along their arcs; a landing ends the swing.
@@ -175,7 +188,6 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
 
   // Start a step when a foot is out of place and both feet have been down long enough.
   if (!swinging && time - lastLanding_ >= config_.doubleSupportSeconds) {
-    const bool moving = velocity_.norm() > config_.movingSpeed * scale_;
     const double threshold = (moving ? config_.walkThreshold : config_.standThreshold) * scale_;
     const bool unbalanced = !overSupport(centerOfMass);
     std::array<double, 2> need{};

@@ -12,9 +12,10 @@
 //             following the body until 70 % of the swing, then is fixed.
 // A step starts (only one foot swings at a time, after `doubleSupportSeconds` on both feet) when
 // a foot is farther than the threshold from where it would stand under the body, turned more than
-// `turnRadians` from the heading, or the centre of mass has left the support polygon. The landing
-// spot leads the body by its velocity times half a step, so while walking the body passes over
-// each foot at mid-stance. The foot that stepped last waits for the other unless the other is
+// `turnRadians` from the heading, or the centre of mass has left the support polygon. While the
+// body moves (over `movingSpeed` along the ground, rising or sinking slower than `maxClimb` of
+// that: reaching down is not walking) the threshold is `walkThreshold` and the landing spot leads
+// the body by its velocity times half a step, so the body passes over each foot at mid-stance. The foot that stepped last waits for the other unless the other is
 // already where it should be: feet alternate.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -29,7 +30,8 @@ struct FootPlannerConfig {
   double liftHeight = 0.07;          // metres at the avatar's scale (scaled by `scale` below)
   double walkThreshold = 0.05;       // foot error that starts a step while the body moves
   double standThreshold = 0.22;      // ... while it stands (leaning does not make it step)
-  double movingSpeed = 0.15;         // m/s: above this the body counts as moving
+  double movingSpeed = 0.15;         // m/s: above this the body counts as moving ...
+  double maxClimb = 0.5;             // ... while it sinks or rises slower than this times that
   double turnRadians = 0.55;         // ~30 degrees
   double velocitySmoothing = 0.15;   // seconds, low-pass time constant of the body's velocity
 };
@@ -92,6 +94,7 @@ class FootPlanner {
   std::array<Swing, 2> swing_{};
   double floorHeight_ = 0.0;
   Eigen::Vector3d lastCentre_ = Eigen::Vector3d::Zero(), velocity_ = Eigen::Vector3d::Zero();
+  double lastHeight_ = 0.0, verticalSpeed_ = 0.0;  // the centre's, low-passed as the velocity
   double lastTime_ = 0.0, lastLanding_ = -1e9;
   int lastFoot_ = -1, steps_ = 0;
   bool initialised_ = false;

@@ -437,9 +437,8 @@ TEST_CASE("three points reaching down to the legs: the body stoops over planted 
   // knees a little. Before (be76a5b): the inferred pelvis took most of the drop as a crouch and
   // sank to 0.37 of its standing height, each look at a leg turned the bent body up to 63 degrees
   // (the forward's ground projection is short and swings far; knees pointing backwards in the
-  // eval, docs/eval.md "Session 14"), and the feet wandered 75 cm in 16 steps. Now 0.81, 3
-  // degrees, and 24 cm in 6 steps: the feet still step on the way down and up (the inferred
-  // centre moves 5-15 cm while the bend is recognised), hence the loose bound on them.
+  // eval, docs/eval.md "Session 14"), and the feet wandered 75 cm in 16 steps. Now 0.82, 2
+  // degrees, and 12 cm in 3 steps (24 cm in 6 while a sinking head's motion counted as walking).
   constexpr double kDeg = std::numbers::pi / 180.0;
   const auto down = [](int i) { return std::clamp((i - 45) / 90.0, 0.0, 1.0) * std::clamp((585 - i) / 90.0, 0.0, 1.0); };
   const auto look = [](int i) { return i < 180 || i >= 420 ? 0.0 : std::sin((i - 180) / 120.0 * std::numbers::pi); };
@@ -487,7 +486,7 @@ TEST_CASE("three points reaching down to the legs: the body stoops over planted 
                           << " mm in " << stepsAfter - stepsAtStart << " steps; pelvis turned up to "
                           << worstTurn / kDeg << " degrees; knee behind " << worstKnee << " m");
   CHECK(lowestPelvis > 0.6 * standingPelvis);  // a stoop, not a heap (the eval's collapse: under 0.5)
-  CHECK(footMoved < 0.4);
+  CHECK(footMoved < 0.2);
   CHECK(worstTurn < 15.0 * kDeg);
   CHECK(worstKnee > -0.01);
 }
