@@ -4,13 +4,14 @@
 // target or disabled; then, by mode,
 //   seated       the seat under the first tracked head (placeSeat), hips/knees/feet/pelvis on it;
 //   three-point  the pelvis under the head and the feet from the foot planner (it steps; the
-//                planner is this job's input-output state), balance while the CoM is off support;
+//                planner and the body's heading, body_heading.h, are this job's input-output
+//                state), balance while the CoM is off support;
 //   tracked feet strides scaled by the calibration's leg ratio about the pelvis;
 // and the knee/elbow pole targets from the current (last solved) body. No allocation.
 //
 //   TaskTargetsJob job;
 //   job.rig = &rig; job.calibration = &calibration; job.sample = &guarded; job.targets = &targets;
-//   job.planner = &planner; job.seat = &seat; job.data = &data; job.output = &out;
+//   job.planner = &planner; job.heading = &heading; job.seat = &seat; job.data = &data; job.output = &out;
 //   if (job.Run() && out.settleSeat) ...   // a new seat: settle outside the budget
 #include "ik/solver.h"
 #include "runtime/body_calibration.h"
