@@ -2,19 +2,19 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
+
+#include "runtime/foot_planner.h"
 
 namespace embody::runtime {
 
-double BodyHeading::update(double headYaw, double band) {
+double BodyHeading::update(double headYaw, double neckTurn) {
   if (!initialised_ || !std::isfinite(yaw_)) {
     yaw_ = headYaw;
     initialised_ = true;
     return yaw_;
   }
-  const double away = std::remainder(headYaw - yaw_, 2.0 * std::numbers::pi);
-  const double kept = std::clamp(away, -std::max(0.0, band), std::max(0.0, band));
-  yaw_ = std::remainder(headYaw - kept, 2.0 * std::numbers::pi);
+  const double slack = std::max(0.0, neckTurn);
+  yaw_ = wrapAngle(headYaw - std::clamp(wrapAngle(headYaw - yaw_), -slack, slack));
   return yaw_;
 }
 

@@ -14,7 +14,6 @@ class BodyHeading {
   // The body's heading (radians about up) for this frame's head heading, at most `neckTurn`
   // radians from it (0: the head's own). The first call after a reset returns the head's.
   double update(double headYaw, double neckTurn);
-  double yaw() const { return yaw_; }
 
  private:
   double yaw_ = 0.0;

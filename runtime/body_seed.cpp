@@ -4,12 +4,12 @@
 #include <cmath>
 
 #include "ik/expmap.h"
+#include "runtime/foot_planner.h"
 
 namespace embody::runtime {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
-double wrapAngle(double a) { return std::remainder(a, 2.0 * kPi); }
 }  // namespace
 
 double seedYaw(const SeedInputs& in) {

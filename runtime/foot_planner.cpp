@@ -12,11 +12,6 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-double wrapAngle(double a) {
-  while (a > kPi) a -= 2.0 * kPi;
-  while (a < -kPi) a += 2.0 * kPi;
-  return a;
-}
 
 double cross2(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
@@ -49,6 +44,8 @@ Eigen::Vector2d nearestOnSegment(const Eigen::Vector2d& p, const Eigen::Vector2d
 }
 
 }  // namespace
+
+double wrapAngle(double radians) { return std::remainder(radians, 2.0 * kPi); }
 
 Eigen::Quaterniond yawRotation(double yaw, const Eigen::Vector3d& up) { return Eigen::Quaterniond(Eigen::AngleAxisd(yaw, up)); }
 
@@ -135,17 +132,18 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
                                                      const Eigen::Vector3d& centerOfMass) {
   if (!initialised_) reset(centreIn, yaw, time);
   const Eigen::Vector3d centre = ground(centreIn);
+  const double height = up_.dot(centreIn);
   const double dt = time - lastTime_;
   if (dt > 0.0 && dt < 0.5) {
     const double a = 1.0 - std::exp(-dt / config_.velocitySmoothing);
     velocity_ += a * ((centre - lastCentre_) / dt - velocity_);
-    verticalSpeed_ += a * ((up_.dot(centreIn) - lastHeight_) / dt - verticalSpeed_);
+    verticalSpeed_ += a * ((height - lastHeight_) / dt - verticalSpeed_);
   } else if (dt >= 0.5) {
     velocity_.setZero();
     verticalSpeed_ = 0.0;
   }
   lastCentre_ = centre;
-  lastHeight_ = up_.dot(centreIn);
+  lastHeight_ = height;
   lastTime_ = time;
   const double step = config_.stepSeconds;
   // Walking keeps the head's height; reaching down or standing up moves the inferred centre too

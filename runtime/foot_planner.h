@@ -15,8 +15,9 @@
 // `turnRadians` from the heading, or the centre of mass has left the support polygon. While the
 // body moves (over `movingSpeed` along the ground, rising or sinking slower than `maxClimb` of
 // that: reaching down is not walking) the threshold is `walkThreshold` and the landing spot leads
-// the body by its velocity times half a step, so the body passes over each foot at mid-stance. The foot that stepped last waits for the other unless the other is
-// already where it should be: feet alternate.
+// the body by its velocity times half a step, so the body passes over each foot at mid-stance.
+// The foot that stepped last waits for the other unless the other is already where it should be:
+// feet alternate.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
@@ -111,5 +112,7 @@ double headingOf(const Eigen::Quaterniond& q, const Eigen::Vector3d& up, const E
 // reaching beyond both arms' span cycle by 0.6 mm a frame.
 double faceHeadingOf(const Eigen::Quaterniond& q, const Eigen::Vector3d& up, const Eigen::Vector3d& forward);
 Eigen::Quaterniond yawRotation(double yaw, const Eigen::Vector3d& up);
+// An angle (radians) brought into [-pi, pi]: the shorter way round between two headings.
+double wrapAngle(double radians);
 
 }  // namespace embody::runtime

@@ -45,6 +45,14 @@ SolvedMotionBvh SolvedMotionBvh::forAvatar(const avatar::AvatarAsset& asset, dou
   return out;
 }
 
+namespace {
+bool hasPositionChannel(const avatar::BvhJoint& joint) {
+  for (BvhChannel c : joint.channels)
+    if (c < BvhChannel::Xrotation) return true;
+  return false;
+}
+}  // namespace
+
 // A joint the body moves that has no position channels of its own keeps its file offset when read
 // back. CC_Base clips carry the body's motion on the root (RL_BoneRoot, position channels) and
 // turn CC_Base_Hip under it (rotation channels only), while the solver moves the hips: written
@@ -57,17 +65,13 @@ void SolvedMotionBvh::carryTranslationsToRoot() {
     const avatar::BvhJoint& joint = clip_.joints[b];
     const int p = joint.parent;
     if (p < 0 || joint.endSite || !posed_[b] || !posed_[size_t(p)]) continue;
-    bool hasPosition = false;
-    for (BvhChannel c : joint.channels) hasPosition = hasPosition || c < BvhChannel::Xrotation;
-    if (hasPosition) continue;
+    if (hasPositionChannel(joint)) continue;
     const glm::dvec3 readBack = position_[size_t(p)] + world_[size_t(p)] * joint.offset;
     const glm::dvec3 moved = position_[b] - readBack;
     if (glm::length(moved) < 1e-6 * (1.0 + glm::length(joint.offset))) continue;
     int root = int(b);
     while (clip_.joints[size_t(root)].parent >= 0) root = clip_.joints[size_t(root)].parent;
-    bool rootHasPosition = false;
-    for (BvhChannel c : clip_.joints[size_t(root)].channels) rootHasPosition = rootHasPosition || c < BvhChannel::Xrotation;
-    if (!rootHasPosition) return;
+    if (!hasPositionChannel(clip_.joints[size_t(root)])) return;
     // Every joint between the root and this one (and the root) moves by the same amount: they stay
     // where their offsets put them above it.
     for (int a = p; a >= 0; a = clip_.joints[size_t(a)].parent) position_[size_t(a)] += moved;
