@@ -41,8 +41,9 @@ bool BudgetedSolveJob::Run() const {
   // seated placement does: from the rest pose the hands start ~0.5 m off, and at the two
   // iterations a 1 ms frame allows the body took 13-17 frames (0.15-0.19 s) to reach them, which
   // alone decided `embody demo`'s hand p95 (0.2 mm or 160 mm, by how the first frames were
-  // scheduled). Fixed-iteration runs keep their counts (their outputs repeat to the bit).
-  if (settleFirst && !fixed) {
+  // scheduled). Deterministic runs settle too (a fixed cap, no clock), so they score the path
+  // the live runtime takes.
+  if (settleFirst) {
     const ik::SolveReport& report = settle(*model, *data, o, kFirstSolveSettleIterations);
     iterations += report.iterations;
     converged = report.converged();

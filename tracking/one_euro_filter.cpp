@@ -32,7 +32,7 @@ float oneEuroCutoff(const OneEuroParams& p, float speed, NoiseEstimate& estimate
   // Capped where alpha is 1 to float precision at any tracking rate (and for a silent signal).
   constexpr float kMaxCutoff = 1e5f;
   const float ratio = p.referenceNoise / std::max(noise, p.referenceNoise / std::sqrt(kMaxCutoff));
-  return std::max(cutoff, p.minCutoff * ratio * ratio);
+  return cutoff * std::max(1.0f, ratio * ratio);
 }
 
 glm::vec3 OneEuroVec3::filter(const glm::vec3& x, float dt) {

@@ -2,9 +2,10 @@
 // The One Euro filter (Casiez, Roussel & Vogel, CHI 2012): a low-pass filter whose cutoff rises
 // with speed, so jitter at rest is removed while fast motion keeps little lag.
 //   cutoff = minCutoff + beta * |filtered speed|,   alpha = 1 / (1 + tau / dt),  tau = 1 / (2 pi cutoff)
-// With a reference noise the cutoff is also at least minCutoff * (reference / measured noise)^2:
-// a first-order low-pass leaves a residual noise variance of about s^2 pi cutoff dt, so this keeps
-// a quieter source's residual at the reference source's, and a clean one is barely delayed.
+// With a reference noise the cutoff is raised by (reference / measured noise)^2 where that is
+// above 1: a first-order low-pass leaves a residual noise variance of about s^2 pi cutoff dt, so
+// this keeps a quieter source's residual at the reference source's, at rest and at speed, and a
+// clean one is barely delayed.
 // Positions use speed in m/s, orientations angular speed in rad/s (the quaternion is slerped).
 #include "tracking/tracker.h"
 
@@ -16,8 +17,8 @@ struct OneEuroParams {
   float derivativeCutoff = 1.0f;  // Hz, for the speed estimate
   // The noise (standard deviation per axis, metres or radians) the cutoffs above are tuned for;
   // 0: they apply whatever the noise. Otherwise the filter measures the signal's own noise
-  // (NoiseEstimate) and smooths no more than that noise needs: the cutoff is at least
-  // minCutoff * (referenceNoise / measured)^2, which leaves a quieter source's residual jitter
+  // (NoiseEstimate) and smooths no more than that noise needs: the cutoff times
+  // max(1, (referenceNoise / measured)^2), which leaves a quieter source's residual jitter
   // where the tuned cutoffs leave a `referenceNoise` one's, with less lag. It never smooths less
   // than the plain filter would at referenceNoise and above.
   float referenceNoise = 0.0f;

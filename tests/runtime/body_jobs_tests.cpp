@@ -469,6 +469,24 @@ TEST_CASE("BudgetedSolveJob: Validate, the fixed count, the cold start's four ti
   capped.maxIterations = 3;
   REQUIRE(capped.Run());
   CHECK((out.iterations == 3 || out.converged));
+
+  // The first live solve settles, with a fixed count too (embody eval scores the live path): from
+  // the rest pose it runs past the cold start's 4 x 2 iterations, the same count and
+  // configuration every time.
+  BudgetedSolveJob settling = cold;
+  settling.settleFirst = true;
+  Eigen::VectorXd settled[2];
+  int iterations[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    REQUIRE(state.data.setConfiguration(before));
+    REQUIRE(settling.Run());
+    CHECK_FALSE(out.broken);
+    settled[k] = state.data.q();
+    iterations[k] = out.iterations;
+  }
+  CHECK(iterations[0] > 8);
+  CHECK(iterations[0] == iterations[1]);
+  CHECK(settled[0] == settled[1]);
 }
 
 TEST_CASE("SkeletonPoseJob: Validate rejects a pose of another size, the rest configuration gives the rest pose",
