@@ -119,6 +119,9 @@ void FootPlanner::reset(const Eigen::Vector3d& centre, double yaw, double time) 
   }
   lastCentre_ = ground(centre);
   velocity_.setZero();
+  travel_.setZero();
+  travelSince_ = time;
+  leadWeight_ = 0.0;
   lastHeight_ = up_.dot(centre);
   verticalSpeed_ = 0.0;
   lastTime_ = time;
@@ -137,9 +140,15 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
   if (dt > 0.0 && dt < 0.5) {
     const double a = 1.0 - std::exp(-dt / config_.velocitySmoothing);
     velocity_ += a * ((centre - lastCentre_) / dt - velocity_);
+    // The mean since the reset until there is a time constant's worth, then exponential: a body
+    // planted mid-walk (a clip's first frame, tracking regained) reads as walking at once.
+    const double weight = std::max(1.0 - std::exp(-dt / config_.travelSmoothing), dt / std::max(time - travelSince_, dt));
+    travel_ += weight * ((centre - lastCentre_) / dt - travel_);
     verticalSpeed_ += a * ((height - lastHeight_) / dt - verticalSpeed_);
   } else if (dt >= 0.5) {
     velocity_.setZero();
+    travel_.setZero();
+    travelSince_ = time;
     verticalSpeed_ = 0.0;
   }
   lastCentre_ = centre;
@@ -152,8 +161,19 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
   // (body_plausibility_tests). So the body moves only while the centre's vertical speed stays
   // under `maxClimb` of its ground speed, and only a moving body's landing spots lead it.
   const double groundSpeed = velocity_.norm();
-  const bool moving = groundSpeed > config_.movingSpeed * scale_ && std::abs(verticalSpeed_) < config_.maxClimb * groundSpeed;
-  const Eigen::Vector3d lead = moving ? velocity_ : Eigen::Vector3d::Zero();
+  // Travelling, not swaying: a boxer's or a dancer's head moves 0.3-1 m/s back and forth, and
+  // taken for walking it stepped the feet 15 m over a clip where the performer's moved 1.6 m
+  // (cmu_002_05; docs/eval.md, "Session 15"). Far from its feet a body travels whatever its
+  // average says (a leap starts faster than the average follows), and so does one turned half a
+  // step's turn from its feet: turning on the spot, the centre circles and averages out too.
+  const double feetTurn = std::max(std::abs(wrapAngle(yaw - feet_[0].yaw)), std::abs(wrapAngle(yaw - feet_[1].yaw)));
+  const bool travelling = travel_.norm() > config_.travelSpeed * scale_ ||
+                          (centre - centreOverFeet()).norm() > config_.standThreshold * scale_ || feetTurn > 0.5 * config_.turnRadians;
+  const bool moving = groundSpeed > config_.movingSpeed * scale_ && std::abs(verticalSpeed_) < config_.maxClimb * groundSpeed && travelling;
+  // The lead eases in and out: switched, it moved a swinging foot's landing spot by up to half a
+  // step in one frame.
+  if (dt > 0.0) leadWeight_ = std::clamp(leadWeight_ + (moving ? dt : -dt) / config_.leadEasing, 0.0, 1.0);
+  const Eigen::Vector3d lead = leadWeight_ * velocity_;
   // Where a foot landing after `remaining` seconds should go: under the body then, half a step
   // ahead of it while it moves.
   auto landing = [&](int f, double remaining) {
@@ -184,6 +204,18 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
     foot.planted = false;
   }
 
+  // A planted foot left beyond its leg's reach (a leap, a spin) lifts at once, even while the
+  // other swings: planted, it is the IK's top level and would drag the head and hands
+  // (cmu_131_03's spinning leap: the head 20-70 cm off for a third of a second).
+  for (int f = 0; f < 2; ++f) {
+    const FootTarget& foot = feet_[static_cast<size_t>(f)];
+    if (swing_[static_cast<size_t>(f)].active ||
+        ground(standSpot(f, centre, yaw) - foot.position).norm() <= config_.reachRadius * scale_)
+      continue;
+    startSwing(f, time, landing(f, step), yaw);
+    swinging = true;
+  }
+
   // Start a step when a foot is out of place and both feet have been down long enough.
   if (!swinging && time - lastLanding_ >= config_.doubleSupportSeconds) {
     const double threshold = (moving ? config_.walkThreshold : config_.standThreshold) * scale_;
@@ -198,22 +230,31 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
     int pick = need[0] >= need[1] ? 0 : 1;
     // Alternate: the foot that stepped last waits while the other one has somewhere to go.
     if (pick == lastFoot_ && need[static_cast<size_t>(1 - pick)] > 0.3) pick = 1 - pick;
-    if (need[static_cast<size_t>(pick)] >= 1.0 || (unbalanced && need[static_cast<size_t>(pick)] > 0.2)) {
-      Swing& s = swing_[static_cast<size_t>(pick)];
-      FootTarget& foot = feet_[static_cast<size_t>(pick)];
-      s.active = true;
-      s.start = time;
-      s.from = foot.position;
-      s.fromYaw = foot.yaw;
-      s.to = landing(pick, step);
-      s.toYaw = yaw;
-      foot.planted = false;
-      lastFoot_ = pick;
-      ++steps_;
-    }
+    if (need[static_cast<size_t>(pick)] >= 1.0 || (unbalanced && need[static_cast<size_t>(pick)] > 0.2))
+      startSwing(pick, time, landing(pick, step), yaw);
   }
   buildSupport();
   return feet_;
+}
+
+void FootPlanner::startSwing(int f, double time, const Eigen::Vector3d& to, double toYaw) {
+  Swing& s = swing_[static_cast<size_t>(f)];
+  FootTarget& foot = feet_[static_cast<size_t>(f)];
+  s.active = true;
+  s.start = time;
+  s.from = foot.position;
+  s.fromYaw = foot.yaw;
+  s.to = to;
+  s.toYaw = toYaw;
+  foot.planted = false;
+  lastFoot_ = f;
+  ++steps_;
+}
+
+Eigen::Vector3d FootPlanner::centreOverFeet() const {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (size_t f = 0; f < 2; ++f) c += 0.5 * (ground(feet_[f].position) - yawRotation(feet_[f].yaw, up_) * ground(restOffset_[f]));
+  return c;
 }
 
 void FootPlanner::buildSupport() {

@@ -14,8 +14,12 @@
 // a foot is farther than the threshold from where it would stand under the body, turned more than
 // `turnRadians` from the heading, or the centre of mass has left the support polygon. While the
 // body moves (over `movingSpeed` along the ground, rising or sinking slower than `maxClimb` of
-// that: reaching down is not walking) the threshold is `walkThreshold` and the landing spot leads
-// the body by its velocity times half a step, so the body passes over each foot at mid-stance.
+// that: reaching down is not walking; and travelling: its velocity averaged over
+// `travelSmoothing` over `travelSpeed`, or its centre farther than `standThreshold` from over the
+// feet, so a body swaying on the spot does not walk) the threshold is `walkThreshold` and the
+// landing spot leads the body by its velocity times half a step (eased in and out over
+// `leadEasing`), so the body passes over each foot at mid-stance. A planted foot farther than
+// `reachRadius` from where it would stand lifts at once, even while the other swings.
 // The foot that stepped last waits for the other unless the other is already where it should be:
 // feet alternate.
 #include <Eigen/Core>
@@ -35,6 +39,10 @@ struct FootPlannerConfig {
   double maxClimb = 0.5;             // ... while it sinks or rises slower than this times that
   double turnRadians = 0.55;         // ~30 degrees
   double velocitySmoothing = 0.15;   // seconds, low-pass time constant of the body's velocity
+  double travelSpeed = 0.3;          // m/s: ... and while its travel (below) is over this
+  double travelSmoothing = 1.0;      // seconds, the travel's time constant: a sway averages out
+  double leadEasing = 0.2;           // seconds over which the landing spots start or stop leading
+  double reachRadius = 0.45;         // a planted foot this far from its spot lifts at once
 };
 
 // A foot's sole on the ground, for the support polygon: the ankle's ground point, the heel behind
@@ -84,6 +92,8 @@ class FootPlanner {
   Eigen::Vector3d uncrossed(int foot, const Eigen::Vector3d& spot, double yaw) const;
   Eigen::Vector2d plane(const Eigen::Vector3d& p) const { return {p.dot(axisA_), p.dot(axisB_)}; }
   void buildSupport();
+  void startSwing(int foot, double time, const Eigen::Vector3d& to, double toYaw);
+  Eigen::Vector3d centreOverFeet() const;  // where the planted feet's body centre would stand
 
   FootPlannerConfig config_;
   FootShape shape_;
@@ -95,8 +105,10 @@ class FootPlanner {
   std::array<Swing, 2> swing_{};
   double floorHeight_ = 0.0;
   Eigen::Vector3d lastCentre_ = Eigen::Vector3d::Zero(), velocity_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d travel_ = Eigen::Vector3d::Zero();  // the velocity over `travelSmoothing`
   double lastHeight_ = 0.0, verticalSpeed_ = 0.0;  // the centre's, low-passed as the velocity
-  double lastTime_ = 0.0, lastLanding_ = -1e9;
+  double lastTime_ = 0.0, lastLanding_ = -1e9, travelSince_ = 0.0;
+  double leadWeight_ = 0.0;  // 0 standing .. 1 walking, eased over `leadEasing`
   int lastFoot_ = -1, steps_ = 0;
   bool initialised_ = false;
   std::vector<Eigen::Vector2d> points_, hull_;  // support polygon (reserved: no per-frame allocation)

@@ -1,5 +1,6 @@
 // The three-point foot planner on its own (runtime/foot_planner.h): where feet land.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -65,6 +66,64 @@ TEST_CASE("foot planner: turning on the spot while drifting sideways keeps the f
   INFO("narrowest landing " << narrowest << " m over " << steps << " steps");
   CHECK(steps >= 2);
   CHECK(narrowest >= 0.1 - 1e-9);
+}
+
+// Drives a planner configured with `config` at 90 Hz along `centre(t)` facing +Z for `seconds`,
+// the centre of mass `comShare` of the way from the start to the centre; returns its steps and
+// the farthest a planted foot was left from where it would stand.
+struct Drive {
+  int steps = 0;
+  double farthestPlanted = 0.0;
+};
+template <class Centre>
+Drive drive(const FootPlannerConfig& config, Centre centre, double seconds, double comShare = 1.0) {
+  FootPlanner p;
+  const std::array<Eigen::Vector3d, 2> rest{Eigen::Vector3d(0.1, 0.08, 0.0), Eigen::Vector3d(-0.1, 0.08, 0.0)};
+  p.configure(config, FootShape{}, Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(), rest, 1.0);
+  Drive d;
+  for (int i = 0; i <= int(seconds * 90.0); ++i) {
+    const double t = i / 90.0;
+    const Eigen::Vector3d c = centre(t);
+    const auto& feet = p.update(t, c, 0.0, centre(0.0) + comShare * (c - centre(0.0)));
+    for (size_t f = 0; f < 2; ++f) {
+      const Eigen::Vector3d spot(c.x() + rest[f].x(), 0.0, c.z());
+      if (feet[f].planted) d.farthestPlanted = std::max(d.farthestPlanted, Eigen::Vector3d(feet[f].position.x() - spot.x(), 0.0, feet[f].position.z() - spot.z()).norm());
+    }
+  }
+  d.steps = p.steps();
+  return d;
+}
+
+TEST_CASE("foot planner: a body swaying on the spot does not walk, one walking from the first frame does", "[runtime]") {
+  // A boxer's or a dancer's head: 15 cm forward and back at 1 Hz (0.94 m/s at the middle) for
+  // 6 s, the hips keeping the centre of mass over the feet (a third of the sway). Counted as walking while over 0.15 m/s (the planner before its travel test,
+  // travelSpeed 0) it stepped at every swing; now it stands. Walking at 1.2 m/s from the first
+  // frame (a clip starting mid-walk, tracking regained) steps at once and keeps stepping.
+  auto sway = [](double t) { return Eigen::Vector3d(0.0, 0.9, 0.15 * std::sin(2.0 * M_PI * t)); };
+  FootPlannerConfig swayBlind;
+  swayBlind.travelSpeed = 0.0;
+  const Drive swaying = drive(FootPlannerConfig{}, sway, 6.0, 1.0 / 3.0), blind = drive(swayBlind, sway, 6.0, 1.0 / 3.0);
+  INFO("swaying: " << swaying.steps << " steps, " << blind.steps << " taken for walking");
+  CHECK(blind.steps >= 12);
+  CHECK(swaying.steps <= 2);
+  const Drive walking = drive(FootPlannerConfig{}, [](double t) { return Eigen::Vector3d(0.0, 0.9, 1.2 * t); }, 3.0);
+  INFO("walking: " << walking.steps << " steps, a planted foot up to " << walking.farthestPlanted << " m from its spot");
+  CHECK(walking.steps >= 7);
+  CHECK(walking.farthestPlanted < 0.45);
+}
+
+TEST_CASE("foot planner: a leap lifts a planted foot left beyond its leg's reach, even while the other swings", "[runtime]") {
+  // Standing 1 s, then 1.2 m forward in 0.4 s (3 m/s) and standing again. One foot at a time a
+  // planted foot was left up to 0.8 m behind (reachRadius 9: the planner before the reach test),
+  // where the IK's top level dragged the head and hands after it.
+  auto leap = [](double t) { return Eigen::Vector3d(0.0, 0.9, 1.2 * std::clamp((t - 1.0) / 0.4, 0.0, 1.0)); };
+  FootPlannerConfig noReach;
+  noReach.reachRadius = 9.0;
+  const Drive guarded = drive(FootPlannerConfig{}, leap, 3.0), unguarded = drive(noReach, leap, 3.0);
+  INFO("a planted foot up to " << guarded.farthestPlanted << " m from its spot (" << unguarded.farthestPlanted
+                               << " m without the reach test)");
+  CHECK(unguarded.farthestPlanted > 0.6);
+  CHECK(guarded.farthestPlanted <= FootPlannerConfig{}.reachRadius + 0.05);
 }
 
 TEST_CASE("foot planner: re-planting the feet (a re-seed) keeps the count of steps taken", "[runtime]") {
