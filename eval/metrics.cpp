@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/percentile.h"
+
 namespace embody::eval {
 
 namespace {
@@ -83,12 +85,7 @@ const char* groupName(Group g) {
   return kNames[int(g)];
 }
 
-double percentile95(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const size_t rank = size_t(std::ceil(0.95 * double(values.size())));
-  return values[std::clamp<size_t>(rank, 1, values.size()) - 1];
-}
+double percentile95(std::vector<double> values) { return percentileNearestRank(values, 95.0); }
 
 Metrics score(const JointTrack& solved, const JointTrack& clip, const ScoredSkeleton& sk, double fps) {
   Metrics m;

@@ -5,15 +5,11 @@
 #include <numbers>
 #include <nlohmann/json.hpp>
 
+#include "core/percentile.h"
+
 namespace embody::runtime {
 
-double percentile(std::vector<double>& v, double p) {
-  if (v.empty()) return 0.0;
-  const double rank = std::ceil(std::clamp(p, 0.0, 100.0) / 100.0 * static_cast<double>(v.size()));
-  const size_t k = static_cast<size_t>(std::max(rank, 1.0)) - 1;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
-}
+double percentile(std::vector<double>& v, double p) { return percentileNearestRank(v, p); }
 
 StatsSummary StatsRecorder::summary() const {
   StatsSummary s;
