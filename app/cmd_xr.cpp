@@ -15,6 +15,7 @@
 #include "app/job_options.h"
 #include "app/motion_export.h"
 #include "avatar/body/calibration.h"
+#include "core/percentile.h"
 #include "runtime/frame_stats.h"
 #include "runtime/seated_stats.h"
 #include "runtime/tracked_avatar_body.h"
@@ -205,7 +206,7 @@ xr::XrLoopReport runWithRetries(const xr::XrLoopOptions& lo, BodyHook& hook, int
   return r;
 }
 
-double percentileOf(std::vector<double> v, double p) { return runtime::percentile(v, p); }
+double percentileOf(std::vector<double> v, double p) { return percentileNearestRank(v, p); }
 double maxOf(const std::vector<double>& v) { return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()); }
 
 void printSession(const xr::XrLoopReport& r) {

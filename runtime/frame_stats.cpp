@@ -9,8 +9,6 @@
 
 namespace embody::runtime {
 
-double percentile(std::vector<double>& v, double p) { return percentileNearestRank(v, p); }
-
 StatsSummary StatsRecorder::summary() const {
   StatsSummary s;
   s.frames = frames_.size();
@@ -30,9 +28,9 @@ StatsSummary StatsRecorder::summary() const {
     s.deadlineMisses += f.deadlineMiss ? 1 : 0;
   }
   s.ikMaxMs = ik.empty() ? 0.0 : *std::max_element(ik.begin(), ik.end());
-  s.ikP50Ms = percentile(ik, 50);
-  s.ikP99Ms = percentile(ik, 99);
-  s.renderP50Ms = percentile(render, 50);
+  s.ikP50Ms = percentileNearestRank(ik, 50);
+  s.ikP99Ms = percentileNearestRank(ik, 99);
+  s.renderP50Ms = percentileNearestRank(render, 50);
   s.iterationsMean = ik.empty() ? 0.0 : iterations / static_cast<double>(ik.size());
   for (auto id : tracking::kAllTrackers) {
     const auto i = static_cast<size_t>(tracking::index(id));
@@ -43,8 +41,8 @@ StatsSummary StatsRecorder::summary() const {
       if (f.turnResidual[i] >= 0.0f) turn.push_back(f.turnResidual[i] * 180.0 / std::numbers::pi);
       tracked += f.status[i] == tracking::TrackerStatus::Tracked ? 1 : 0;
     }
-    s.residualP95[i] = r.empty() ? -1.0 : percentile(r, 95);
-    s.turnResidualP95Deg[i] = turn.empty() ? -1.0 : percentile(turn, 95);
+    s.residualP95[i] = r.empty() ? -1.0 : percentileNearestRank(r, 95);
+    s.turnResidualP95Deg[i] = turn.empty() ? -1.0 : percentileNearestRank(turn, 95);
     s.trackedFraction[i] = static_cast<double>(tracked) / static_cast<double>(frames_.size());
   }
   std::vector<double> head, hands;
@@ -62,8 +60,8 @@ StatsSummary StatsRecorder::summary() const {
       else ++s.handFramesOutOfReach;
     }
   }
-  s.headErrorP95 = head.empty() ? -1.0 : percentile(head, 95);
-  s.handErrorP95 = hands.empty() ? -1.0 : percentile(hands, 95);
+  s.headErrorP95 = head.empty() ? -1.0 : percentileNearestRank(head, 95);
+  s.handErrorP95 = hands.empty() ? -1.0 : percentileNearestRank(hands, 95);
   return s;
 }
 

@@ -62,9 +62,6 @@ class StatsRecorder {
   std::vector<FrameStats> frames_;
 };
 
-// Nearest-rank percentile (p in 0..100) of the values; 0 for none. Reorders `values`.
-double percentile(std::vector<double>& values, double p);
-
 // {"frames", "ik": {budget_ms, p50_ms, p99_ms, max_ms, deadline_misses, iterations_mean[,
 //  startup_ms, startup_iterations]},
 //  "tracking": {head_error_p95_m, hand_error_p95_m, hand_frames_out_of_reach, non_finite_frames},

@@ -4,6 +4,7 @@
 #include <numbers>
 #include <nlohmann/json.hpp>
 
+#include "core/percentile.h"
 #include "fake_solver.h"
 #include "runtime/ik_stage.h"
 #include "tracking/synthetic_source.h"
@@ -149,13 +150,13 @@ TEST_CASE("the start-up solve, settled outside the budget once by design, is rep
   CHECK_FALSE(k["ik"].contains("startup_ms"));
 }
 
-TEST_CASE("percentile is nearest-rank") {
+TEST_CASE("percentileNearestRank is nearest-rank") {
   std::vector<double> v{5, 1, 4, 2, 3};
-  CHECK(percentile(v, 50) == 3);
-  CHECK(percentile(v, 99) == 5);
-  CHECK(percentile(v, 0) == 1);
+  CHECK(embody::percentileNearestRank(v, 50) == 3);
+  CHECK(embody::percentileNearestRank(v, 99) == 5);
+  CHECK(embody::percentileNearestRank(v, 0) == 1);
   std::vector<double> none;
-  CHECK(percentile(none, 50) == 0);
+  CHECK(embody::percentileNearestRank(none, 50) == 0);
 }
 
 TEST_CASE("tracking loss through the stage: targets stay finite, hands recover at most 3 m/s") {

@@ -96,8 +96,9 @@ Drive drive(const FootPlannerConfig& config, Centre centre, double seconds, doub
 
 TEST_CASE("foot planner: a body swaying on the spot does not walk, one walking from the first frame does", "[runtime]") {
   // A boxer's or a dancer's head: 15 cm forward and back at 1 Hz (0.94 m/s at the middle) for
-  // 6 s, the hips keeping the centre of mass over the feet (a third of the sway). Counted as walking while over 0.15 m/s (the planner before its travel test,
-  // travelSpeed 0) it stepped at every swing; now it stands. Walking at 1.2 m/s from the first
+  // 6 s, the hips keeping the centre of mass over the feet (a third of the sway). Counted as
+  // walking while over 0.15 m/s (the planner before its travel test, travelSpeed 0) it stepped
+  // at every swing; now it stands. Walking at 1.2 m/s from the first
   // frame (a clip starting mid-walk, tracking regained) steps at once and keeps stepping.
   auto sway = [](double t) { return Eigen::Vector3d(0.0, 0.9, 0.15 * std::sin(2.0 * M_PI * t)); };
   FootPlannerConfig swayBlind;

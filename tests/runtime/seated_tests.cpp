@@ -12,6 +12,7 @@
 
 #include "avatar/avatar_asset.h"
 #include "avatar/procedural/default_avatar.h"
+#include "core/percentile.h"
 #include "runtime/frame_stats.h"
 #include "runtime/ik_stage.h"
 #include "runtime/seated_stats.h"
@@ -107,7 +108,7 @@ struct SeatedRun {
   glm::vec3 hips0 = b.seatedOn(start);
 };
 
-double p95(std::vector<double> v) { return runtime::percentile(v, 95.0); }
+double p95(std::vector<double> v) { return percentileNearestRank(v, 95.0); }
 
 }  // namespace
 
