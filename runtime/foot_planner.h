@@ -8,8 +8,9 @@
 // low-passed ground velocity, and for each foot:
 //   planted   its target is fixed in the world (a level-0 task: it does not slide);
 //   swinging  it travels from where it lifted to a landing spot on an arc `liftHeight` high over
-//             `stepSeconds` (smoothstep along the ground, a sine bump up); the landing spot keeps
-//             following the body until 70 % of the swing, then is fixed.
+//             `stepSeconds` (smoothstep along the ground, a squared sine up: it lifts and lands
+//             at zero vertical speed); the landing spot keeps following the body until 70 % of
+//             the swing, then is fixed.
 // A step starts (only one foot swings at a time, after `doubleSupportSeconds` on both feet) when
 // a foot is farther than the threshold from where it would stand under the body, turned more than
 // `turnRadians` from the heading, or the centre of mass has left the support polygon. While the

@@ -127,6 +127,38 @@ TEST_CASE("foot planner: a leap lifts a planted foot left beyond its leg's reach
   CHECK(guarded.farthestPlanted <= FootPlannerConfig{}.reachRadius + 0.05);
 }
 
+TEST_CASE("foot planner: a swinging foot leaves and meets the ground at walking speed, not with a jolt", "[runtime]") {
+  // Walking at 1.2 m/s, 90 Hz: over every swing, the foot's vertical speed in its first and last
+  // frame, and how high it rises. A sine bump (the planner before) lifted the foot from rest to
+  // 0.73 m/s in one frame and stopped it as suddenly: 0.07 m high over a 0.3 s swing, pi h / T.
+  const FootPlannerConfig config;
+  FootPlanner p = planner();
+  std::array<double, 2> lastHeight{0.0, 0.0};
+  std::array<bool, 2> planted{true, true};
+  double fastestEdge = 0.0, highest = 0.0;
+  int swingFrames = 0;
+  for (int i = 0; i <= 3 * 90; ++i) {
+    const double t = i / 90.0;
+    const Eigen::Vector3d c(0.0, 0.9, 1.2 * t);
+    const auto& feet = p.update(t, c, 0.0, c);
+    for (size_t f = 0; f < 2; ++f) {
+      const double height = feet[f].position.y() - 0.08;
+      const double speed = std::abs(height - lastHeight[f]) * 90.0;
+      // A frame that lifts a planted foot, or plants a swinging one.
+      if (planted[f] != feet[f].planted) fastestEdge = std::max(fastestEdge, speed);
+      if (!feet[f].planted) ++swingFrames;
+      highest = std::max(highest, height);
+      lastHeight[f] = height;
+      planted[f] = feet[f].planted;
+    }
+  }
+  INFO("vertical speed at lift-off or landing up to " << fastestEdge << " m/s, " << swingFrames
+                                                      << " swinging frames, " << highest << " m high");
+  REQUIRE(p.steps() >= 7);
+  CHECK(fastestEdge < 0.1);
+  CHECK(highest == Approx(config.liftHeight).margin(0.005));
+}
+
 TEST_CASE("foot planner: re-planting the feet (a re-seed) keeps the count of steps taken", "[runtime]") {
   // stats.json body.steps counts the run's steps: a collapse guard's re-seed re-plants the feet
   // (reset) and once zeroed the count, so a run with a re-seed reported only the steps after it.
