@@ -5,18 +5,38 @@
 // cmu_131_03). Bent over, a head that looks at one leg and then the other turns on the neck while
 // the body stays: the body follows the head only as far as `neckTurn` leaves between them. Before,
 // each look turned the bent body and swung its pelvis, 0.6 m behind the head, from side to side.
-// Stateful: one per body; reset() with the warm start.
+//
+// The body follows the head's yaw through a One Euro filter of its own (the tracker filter's
+// tuned orientation cutoffs: 1 Hz at rest, +3 Hz per rad/s). The head tracker's filter smooths a
+// clean source (motion capture, a runtime's own filtered poses) only as much as its noise needs,
+// so the head meets a fast turn from its first frame; a body turned as abruptly stepped its feet
+// round one at a time behind it and crossed its legs (half a turn in 0.6 s), so the body's turn is
+// eased in where the head's need not be. Stateful: one per body; reset() with the warm start.
+#include "tracking/one_euro_filter.h"
+
 namespace embody::runtime {
+
+struct BodyHeadingConfig {
+  bool smoothed = true;  // false: the body takes the head's yaw as it comes (tests)
+  tracking::OneEuroParams smoothing{1.0f, 3.0f, 1.0f};
+};
 
 class BodyHeading {
  public:
+  explicit BodyHeading(const BodyHeadingConfig& config = {}) : config_(config) {}
   void reset() { initialised_ = false; }
-  // The body's heading (radians about up) for this frame's head heading, at most `neckTurn`
-  // radians from it (0: the head's own). The first call after a reset returns the head's.
-  double update(double headYaw, double neckTurn);
+  // The body's heading (radians about up) for the head's heading at `time` (seconds), at most
+  // `neckTurn` radians from the smoothed head heading (0: that heading itself). The first call
+  // after a reset, or after a gap over half a second, takes the head's as it is.
+  double update(double headYaw, double neckTurn, double time);
 
  private:
+  // The head's yaw through the One Euro filter (radians, wrapped).
+  double smoothedHeadYaw(double headYaw, double time);
+
+  BodyHeadingConfig config_;
   double yaw_ = 0.0;
+  double rawYaw_ = 0.0, smoothYaw_ = 0.0, rate_ = 0.0, lastTime_ = 0.0;
   bool initialised_ = false;
 };
 

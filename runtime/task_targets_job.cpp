@@ -140,7 +140,7 @@ void TaskWriter::setInferredLowerBody() {
   const double drop = r.restHeight[headIndex] - (r.up.dot(headPivot) - r.floor);
   const InferredTrunk trunk = inferTrunk(drop, pitchDown, r.restHeadToHips.norm());
   const double neckTurn = kBentNeckTurn * smoothstep(trunk.bend / kBentNeckTurn);
-  const double yaw = job_.heading->update(faceHeadingOf(headTurn, r.up, r.forward), neckTurn);
+  const double yaw = job_.heading->update(faceHeadingOf(headTurn, r.up, r.forward), neckTurn, time);
   const Eigen::Quaterniond heading = yawRotation(yaw, r.up);
   const Eigen::Vector3d side = r.up.cross(heading * r.forward).normalized();
   const Eigen::Quaterniond lean(Eigen::AngleAxisd(trunk.lean, side));

@@ -30,13 +30,14 @@ struct TrackerFilterParams {
   // 1 mm jitter 4.3x less instead of 4.8x (0.3 mm: 4.9x instead of 5.1x), for 3.9 mm of lag at
   // 1 m/s instead of 9.9 mm, which was most of a hand's error against motion capture (embody eval,
   // three trackers, eight clips: hands 1.45 -> 0.84 cm; docs/eval.md).
-  // Positions are tuned for that 1 mm and smooth a cleaner source (a headset runtime's own
+  // Both are tuned for that 1 mm / 0.3 deg and smooth a cleaner source (a headset runtime's own
   // filtered poses, motion capture) less: `embody eval --trackers 3`, eight clips, hands 0.55 ->
-  // 0.42 cm (cmu_131_02 0.51 -> 0.05). Orientations keep their cutoffs whatever the noise: adapted
-  // too, one clip's spinning jump (cmu_131_03) went 9.1 -> 11.3 cm (docs/tracking.md, "One Euro
+  // 0.42 cm (cmu_131_02 0.51 -> 0.05) for positions; the head 0.32 -> 0.17 cm for orientations,
+  // with the body's heading eased by a filter of its own (runtime/body_heading.h; without it the
+  // body turned as abruptly as a clean head and crossed its legs: docs/tracking.md, "One Euro
   // filter").
   OneEuroParams position{1.0f, 40.0f, 1.0f, 0.001f};
-  OneEuroParams orientation{1.0f, 3.0f, 1.0f};
+  OneEuroParams orientation{1.0f, 3.0f, 1.0f, 0.00524f};
 };
 
 // The white noise on a tracker's signal, from its third differences: per axis, white noise of

@@ -198,16 +198,48 @@ TEST_CASE("faceHeadingOf: a head looking down, past the vertical or bent over an
 
 TEST_CASE("BodyHeading: the head's heading upright, a neck's turn of slack when bent over", "[runtime]") {
   const double deg = std::numbers::pi / 180.0;
-  BodyHeading h;
-  CHECK(h.update(10 * deg, 45 * deg) == Approx(10 * deg));  // the first call takes the head's
-  CHECK(h.update(40 * deg, 45 * deg) == Approx(10 * deg));  // within the neck's turn: the body stays
-  CHECK(h.update(70 * deg, 45 * deg) == Approx(25 * deg));  // beyond it: dragged along
-  CHECK(h.update(-20 * deg, 45 * deg) == Approx(25 * deg));
-  CHECK(h.update(0.0, 0.0) == Approx(0.0).margin(1e-12));   // upright: the head's own
+  BodyHeading h({.smoothed = false});
+  double t = 0.0;
+  auto update = [&](double yaw, double slack) { return h.update(yaw, slack, t += 1.0 / 90.0); };
+  CHECK(update(10 * deg, 45 * deg) == Approx(10 * deg));  // the first call takes the head's
+  CHECK(update(40 * deg, 45 * deg) == Approx(10 * deg));  // within the neck's turn: the body stays
+  CHECK(update(70 * deg, 45 * deg) == Approx(25 * deg));  // beyond it: dragged along
+  CHECK(update(-20 * deg, 45 * deg) == Approx(25 * deg));
+  CHECK(update(0.0, 0.0) == Approx(0.0).margin(1e-12));   // upright: the head's own
   // Across +-180 degrees the shorter way round.
-  CHECK(h.update(170 * deg, 0.0) == Approx(170 * deg));
-  CHECK(std::remainder(h.update(-160 * deg, 45 * deg) - 170 * deg, 2 * std::numbers::pi) == Approx(0.0).margin(1e-12));
-  CHECK(std::remainder(h.update(-100 * deg, 45 * deg) - (-145 * deg), 2 * std::numbers::pi) == Approx(0.0).margin(1e-12));
+  CHECK(update(170 * deg, 0.0) == Approx(170 * deg));
+  CHECK(std::remainder(update(-160 * deg, 45 * deg) - 170 * deg, 2 * std::numbers::pi) == Approx(0.0).margin(1e-12));
+  CHECK(std::remainder(update(-100 * deg, 45 * deg) - (-145 * deg), 2 * std::numbers::pi) == Approx(0.0).margin(1e-12));
   h.reset();
-  CHECK(h.update(-100 * deg, 45 * deg) == Approx(-100 * deg));
+  CHECK(update(-100 * deg, 45 * deg) == Approx(-100 * deg));
+}
+
+TEST_CASE("BodyHeading: the body trails a fast turn of the head by a few degrees and ends where the head does", "[runtime]") {
+  // Half a turn in 0.6 s (smoothstep, up to 7.9 rad/s) from 170 degrees, across +-180, at 90 Hz,
+  // then still: the head's yaw as a clean source gives it, which the tracker filter no longer
+  // smooths. The body follows it through the tuned orientation cutoffs, as it did when the head
+  // itself was filtered with them: taken as it came, the body turned with the head to the frame,
+  // and one foot at a time could not step round behind it (the legs crossed; "three-point turning
+  // on the spot", tests/runtime/avatar_body_tests.cpp).
+  const double deg = std::numbers::pi / 180.0;
+  auto headYaw = [&](double t) {
+    const double x = std::clamp(t / 0.6, 0.0, 1.0);
+    return std::remainder(170 * deg + std::numbers::pi * x * x * (3.0 - 2.0 * x), 2.0 * std::numbers::pi);
+  };
+  BodyHeading eased, plain({.smoothed = false});
+  double easedTrail = 0.0, plainTrail = 0.0, settled = 0.0;
+  for (int i = -10; i <= 135; ++i) {
+    const double t = i / 90.0;
+    const double ye = eased.update(headYaw(t), 0.0, t), yp = plain.update(headYaw(t), 0.0, t);
+    REQUIRE(std::isfinite(ye));
+    easedTrail = std::max(easedTrail, std::abs(std::remainder(headYaw(t) - ye, 2 * std::numbers::pi)));
+    plainTrail = std::max(plainTrail, std::abs(std::remainder(headYaw(t) - yp, 2 * std::numbers::pi)));
+    if (t >= 1.4) settled = std::max(settled, std::abs(std::remainder(headYaw(t) - ye, 2 * std::numbers::pi)));
+  }
+  INFO("trailing the head by up to " << easedTrail / deg << " degrees (" << plainTrail / deg << " taken as it came), "
+                                     << settled / deg << " once it has stopped");
+  CHECK(plainTrail < 1e-9);
+  CHECK(easedTrail > 4 * deg);
+  CHECK(easedTrail < 15 * deg);
+  CHECK(settled < 0.5 * deg);
 }
