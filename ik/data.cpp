@@ -261,6 +261,9 @@ Data::Data(const Model& model) : ws_(std::make_unique<Workspace>(model)) {
   for (int t = 0; t < ws_->task_count; ++t) {
     ws_->target_position[t] = taskPosition(t);
     ws_->target_orientation[t] = taskOrientation(t);
+    const JointId reference = model.tasks[size_t(t)].desc.reference;
+    if (reference != kNoParent)
+      ws_->target_orientation[t] = Eigen::Quaterniond(ws_->frames[reference].linear()).conjugate() * ws_->target_orientation[t];
   }
 }
 

@@ -142,7 +142,10 @@ void taskRows(const Model& model, Workspace& w, TaskId t) {
       }
       if (hasRot) {
         const Eigen::Quaterniond current(frame.linear());
-        Eigen::Quaterniond err = w.target_orientation[t] * current.conjugate();
+        const Eigen::Quaterniond target = d.reference == kNoParent
+                                              ? w.target_orientation[t]
+                                              : Eigen::Quaterniond(w.frames[d.reference].linear()) * w.target_orientation[t];
+        Eigen::Quaterniond err = target * current.conjugate();
         if (err.w() < 0) err.coeffs() = -err.coeffs();
         const Eigen::AngleAxisd aa(err);
         const Eigen::Vector3d er = aa.angle() * aa.axis();

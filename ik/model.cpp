@@ -346,6 +346,11 @@ Status buildTask(const std::vector<TaskDesc>& tasks, size_t i, Model& m) {
     }
   }
   if (Status s = recruitJoints(d, who, com, chain, m, t); !s) return s;
+  if (d.reference != kNoParent) {
+    if (d.type != TaskType::Orientation) return fail(who + ": only an orientation task takes a reference joint");
+    if (d.reference < 0 || d.reference >= static_cast<JointId>(nj) || d.reference == d.joint || !t.ancestors[d.reference])
+      return fail(who + ": reference joint " + std::to_string(d.reference) + " is not an ancestor of its joint");
+  }
   m.tasks.push_back(std::move(t));
   return Status::success();
 }
@@ -445,6 +450,16 @@ Status checkRecruiting(const Model& model) {
                        levelName(model, static_cast<TaskId>(a)) + " that does not recruit it"};
       }
     }
+  }
+  // A target relative to a reference joint: nothing the task moves may move the reference.
+  for (const Model::Task& t : tasks) {
+    if (t.desc.reference == kNoParent) continue;
+    const std::vector<char> moved = withCoupled(t.recruited);
+    for (JointId j = t.desc.reference; j != kNoParent; j = model.joints[j].desc.parent)
+      if (moved[j])
+        return Error{"ik task '" + t.desc.name + "': its target is relative to joint '" +
+                     model.joints[t.desc.reference].desc.name + "', which its recruited joint '" +
+                     model.joints[j].desc.name + "' moves"};
   }
   std::vector<char> any(nj, 0), anyImplicit(nj, 0);
   for (const Model::Task& t : tasks) {

@@ -121,6 +121,11 @@ struct TaskDesc {
   Recruit recruit = Recruit::ToRoot;
   int depth = 0;                                     // Recruit::Depth
   std::vector<JointId> joints;                       // Recruit::Explicit
+  // Orientation only: the target is the joint's turn in this ancestor's frame (kNoParent: in the
+  // world), e.g. a clavicle held at its rest turn on the chest whatever the chest does. The
+  // error is then unchanged by the reference's own motion, so the task must not recruit the
+  // reference or any joint that moves it (checked, couplings included).
+  JointId reference = kNoParent;
   // Per-iteration error clamp: |e| <= max_error (metres for positions, radians for rotations).
   double max_position_error = 0.1;
   double max_rotation_error = 0.5;

@@ -61,6 +61,10 @@ struct AvatarBodyOptions {
   // clips they pulled elbows off the performers' (3 trackers: upper body 6.7 -> 8.2 cm, reverse
   // elbows 65 -> 273 frames; 6 trackers worse on 7 of 8 clips; docs/eval.md).
   bool elbowPoles = false;
+  // Each clavicle held at its rest turn on the chest at the lowest level (task_layout.cpp), so it
+  // moves only when a hand needs it beyond the arm's reach. Off: the clavicles take a share of
+  // every arm motion and keep it (the shoulder joint 13 cm off on the CMU walk).
+  bool restClavicles = true;
   // The tracked person IS this avatar (embody eval: the avatar is the clip's own skeleton, built
   // in tracking space, tracking/bvh_avatar.h): tracking space is avatar space (scale 1, floor at
   // y = 0, no turn), no height or stride calibration, and the trackers' rest references are the

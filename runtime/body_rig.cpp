@@ -111,6 +111,7 @@ Status RigBuilder::bindJoints(ik::JointId& leftElbow) {
     const int a = avatar_.humanoid.joint(bone);
     return a >= 0 ? r.body.ikJointOfAvatar[size_t(a)] : -1;
   };
+  r.clavicleJoint = {ikOf(avatar::HumanBone::leftShoulder), ikOf(avatar::HumanBone::rightShoulder)};
   r.leftShoulder = ikOf(avatar::HumanBone::leftUpperArm);
   r.rightShoulder = ikOf(avatar::HumanBone::rightUpperArm);
   leftElbow = ikOf(avatar::HumanBone::leftLowerArm);
@@ -310,6 +311,21 @@ void RigBuilder::addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskDesc>& 
       r.tasks.pole[k] = add(t, spec.weight);
       break;
     }
+    case TaskKind::ClavicleRest: {
+      const size_t s = spec.tracker == TrackerId::LeftHand ? 0 : 1;
+      const ik::JointId c = r.clavicleJoint[s];
+      // Joint markers say where every clavicle is; an avatar without clavicle bones has none.
+      if (!options_.restClavicles || options_.jointMarkers || c < 0) break;
+      t.name = std::string("clavicle_rest_") + (s == 0 ? "left" : "right");
+      t.type = ik::TaskType::Orientation;
+      t.joint = c;
+      t.recruit = ik::Recruit::Explicit;
+      t.joints = {c};
+      t.reference = r.body.model.joints[size_t(c)].desc.parent;
+      t.rotation_tolerance = 0.05;
+      r.tasks.clavicle[s] = add(t, spec.weight);
+      break;
+    }
     case TaskKind::InferredHips:
       t.type = ik::TaskType::Position;
       t.position_tolerance = 0.05;
@@ -332,7 +348,8 @@ void RigBuilder::addLayoutTask(const TaskSpec& spec, std::vector<ik::TaskDesc>& 
 void RigBuilder::addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks) {
   int lowest = 1;
   for (const TaskSpec& spec : r.layout.tasks)
-    if (spec.kind != TaskKind::LimbPole) lowest = std::max(lowest, spec.priority);  // no poles with markers
+    if (spec.kind != TaskKind::LimbPole && spec.kind != TaskKind::ClavicleRest)  // neither with markers
+      lowest = std::max(lowest, spec.priority);
   auto add = [&](ik::TaskDesc t) {
     tasks.push_back(std::move(t));
     return ik::TaskId(tasks.size() - 1);

@@ -35,6 +35,7 @@ struct BodyTasks {
   std::array<ik::TaskId, tracking::kTrackerCount> orientation{-1, -1, -1, -1, -1, -1};
   ik::TaskId balance = -1, hipsPosition = -1, hipsRotation = -1;  // three-point mode
   std::array<ik::TaskId, 4> pole{-1, -1, -1, -1};  // knees (0 left, 1 right), elbows (2, 3)
+  std::array<ik::TaskId, 2> clavicle{-1, -1};      // the clavicles' rest turns (0 left)
   // Seated mode, per side (0 = left), and the pelvis.
   std::array<ik::TaskId, 2> seatHip{-1, -1}, seatKnee{-1, -1};
   ik::TaskId seatPelvis = -1;
@@ -63,6 +64,7 @@ struct BodyRig {
   std::array<Eigen::Quaterniond, tracking::kTrackerCount> jointFromTracker{};
   std::array<double, tracking::kTrackerCount> restHeight{};
   ik::JointId leftShoulder = -1, rightShoulder = -1;
+  std::array<ik::JointId, 2> clavicleJoint{-1, -1};  // the clavicles' IK joints (0 left), -1 unmapped
   std::array<ik::JointId, 2> hipJoint{-1, -1}, kneeJoint{-1, -1};  // 0 = left
   // Limbs: knees (0 left, 1 right) then elbows (2, 3): the chain's root, middle and end joints,
   // the hinge joint, and the rest segment lengths.

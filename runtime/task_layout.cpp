@@ -17,6 +17,7 @@ constexpr EnumName<TaskKind> kTaskKindNames[] = {{TaskKind::Balance, "balance"},
                                                  {TaskKind::SeatedHip, "seated_hip"},
                                                  {TaskKind::SeatedKnee, "seated_knee"},
                                                  {TaskKind::SeatedPelvis, "seated_pelvis"},
+                                                 {TaskKind::ClavicleRest, "clavicle_rest"},
                                                  {TaskKind::LimbPole, "pole"}};
 
 std::string_view taskKindName(TaskKind kind) {
@@ -101,6 +102,17 @@ TaskLayout taskLayoutFor(tracking::TrackerMask trackers) {
   const int poles = l.levels() + 1;
   for (auto id : {TrackerId::LeftFoot, TrackerId::RightFoot, TrackerId::LeftHand, TrackerId::RightHand})
     l.tasks.push_back({TaskKind::LimbPole, id, poles, 0.3f});
+  // Below them all: each clavicle at its rest turn on the chest (body_rig.cpp). The hand tasks
+  // recruit the clavicles, and minimum-norm steps spread an arm's motion over clavicle and shoulder
+  // alike: nothing brought them back, and on the CMU walk the right clavicle hung 17-21 degrees
+  // lowered and 10-13 back (the shoulder joint 13 cm off) with the hand on its target. Lowest, it
+  // only takes the freedom every other task leaves, and it lets go as a hand's target nears the
+  // arm's reach (task_targets_job.cpp), so a hand beyond it still raises its clavicle. Weight 0.1:
+  // with 0.3 or 1.0 the solution's jitter rose more (embody eval, three trackers, eight clips,
+  // before the let-go: x clip 2.06 / 2.10 against 2.02, upper body 3.78 / 3.79 against 3.77 cm;
+  // docs/eval.md, "Session 16").
+  const int clavicles = l.levels() + 1;
+  for (auto hand : {TrackerId::LeftHand, TrackerId::RightHand}) l.tasks.push_back({TaskKind::ClavicleRest, hand, clavicles, 0.1f});
   return l;
 }
 
@@ -152,6 +164,8 @@ std::string TaskLayout::describe() const {
     s += "  " + std::to_string(t.priority) + "  " + std::string(taskKindName(t.kind));
     if (t.kind == TaskKind::SeatedHip || t.kind == TaskKind::SeatedKnee)
       s += t.tracker == TrackerId::LeftFoot ? " left" : " right";
+    else if (t.kind == TaskKind::ClavicleRest)
+      s += t.tracker == TrackerId::LeftHand ? " left" : " right";
     else if (t.kind == TaskKind::LimbPole)
       s += std::string(t.tracker == TrackerId::LeftFoot || t.tracker == TrackerId::RightFoot ? " knee" : " elbow") +
            (t.tracker == TrackerId::LeftFoot || t.tracker == TrackerId::LeftHand ? " left" : " right");

@@ -20,6 +20,7 @@ enum class TaskKind : uint8_t {
   SeatedHip,          // seated mode: a hip joint centre on the seat (3 rows; `tracker` names the side's foot)
   SeatedKnee,         // seated mode: a knee ahead of its hip joint over the planted foot (3 rows)
   SeatedPelvis,       // seated mode: the pelvis upright, facing the seat (3 rows)
+  ClavicleRest,       // a clavicle at its rest turn on its parent bone (`tracker` = the side's hand; 3 rows)
   LimbPole            // a knee (`tracker` = the side's foot) or an elbow (the side's hand) on its
                       // limb's swivel circle in the anatomical direction (pole_tasks.h; 3 rows)
 };

@@ -79,6 +79,7 @@ class TaskWriter {
   void setInferredLowerBody();
   void setSeatedTargets();
   void setPoleTargets();
+  void setClavicleTargets();
   // Enables (weight > 0, times the task's own) or disables a position/orientation/pose task pair.
   void setPose(ik::TaskId position, ik::TaskId orientation, const Eigen::Vector3d& p, const Eigen::Quaterniond& q, double weight);
   Eigen::Vector3d jointPosition(ik::JointId joint) const { return d.jointFrame(joint).translation(); }
@@ -112,6 +113,7 @@ void TaskWriter::setTargets() {
   else
     scaleStrides();
   setPoleTargets();
+  setClavicleTargets();
 }
 
 // Tracked feet with a tracked pelvis: strides scaled by the leg ratio about the pelvis's ground
@@ -221,6 +223,30 @@ void TaskWriter::setSeatedTargets() {
     setPose(r.tasks.position[f], -1, targets.point[f], targets.rotation[f], w);
   }
   setPose(-1, r.tasks.seatPelvis, Eigen::Vector3d::Zero(), seat.pose.pelvisRotation, w);
+}
+
+// Each clavicle's rest turn on its parent (the task's target is relative to the parent:
+// ik::TaskDesc::reference), let go as the hand's target nears the arm's reach from where the
+// shoulder would be with the clavicle at rest: from 85 % of the reach to all of it. Held there,
+// the arm met a far target straight, and a hand held beyond reach kept the two levels trading
+// 1.4 mm a frame (tests/runtime/body_plausibility_tests.cpp).
+void TaskWriter::setClavicleTargets() {
+  constexpr double kLetGoFrom = 0.85;
+  for (size_t s = 0; s < 2; ++s) {
+    const ik::TaskId t = r.tasks.clavicle[s];
+    if (t < 0) continue;
+    const ik::JointId clavicle = r.clavicleJoint[s];
+    const ik::Model::Joint& c = r.body.model.joints[size_t(clavicle)];
+    const ik::JointId shoulder = s == 0 ? r.leftShoulder : r.rightShoulder;
+    const ik::Model::Joint& arm = r.body.model.joints[size_t(shoulder)];
+    const Eigen::Vector3d restShoulder = arm.desc.parent == clavicle
+                                             ? Eigen::Vector3d(d.jointFrame(c.desc.parent) * c.desc.rest * arm.desc.rest.translation())
+                                             : jointPosition(shoulder);
+    const size_t hand = size_t(tracking::index(s == 0 ? TrackerId::LeftHand : TrackerId::RightHand));
+    const double reach = (targets.point[hand] - restShoulder).norm() / r.armReach;
+    const double weight = targets.weight[hand] > 0.0 ? 1.0 - smoothstep((reach - kLetGoFrom) / (1.0 - kLetGoFrom)) : 1.0;
+    setPose(-1, t, Eigen::Vector3d::Zero(), Eigen::Quaterniond(c.desc.rest.linear()), weight);
+  }
 }
 
 void TaskWriter::setPoleTargets() {

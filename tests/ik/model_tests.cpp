@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include "ik/model.h"
+#include "ik/solver.h"
 #include "tests/support/sample_models.h"
 
 using namespace embody;
@@ -199,4 +200,68 @@ TEST_CASE("the sample models satisfy the recruiting rules") {
   CHECK(test::sampleHumanoid().ok());
   CHECK(test::sampleSpine(true).ok());
   CHECK(test::sampleSpine(false).ok());
+}
+
+TEST_CASE("an orientation relative to a reference joint: validated, unmoved by the reference, met by the recruited joints") {
+  // The neck held at a turn on spine2 (the runtime's clavicles at rest on the chest), below a
+  // head orientation task that turns the whole chain.
+  {
+    Chain c;
+    TaskDesc rel = c.task("neck_on_spine2", c.neck, 1);
+    rel.type = TaskType::Orientation;
+    rel.recruit = Recruit::Explicit;
+    rel.joints = {c.spine1};  // moves its own reference
+    rel.reference = c.spine2;
+    c.b.addTask(rel);
+    CHECK(buildError(c.b).find("relative to joint 'spine2', which its recruited joint 'spine1' moves") != std::string::npos);
+  }
+  {
+    Chain c;
+    TaskDesc rel = c.task("neck_on_arm", c.neck, 1);
+    rel.type = TaskType::Orientation;
+    rel.reference = c.arm;  // not an ancestor
+    rel.recruit = Recruit::Explicit;
+    rel.joints = {c.neck};
+    c.b.addTask(rel);
+    CHECK(buildError(c.b).find("is not an ancestor of its joint") != std::string::npos);
+  }
+  {
+    Chain c;
+    TaskDesc rel = c.task("neck_point", c.neck, 1);  // a position task
+    rel.reference = c.spine2;
+    rel.recruit = Recruit::Explicit;
+    rel.joints = {c.neck};
+    c.b.addTask(rel);
+    CHECK(buildError(c.b).find("only an orientation task takes a reference joint") != std::string::npos);
+  }
+  Chain c;
+  TaskDesc head = c.task("head", c.head, 0);
+  head.type = TaskType::Orientation;
+  head.recruit = Recruit::Explicit;
+  head.joints = {c.spine1, c.spine2, c.neck};  // the trunk and the neck turn the head
+  TaskDesc rel = c.task("neck_on_spine2", c.neck, 1);
+  rel.type = TaskType::Orientation;
+  rel.recruit = Recruit::Explicit;
+  rel.joints = {c.neck};
+  rel.reference = c.spine2;
+  const TaskId headTask = c.b.addTask(head), relTask = c.b.addTask(rel);
+  INFO(buildError(c.b));
+  const Model m = c.b.build().value();
+  Data d(m);
+  // A fresh Data holds the relative task at its current relative turn: the rest one, met.
+  CHECK(d.targetOrientation(relTask).angularDistance(Eigen::Quaterniond::Identity()) < 1e-12);
+  const Eigen::Quaterniond onSpine(Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 0, 1).normalized()));
+  const Eigen::Quaterniond headTurn(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()));
+  REQUIRE(d.setTarget(relTask, onSpine));
+  REQUIRE(d.setTarget(headTask, headTurn * onSpine));  // reachable: the trunk turns by headTurn
+  SolveOptions o;
+  o.max_iterations = 200;
+  solve(m, d, o);
+  const Eigen::Quaterniond spine2(d.jointFrame(c.spine2).rotation()), neck(d.jointFrame(c.neck).rotation());
+  INFO("neck on spine2 " << (spine2.conjugate() * neck).angularDistance(onSpine) << " rad off, head "
+                         << neck.angularDistance(headTurn * onSpine) << " rad off, trunk turned "
+                         << spine2.angularDistance(Eigen::Quaterniond::Identity()) << " rad");
+  CHECK((spine2.conjugate() * neck).angularDistance(onSpine) < 1e-3);  // relative to the moved reference
+  CHECK(neck.angularDistance(headTurn * onSpine) < 1e-3);
+  CHECK(spine2.angularDistance(Eigen::Quaterniond::Identity()) > 0.2);  // the reference did move
 }

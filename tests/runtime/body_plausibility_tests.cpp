@@ -12,6 +12,7 @@
 #include "runtime/ik_stage.h"
 #include "test_paths.h"
 #include "tracking/pose_source.h"
+#include "core/percentile.h"
 
 using namespace embody;
 using namespace embody::runtime;
@@ -103,12 +104,14 @@ AvatarBodyOptions optionsFor(tracking::TrackerMask mask) {
 
 // The default avatar driven for `frames` frames at 90 Hz, 4 IK iterations a frame, by
 // synthetic:idle's first sample held still: `change(i, sample)` edits frame i's sample before
-// the stage runs, `after(i, solver)` reads the solved body.
+// the stage runs, `after(i, solver)` reads the solved body; `configure` edits the options.
 void holdStill(tracking::TrackerMask mask, int frames, const std::function<void(int, tracking::PoseSample&)>& change,
-               const std::function<void(int, const AvatarBodySolver&)>& after) {
+               const std::function<void(int, const AvatarBodySolver&)>& after,
+               const std::function<void(AvatarBodyOptions&)>& configure = {}) {
   const tracking::PoseSample still = open("synthetic:idle", mask)->sample(0.0);
   AvatarBodyOptions o = optionsFor(mask);
   o.maxIterations = 4;
+  if (configure) configure(o);
   auto solver = AvatarBodySolver::create(defaultAvatar(), o);
   REQUIRE(solver.ok());
   ManualClock clock;
@@ -253,6 +256,7 @@ TEST_CASE("limb poles sit below the trackers, joint markers replace them", "[run
     int count = 0, poleLevel = -1, markerLevel = -1, markerRotationLevel = -1, lowestTracker = -1;
     for (const auto& t : m.tasks) {
       if (t.desc.name.rfind("pole_", 0) == 0) ++count, poleLevel = t.desc.level;
+      else if (t.desc.name.rfind("clavicle_rest_", 0) == 0) continue;  // lower still, not a tracker's
       else if (t.desc.name.rfind("marker_", 0) == 0 && t.desc.type == ik::TaskType::Position) markerLevel = t.desc.level;
       else if (t.desc.name.rfind("marker_", 0) == 0 && t.desc.type == ik::TaskType::Orientation) markerRotationLevel = t.desc.level;
       else lowestTracker = std::max(lowestTracker, t.desc.level);
@@ -489,4 +493,48 @@ TEST_CASE("three points reaching down to the legs: the body stoops over planted 
   CHECK(footMoved < 0.2);
   CHECK(worstTurn < 15.0 * kDeg);
   CHECK(worstKnee > -0.01);
+}
+
+// The clavicles (task_layout.cpp, ClavicleRest): drawn back to rest while the hands are within the
+// arms' reach, free to rise towards a hand beyond it. Without the rest task the hand tasks'
+// minimum-norm steps left the clavicles wherever they had taken a share of the arms' motion.
+TEST_CASE("clavicles: drawn back to rest while the hands are within reach, let go for a hand beyond it") {
+  auto clavicleAngle = [](const AvatarBodySolver& s, int side) {
+    const ik::JointId c = s.rig().clavicleJoint[size_t(side)];
+    REQUIRE(c >= 0);
+    const ik::Model::Joint& j = s.body().model.joints[size_t(c)];
+    return s.data().q().segment(j.first_dof, ik::dofCount(j.desc.type)).norm();
+  };
+  // Both hands held `out` metres to the side of the head, 0.3 m ahead, `down` below it: the
+  // largest clavicle turn over the last half second.
+  auto hold = [&](bool rest, float out, float down) {
+    double largest = 0.0;
+    holdStill(
+        tracking::TrackerMask::threePoint(), 180,
+        [=](int, tracking::PoseSample& sample) {
+          const glm::vec3 head = sample[TrackerId::Head].position;
+          sample[TrackerId::LeftHand].position = head + glm::vec3(-out, -down, 0.3f);
+          sample[TrackerId::RightHand].position = head + glm::vec3(out, -down, 0.3f);
+        },
+        [&](int i, const AvatarBodySolver& s) {
+          if (i >= 135) largest = std::max({largest, clavicleAngle(s, 0), clavicleAngle(s, 1)});
+        },
+        [=](AvatarBodyOptions& o) { o.restClavicles = rest; });
+    return largest;
+  };
+  const double deg = std::numbers::pi / 180.0;
+  // Hands before the chest, elbows bent (about 60 % of the arm's reach from the shoulders); then
+  // 1.2 m out to either side, far beyond it.
+  const double held = hold(true, 0.25f, 0.45f), free = hold(false, 0.25f, 0.45f);
+  const double beyond = hold(true, 1.2f, 0.1f), beyondFree = hold(false, 1.2f, 0.1f);
+  INFO("clavicle turn with the hands before the chest " << held / deg << " degrees held at rest, " << free / deg
+                                                        << " free; with the hands 1.2 m out " << beyond / deg << " held, "
+                                                        << beyondFree / deg << " free");
+  // Within reach the rest task takes back what the hands' orientations leave it (the idle
+  // sample's orientations, hands hanging, ask the arms to turn too).
+  CHECK(held < 0.7 * free);
+  // Beyond reach it lets go: the clavicles rise as far as without it.
+  CHECK(beyond > 10.0 * deg);
+  CHECK(std::abs(beyond - beyondFree) < 1.0 * deg);
+
 }

@@ -184,13 +184,19 @@ TEST_CASE("IK thread between a tracking thread and a render thread: newest whole
 TEST_CASE("task layout: balance first, head, then hands, lower body inferred without feet") {
   const TaskLayout three = taskLayoutFor(tracking::TrackerMask::threePoint());
   CHECK(three.inferLowerBody);
-  // feet, head, hands, orientations, the pelvis inferred from the head, then knee and elbow directions
-  CHECK(three.levels() == 6);
-  int balance = 0, plants = 0, poles = 0, inferredHips = 0;
+  // feet, head, hands, orientations, the pelvis inferred from the head, knee and elbow directions,
+  // then the clavicles at rest
+  CHECK(three.levels() == 7);
+  int balance = 0, plants = 0, poles = 0, inferredHips = 0, clavicles = 0;
   for (const auto& t : three.tasks) {
     if (t.kind == TaskKind::LimbPole) {
-      CHECK(t.priority == three.levels());
+      CHECK(t.priority == three.levels() - 1);
       ++poles;
+      continue;
+    }
+    if (t.kind == TaskKind::ClavicleRest) {
+      CHECK(t.priority == three.levels());  // below everything: it takes only what the rest leave
+      ++clavicles;
       continue;
     }
     if (t.kind == TaskKind::Balance) balance = t.priority;
@@ -207,6 +213,8 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
   CHECK(plants == 2);
   CHECK(inferredHips == 5);  // under the orientations, over the poles
   CHECK(poles == 4);  // both knees, both elbows
+  CHECK(clavicles == 2);
+  CHECK(three.describe().find("7  clavicle_rest left") != std::string::npos);
   const TaskLayout full = taskLayoutFor(tracking::TrackerMask::all());
   CHECK_FALSE(full.inferLowerBody);
   for (const auto& t : full.tasks) CHECK((t.kind != TaskKind::FootPlant && t.kind != TaskKind::InferredHips));
@@ -218,8 +226,8 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
   // spine cannot twist), the poles below everything.
   int headPos = 0, headRot = 0, handPos = 0, handRot = 0, hipsPos = 0, hipsRot = 0;
   for (const auto& t : full.tasks) {
-    if (t.kind == TaskKind::LimbPole) {
-      CHECK(t.priority == full.levels());  // below everything a tracker drives
+    if (t.kind == TaskKind::LimbPole || t.kind == TaskKind::ClavicleRest) {
+      CHECK(t.priority >= full.levels() - 1);  // below everything a tracker drives
       continue;
     }
     const bool position = t.kind == TaskKind::TrackerPosition;
@@ -237,7 +245,7 @@ TEST_CASE("task layout: balance first, head, then hands, lower body inferred wit
   CHECK(hipsPos == handRot);
   CHECK(hipsRot == hipsPos + 1);
   CHECK(headRot == hipsRot);
-  CHECK(hipsRot == full.levels() - 1);
+  CHECK(hipsRot == full.levels() - 2);
   // Without a tracked pelvis the head's orientation stays with the hands'.
   const TaskLayout noPelvis = taskLayoutFor(tracking::TrackerMask::threePoint());
   for (const auto& t : noPelvis.tasks)
