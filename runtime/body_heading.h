@@ -18,7 +18,9 @@ namespace embody::runtime {
 
 struct BodyHeadingConfig {
   bool smoothed = true;  // false: the body takes the head's yaw as it comes (tests)
-  tracking::OneEuroParams smoothing{1.0f, 3.0f, 1.0f};
+  // The tracker filter's tuned orientation cutoffs (its referenceNoise is not read here: the yaw
+  // is smoothed as a 0.3 deg tracker's would be, whatever the source's noise).
+  tracking::OneEuroParams smoothing = tracking::TrackerFilterParams{}.orientation;
 };
 
 class BodyHeading {

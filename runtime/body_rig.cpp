@@ -114,9 +114,8 @@ Status RigBuilder::bindJoints(ik::JointId& leftElbow) {
   // A clavicle's own IK joint only: a bone that is not driven maps to none, and one whose pivot
   // another joint drives (ikJointOfAvatar's last joint at the pivot) is not the clavicle's.
   auto ownJoint = [&](avatar::HumanBone bone) {
-    const int a = avatar_.humanoid.joint(bone);
-    const ik::JointId j = a >= 0 ? r.body.ikJointOfAvatar[size_t(a)] : -1;
-    return j >= 0 && r.body.avatarJoint[size_t(j)] == a ? j : -1;
+    const ik::JointId j = ikOf(bone);
+    return j >= 0 && r.body.avatarJoint[size_t(j)] == avatar_.humanoid.joint(bone) ? j : -1;
   };
   r.clavicleJoint = {ownJoint(avatar::HumanBone::leftShoulder), ownJoint(avatar::HumanBone::rightShoulder)};
   r.leftShoulder = ikOf(avatar::HumanBone::leftUpperArm);

@@ -47,6 +47,9 @@ Eigen::Vector2d nearestOnSegment(const Eigen::Vector2d& p, const Eigen::Vector2d
 
 double wrapAngle(double radians) { return std::remainder(radians, 2.0 * kPi); }
 
+Eigen::Quaterniond yawRotation(double yaw, const Eigen::Vector3d& up) { return Eigen::Quaterniond(Eigen::AngleAxisd(yaw, up)); }
+
+namespace {
 // The swinging foot's height over the ground, as a share of the lift, at `phase` of the swing: a
 // squared sine, which leaves and meets the ground at zero vertical speed. The plain sine bump it
 // replaces lifted the foot at 0.73 m/s from one frame to the next (0.07 m over a 0.3 s swing) and
@@ -58,9 +61,6 @@ double liftProfile(double phase) {
   return s * s;
 }
 
-Eigen::Quaterniond yawRotation(double yaw, const Eigen::Vector3d& up) { return Eigen::Quaterniond(Eigen::AngleAxisd(yaw, up)); }
-
-namespace {
 // The heading of direction `f` on the ground (0 when it is vertical).
 double headingOfDirection(const Eigen::Vector3d& f, const Eigen::Vector3d& up, const Eigen::Vector3d& forward) {
   const Eigen::Vector3d side = up.cross(forward);
