@@ -81,6 +81,7 @@ class AvatarBodySolver final : public BodySolver {
   // the point the renderer's first-person camera uses too.
   Eigen::Vector3d restEyePosition() const;
   Eigen::Vector3d jointPosition(ik::JointId joint) const { return data_->jointFrame(joint).translation(); }
+  const Eigen::Isometry3d& jointFrame(ik::JointId joint) const { return data_->jointFrame(joint); }
   ik::JointId trackerJoint(tracking::TrackerId id) const { return rig_.joint[size_t(tracking::index(id))]; }
   // The last targets in avatar space (feet: the planner's in three-point mode).
   const Eigen::Vector3d& target(tracking::TrackerId id) const { return targets_.point[size_t(tracking::index(id))]; }

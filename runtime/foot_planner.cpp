@@ -97,6 +97,7 @@ void FootPlanner::configure(const FootPlannerConfig& config, const FootShape& sh
   axisB_ = up_.cross(forward_);
   restOffset_ = restAnkleOffset;
   scale_ = scale;
+  gait_.configure(config.gait, scale);
   points_.reserve(16);
   hull_.reserve(16);
   initialised_ = false;
@@ -138,7 +139,9 @@ void FootPlanner::reset(const Eigen::Vector3d& centre, double yaw, double time) 
   lastTime_ = time;
   lastLanding_ = time - 1.0;
   lastFoot_ = -1;
+  gait_.reset();
   initialised_ = true;
+  out_ = feet_;
   buildSupport();
 }
 
@@ -148,7 +151,9 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
   const Eigen::Vector3d centre = ground(centreIn);
   const double height = up_.dot(centreIn);
   const double dt = time - lastTime_;
+  Eigen::Vector3d instant = Eigen::Vector3d::Zero();
   if (dt > 0.0 && dt < 0.5) {
+    instant = (centre - lastCentre_) / dt;
     const double a = 1.0 - std::exp(-dt / config_.velocitySmoothing);
     velocity_ += a * ((centre - lastCentre_) / dt - velocity_);
     // The mean since the reset until there is a time constant's worth, then exponential: a body
@@ -166,6 +171,10 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
   lastHeight_ = height;
   lastTime_ = time;
   const double step = config_.stepSeconds;
+  // The sideways sway: the centre's velocity across its travel, against the travel's mean.
+  const double travelSpeed = travel_.norm();
+  const Eigen::Vector3d left = travelSpeed > 1e-9 ? Eigen::Vector3d(up_.cross(travel_) / travelSpeed) : Eigen::Vector3d::Zero();
+  gait_.update(time, height, (instant - travel_).dot(left));
   // Walking keeps the head's height; reaching down or standing up moves the inferred centre too
   // (forward with the head, then back once the bend is recognised), and taken for walking it made
   // a user picking something up shuffle: 6 steps, the feet 24 cm from where they stood
@@ -185,10 +194,10 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
   // step in one frame.
   if (dt > 0.0) leadWeight_ = std::clamp(leadWeight_ + (moving ? dt : -dt) / config_.leadEasing, 0.0, 1.0);
   const Eigen::Vector3d lead = leadWeight_ * velocity_;
-  // Where a foot landing after `remaining` seconds should go: under the body then, half a step
-  // ahead of it while it moves.
-  auto landing = [&](int f, double remaining) {
-    return uncrossed(f, standSpot(f, centre + lead * (remaining + 0.5 * step), yaw), yaw);
+  // Where a foot landing after `remaining` seconds should go: under the body then, `ahead`
+  // seconds ahead of it while it moves.
+  auto landing = [&](int f, double remaining, double ahead) {
+    return uncrossed(f, standSpot(f, centre + lead * (remaining + ahead), yaw), yaw);
   };
 
   // Swinging feet move along their arcs; a landing ends the swing.
@@ -197,9 +206,9 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
     Swing& s = swing_[static_cast<size_t>(f)];
     FootTarget& foot = feet_[static_cast<size_t>(f)];
     if (!s.active) continue;
-    const double phase = std::clamp((time - s.start) / step, 0.0, 1.0);
+    const double phase = std::clamp((time - s.start) / s.duration, 0.0, 1.0);
     if (phase < 0.7) {
-      s.to = landing(f, (1.0 - phase) * step);
+      s.to = landing(f, (1.0 - phase) * s.duration, s.ahead);
       s.toYaw = yaw;
     }
     if (phase >= 1.0) {
@@ -215,6 +224,9 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
     foot.planted = false;
   }
 
+  const Rhythm rhythm = stepRhythm(time, moving, std::max(groundSpeed, travel_.norm()));
+  const double swingTime = rhythm.swing, ahead = rhythm.ahead;
+
   // A planted foot left beyond its leg's reach (a leap, a spin) lifts at once, even while the
   // other swings: planted, it is the IK's top level and would drag the head and hands
   // (cmu_131_03's spinning leap: the head 20-70 cm off for a third of a second).
@@ -223,36 +235,73 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
     if (swing_[static_cast<size_t>(f)].active ||
         ground(standSpot(f, centre, yaw) - foot.position).norm() <= config_.reachRadius * scale_)
       continue;
-    startSwing(f, time, landing(f, step), yaw);
+    startSwing(f, time, step, ahead, landing(f, step, ahead), yaw);
     swinging = true;
   }
 
   // Start a step when a foot is out of place and both feet have been down long enough.
-  if (!swinging && time - lastLanding_ >= config_.doubleSupportSeconds) {
+  if (!swinging && rhythm.due && time - lastLanding_ >= rhythm.doubleSupport) {
     const double threshold = (moving ? config_.walkThreshold : config_.standThreshold) * scale_;
     const bool unbalanced = !overSupport(centerOfMass);
     std::array<double, 2> need{};
     for (int f = 0; f < 2; ++f) {
       const FootTarget& foot = feet_[static_cast<size_t>(f)];
-      const double dist = ground(landing(f, step) - foot.position).norm();
+      const double dist = ground(landing(f, swingTime, ahead) - foot.position).norm();
       const double turn = std::abs(wrapAngle(yaw - foot.yaw));
       need[static_cast<size_t>(f)] = std::max(dist / threshold, turn / config_.turnRadians);
     }
     int pick = need[0] >= need[1] ? 0 : 1;
     // Alternate: the foot that stepped last waits while the other one has somewhere to go.
     if (pick == lastFoot_ && need[static_cast<size_t>(1 - pick)] > 0.3) pick = 1 - pick;
+    if (rhythm.foot >= 0) pick = rhythm.foot;
     if (need[static_cast<size_t>(pick)] >= 1.0 || (unbalanced && need[static_cast<size_t>(pick)] > 0.2))
-      startSwing(pick, time, landing(pick, step), yaw);
+      startSwing(pick, time, swingTime, ahead, landing(pick, swingTime, ahead), yaw);
   }
   buildSupport();
-  return feet_;
+  rollHeels(centre, yaw, time);
+  return out_;
 }
 
-void FootPlanner::startSwing(int f, double time, const Eigen::Vector3d& to, double toYaw) {
+// The returned feet: a planted foot behind the body on its toes, a swinging one letting its heel
+// down from the rise it lifted off with.
+void FootPlanner::rollHeels(const Eigen::Vector3d& centre, double yaw, double time) {
+  const double start = config_.heelRiseStart * config_.reachRadius * scale_, end = config_.reachRadius * scale_;
+  for (size_t f = 0; f < 2; ++f) {
+    const FootTarget& foot = feet_[f];
+    FootTarget& out = out_[f];
+    out = foot;
+    const Swing& s = swing_[f];
+    if (s.active) {
+      const double u = 1.0 - smoothstep(std::clamp((time - s.start) / s.duration, 0.0, 1.0));
+      out.roll = u * s.fromRoll;
+      out.position += u * s.rollOffset;
+      continue;
+    }
+    const Eigen::Vector3d forward = yawRotation(foot.yaw, up_) * forward_;
+    const double behind = -ground(foot.position - standSpot(int(f), centre, yaw)).dot(forward);
+    out.roll = end > start ? config_.maxHeelRise * smoothstep(std::clamp((behind - start) / (end - start), 0.0, 1.0)) : 0.0;
+    if (out.roll <= 0.0) continue;
+    // The ankle turns about the ball of the foot on the ground, `ball` ahead and the ankle's
+    // height below it; toes down is a turn about the foot's left (up x forward).
+    const Eigen::Vector3d pivot = ballPoint(int(f));
+    out.position = pivot + Eigen::AngleAxisd(out.roll, up_.cross(forward)) * (foot.position - pivot);
+  }
+}
+
+Eigen::Vector3d FootPlanner::ballPoint(int f) const {
+  const FootTarget& foot = feet_[static_cast<size_t>(f)];
+  return foot.position + scale_ * shape_.ball * (yawRotation(foot.yaw, up_) * forward_) - up_ * floorHeight_;
+}
+
+void FootPlanner::startSwing(int f, double time, double duration, double ahead, const Eigen::Vector3d& to, double toYaw) {
   Swing& s = swing_[static_cast<size_t>(f)];
   FootTarget& foot = feet_[static_cast<size_t>(f)];
   s.active = true;
   s.start = time;
+  s.duration = duration;
+  s.fromRoll = out_[static_cast<size_t>(f)].roll;
+  s.rollOffset = out_[static_cast<size_t>(f)].position - foot.position;
+  s.ahead = ahead;
   s.from = foot.position;
   s.fromYaw = foot.yaw;
   s.to = to;
@@ -260,6 +309,37 @@ void FootPlanner::startSwing(int f, double time, const Eigen::Vector3d& to, doub
   foot.planted = false;
   lastFoot_ = f;
   ++steps_;
+}
+
+// The rhythm of the next step. Standing, or walking without a regular head dip: quick steps
+// (stepSeconds) as soon as doubleSupportSeconds allow, landing half a swing ahead of a moving
+// body. Walking with one (gait_clock.h), steps land on the dips, the foot the sway names.
+//
+// `speed` is the body's ground speed, the larger of the low-passed velocity and the travel (its
+// mean since a walk started: the velocity trails a walk's start).
+FootPlanner::Rhythm FootPlanner::stepRhythm(double time, bool moving, double speed) const {
+  const double step = config_.stepSeconds;
+  Rhythm r{step, config_.doubleSupportSeconds, 0.5 * step, true, -1};
+  if (!moving || !config_.followHeadDips || !gait_.locked(time)) return r;
+  const int foot = gait_.nextFoot(time);
+  const double period = gait_.period();
+  // A planted foot stays down for two steps less a swing while the body passes over it, and our
+  // legs let it travel `strideReach` of twice reachRadius under the body (the heel rising; a
+  // person's foot rolls further). A walk's stride that does not fit (a run, a long stride) keeps
+  // the quick steps; one that does gets a swing long enough to keep the stance within it.
+  const double underBody = 2.0 * config_.strideReach * config_.reachRadius * scale_;
+  if (foot < 0 || speed * period > underBody) return r;
+  const double longestStance = underBody / std::max(speed, 1e-9);
+  const double swing = std::clamp(std::max(config_.swingShare * period, 2.0 * period - longestStance), step,
+                                  std::max(step, period - config_.doubleSupportSeconds));
+  r.ahead = config_.aheadShare * period;
+  // Start when the next dip is a swing away (or nearer, but not nearer than the quickest step),
+  // the swing as long as what is left.
+  const double toDip = gait_.nextDip(time) - time;
+  r.due = toDip <= swing && toDip >= step;
+  r.swing = std::clamp(toDip, step, swing);
+  r.foot = foot;
+  return r;
 }
 
 Eigen::Vector3d FootPlanner::centreOverFeet() const {

@@ -11,6 +11,8 @@
 //             `stepSeconds` (smoothstep along the ground, a squared sine up: it lifts and lands
 //             at zero vertical speed); the landing spot keeps following the body until 70 % of
 //             the swing, then is fixed.
+// A planted foot left behind the body rises on its toes about the ball of the foot (the ball
+// stays put), and lets the heel down over its next swing.
 // A step starts (only one foot swings at a time, after `doubleSupportSeconds` on both feet) when
 // a foot is farther than the threshold from where it would stand under the body, turned more than
 // `turnRadians` from the heading, or the centre of mass has left the support polygon. While the
@@ -23,10 +25,15 @@
 // `reachRadius` from where it would stand lifts at once, even while the other swings.
 // The foot that stepped last waits for the other unless the other is already where it should be:
 // feet alternate.
+// Walking with the head dipping once a step (gait_clock.h), the steps keep the walker's rhythm
+// instead: each lands on a dip, the foot the head sways towards, the swing as long as the walk's
+// stride needs, while that stride fits the avatar's legs (stepRhythm).
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
 #include <vector>
+
+#include "runtime/gait_clock.h"
 
 namespace embody::runtime {
 
@@ -44,17 +51,34 @@ struct FootPlannerConfig {
   double travelSmoothing = 1.0;      // seconds, the travel's time constant: a sway averages out
   double leadEasing = 0.2;           // seconds over which the landing spots start or stop leading
   double reachRadius = 0.45;         // a planted foot this far from its spot lifts at once
+  // Walking with the head dipping once a step (gait_clock.h), steps land on the dips, the foot
+  // the sway names, the swing at least swingShare of the step, while the walk's stride fits:
+  // the body passes over a planted foot for at most strideReach of twice reachRadius. The
+  // landing spot then leads the body by aheadShare of the step (in cmu_12_01_walk a foot comes
+  // flat 0.25-0.29 m ahead of the hips, at 1.0-1.13 m/s and 0.64 s steps: 0.35-0.4).
+  bool followHeadDips = true;
+  double swingShare = 0.75;
+  double strideReach = 0.8;
+  double aheadShare = 0.4;
+  GaitClockConfig gait;
+  // A planted foot left behind the body rises on its toes, as people's do from mid-stance on:
+  // its heel lifts about the ball of the foot from heelRiseStart of reachRadius behind to
+  // maxHeelRise at reachRadius, which lets the leg reach a walking stride.
+  double heelRiseStart = 0.2;
+  double maxHeelRise = 0.6;  // radians
 };
 
 // A foot's sole on the ground, for the support polygon: the ankle's ground point, the heel behind
 // it and the toes ahead along the foot's heading, half the foot's width either side.
 struct FootShape {
   double heelBack = 0.06, toeForward = 0.16, halfWidth = 0.045;
+  double ball = 0.11;  // the ball of the foot ahead of the ankle: a rising heel pivots there
 };
 
 struct FootTarget {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // ankle (the IK foot joint's pivot)
   double yaw = 0.0;                                    // heading about `up` (radians)
+  double roll = 0.0;  // the heel raised about the ball of the foot (radians, toes down)
   bool planted = true;
 };
 
@@ -70,7 +94,10 @@ class FootPlanner {
   // and the current centre of mass. Returns the foot targets for this frame.
   const std::array<FootTarget, 2>& update(double time, const Eigen::Vector3d& centre, double yaw,
                                           const Eigen::Vector3d& centerOfMass);
-  const std::array<FootTarget, 2>& feet() const { return feet_; }
+  const std::array<FootTarget, 2>& feet() const { return out_; }
+  // Where a foot meets the ground: the ball of the foot. A planted foot's stays put while its
+  // heel rises.
+  Eigen::Vector3d ballPoint(int foot) const;
   bool initialised() const { return initialised_; }
   void restart() { initialised_ = false; }  // the next update() plants both feet afresh
   int steps() const { return steps_; }  // since construction: a re-plant (reset) keeps the count
@@ -80,6 +107,7 @@ class FootPlanner {
   bool overSupport(const Eigen::Vector3d& point) const;
   Eigen::Vector3d nearestSupportPoint(const Eigen::Vector3d& point, double margin) const;
   Eigen::Vector3d groundVelocity() const { return velocity_; }
+  const GaitClock& gait() const { return gait_; }
 
  private:
   struct Swing {
@@ -87,13 +115,25 @@ class FootPlanner {
     double start = 0.0;
     Eigen::Vector3d from = Eigen::Vector3d::Zero(), to = Eigen::Vector3d::Zero();
     double fromYaw = 0.0, toYaw = 0.0;
+    double duration = 0.3;  // seconds
+    double fromRoll = 0.0;  // the heel's rise at lift-off, let down over the swing
+    Eigen::Vector3d rollOffset = Eigen::Vector3d::Zero();  // the rolled ankle's offset at lift-off
+    double ahead = 0.15;    // seconds the landing spot leads the moving body by
   };
   Eigen::Vector3d ground(const Eigen::Vector3d& p) const { return p - up_ * up_.dot(p); }
   Eigen::Vector3d standSpot(int foot, const Eigen::Vector3d& centre, double yaw) const;
   Eigen::Vector3d uncrossed(int foot, const Eigen::Vector3d& spot, double yaw) const;
   Eigen::Vector2d plane(const Eigen::Vector3d& p) const { return {p.dot(axisA_), p.dot(axisB_)}; }
   void buildSupport();
-  void startSwing(int foot, double time, const Eigen::Vector3d& to, double toYaw);
+  void startSwing(int foot, double time, double duration, double ahead, const Eigen::Vector3d& to, double toYaw);
+  struct Rhythm {
+    double swing;          // seconds
+    double doubleSupport;  // seconds on both feet before the next swing
+    double ahead;          // seconds the landing spot leads a moving body by
+    bool due;              // whether a step may start now
+    int foot;              // the foot that must step (-1: the planner's choice)
+  };
+  Rhythm stepRhythm(double time, bool moving, double speed) const;
   Eigen::Vector3d centreOverFeet() const;  // where the planted feet's body centre would stand
 
   FootPlannerConfig config_;
@@ -102,7 +142,9 @@ class FootPlanner {
   Eigen::Vector3d axisA_ = Eigen::Vector3d::UnitX(), axisB_ = Eigen::Vector3d::UnitZ();
   std::array<Eigen::Vector3d, 2> restOffset_{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
   double scale_ = 1.0;
-  std::array<FootTarget, 2> feet_{};
+  std::array<FootTarget, 2> feet_{};  // flat: a planted foot's ankle where it was put down
+  std::array<FootTarget, 2> out_{};    // what update() returns: heels raised, swings let down
+  void rollHeels(const Eigen::Vector3d& centre, double yaw, double time);
   std::array<Swing, 2> swing_{};
   double floorHeight_ = 0.0;
   Eigen::Vector3d lastCentre_ = Eigen::Vector3d::Zero(), velocity_ = Eigen::Vector3d::Zero();
@@ -110,6 +152,7 @@ class FootPlanner {
   double lastHeight_ = 0.0, verticalSpeed_ = 0.0;  // the centre's, low-passed as the velocity
   double lastTime_ = 0.0, lastLanding_ = -1e9, travelSince_ = 0.0;
   double leadWeight_ = 0.0;  // 0 standing .. 1 walking, eased over `leadEasing`
+  GaitClock gait_;
   int lastFoot_ = -1, steps_ = 0;
   bool initialised_ = false;
   std::vector<Eigen::Vector2d> points_, hull_;  // support polygon (reserved: no per-frame allocation)

@@ -174,7 +174,9 @@ void TaskWriter::setInferredLowerBody() {
   for (int f = 0; f < 2; ++f) {
     const size_t i = size_t(tracking::index(f == 0 ? TrackerId::LeftFoot : TrackerId::RightFoot));
     targets.point[i] = feet[size_t(f)].position + r.up * airborne;
-    targets.rotation[i] = yawRotation(feet[size_t(f)].yaw, r.up) * r.restRotation[i];
+    const Eigen::Quaterniond turn = yawRotation(feet[size_t(f)].yaw, r.up);
+    const Eigen::Quaterniond heelRise(Eigen::AngleAxisd(feet[size_t(f)].roll, r.up.cross(turn * r.forward).normalized()));
+    targets.rotation[i] = heelRise * turn * r.restRotation[i];
     setPose(r.tasks.position[i], -1, targets.point[i], targets.rotation[i], 1.0);
   }
   // Balance as an inequality: only while the centre of mass is off the support polygon.

@@ -38,6 +38,8 @@ const avatar::AvatarAsset& defaultAvatar() {
 
 struct FootTrace {
   std::vector<Eigen::Vector3d> position[2];  // the avatar's ankles, per frame
+  std::vector<Eigen::Isometry3d> ankle[2];   // the avatar's ankle frames, per frame
+  std::vector<Eigen::Vector3d> ball[2];      // the planner's ball of the foot, per frame
   std::vector<char> planted[2];              // the planner's state, per frame
 };
 
@@ -77,6 +79,8 @@ Run drive(const avatar::AvatarAsset& avatar, tracking::PoseSource& source, const
     for (int f = 0; f < 2; ++f) {
       const TrackerId id = f == 0 ? TrackerId::LeftFoot : TrackerId::RightFoot;
       run.feet.position[f].push_back(s.jointPosition(s.trackerJoint(id)));
+      run.feet.ankle[f].push_back(s.jointFrame(s.trackerJoint(id)));
+      run.feet.ball[f].push_back(s.feet().ballPoint(f));
       run.feet.planted[f].push_back(s.feet().feet()[size_t(f)].planted ? 1 : 0);
     }
     if (check) check(s, frame);
@@ -151,16 +155,24 @@ TEST_CASE("three-point walk: the avatar steps foot by foot, planted feet do not 
   // A walk is no collapse: stepping feet pass each other along the stride, never across it.
   CHECK(recoveries == 0);
   // Lift-offs (planted -> swinging), in order, and the ankle's rise above its planted height.
+  // A planted foot's heel rises as the body passes over it (foot_planner.h): what must not slide
+  // is the ball of the foot, the point the planner turns it about, carried in the solved ankle's
+  // frame from the first planted frame on.
   std::vector<int> liftOffs;
-  double worstSlide = 0.0, maxRise[2] = {0.0, 0.0};
+  double worstSlide = 0.0, maxRise[2] = {0.0, 0.0}, heelRise = 0.0;
   for (int f = 0; f < 2; ++f) {
     const auto& pos = r.feet.position[f];
     const auto& planted = r.feet.planted[f];
     size_t plantStart = 0;
+    Eigen::Vector3d ballInAnkle = Eigen::Vector3d::Zero();
     for (size_t i = 0; i < pos.size(); ++i) {
       if (i > 0 && planted[i - 1] && !planted[i]) liftOffs.push_back(int(i) * 2 + f);
       if (planted[i] && (i == 0 || !planted[i - 1])) plantStart = i;
-      if (planted[i] && i > plantStart + 1) worstSlide = std::max(worstSlide, (pos[i] - pos[plantStart + 1]).norm());
+      if (planted[i] && i == plantStart + 1) ballInAnkle = r.feet.ankle[f][i].inverse() * r.feet.ball[f][i];
+      if (planted[i] && i > plantStart + 1) {
+        worstSlide = std::max(worstSlide, (r.feet.ankle[f][i] * ballInAnkle - r.feet.ball[f][plantStart + 1]).norm());
+        heelRise = std::max(heelRise, pos[i].y() - pos[plantStart + 1].y());
+      }
       if (!planted[i] && plantStart < pos.size()) maxRise[f] = std::max(maxRise[f], pos[i].y() - pos[plantStart].y());
     }
   }
@@ -171,7 +183,8 @@ TEST_CASE("three-point walk: the avatar steps foot by foot, planted feet do not 
     if (k > 0 && liftOffs[k] % 2 == liftOffs[k - 1] % 2) ++repeats;
   }
   INFO("lift-offs: left " << left << ", right " << right << ", same foot twice in a row " << repeats << ", worst slide "
-                          << worstSlide << " m, rise " << maxRise[0] << " / " << maxRise[1]);
+                          << worstSlide << " m (ball of the foot), rise " << maxRise[0] << " / " << maxRise[1]
+                          << ", planted ankles up to " << heelRise << " m up");
   CHECK(left >= 2);
   CHECK(right >= 2);
   CHECK(repeats <= (left + right) / 4);  // mostly alternating

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 #include "runtime/body_heading.h"
 #include "runtime/foot_planner.h"
@@ -131,8 +132,12 @@ TEST_CASE("foot planner: a swinging foot leaves and meets the ground at walking 
   // Walking at 1.2 m/s, 90 Hz: over every swing, the foot's vertical speed in its first and last
   // frame, and how high it rises. A sine bump (the planner before) lifted the foot from rest to
   // 0.73 m/s in one frame and stopped it as suddenly: 0.07 m high over a 0.3 s swing, pi h / T.
-  const FootPlannerConfig config;
-  FootPlanner p = planner();
+  // The heels stay down here: a rising heel lifts the ankle before lift-off (tested below).
+  FootPlannerConfig config;
+  config.maxHeelRise = 0.0;
+  FootPlanner p;
+  p.configure(config, FootShape{}, Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(),
+              {Eigen::Vector3d(0.1, 0.08, 0.0), Eigen::Vector3d(-0.1, 0.08, 0.0)}, 1.0);
   std::array<double, 2> lastHeight{0.0, 0.0};
   std::array<bool, 2> planted{true, true};
   double fastestEdge = 0.0, highest = 0.0;
@@ -157,6 +162,102 @@ TEST_CASE("foot planner: a swinging foot leaves and meets the ground at walking 
   REQUIRE(p.steps() >= 7);
   CHECK(fastestEdge < 0.1);
   CHECK(highest == Approx(config.liftHeight).margin(0.005));
+}
+
+TEST_CASE("foot planner: a planted foot behind the body rises on its toes, the ball of the foot stays put", "[runtime]") {
+  // Walking at 1.2 m/s, 90 Hz. A planted foot's ankle turns about the ball of the foot as the body
+  // passes over it; a swinging foot lets the heel down by the landing, without a jump at
+  // lift-off.
+  FootPlanner p = planner();
+  std::array<Eigen::Vector3d, 2> ball{}, lastAnkle{};
+  std::array<bool, 2> planted{true, true};
+  std::array<bool, 2> lifting{false, false};
+  double worstSlide = 0.0, highestRoll = 0.0, rollAtLanding = 0.0, liftJump = 0.0;
+  for (int i = 0; i <= 3 * 90; ++i) {
+    const double t = i / 90.0;
+    const Eigen::Vector3d c(0.0, 0.9, 1.2 * t);
+    const auto& feet = p.update(t, c, 0.0, c);
+    for (size_t f = 0; f < 2; ++f) {
+      if (feet[f].planted && !planted[f]) rollAtLanding = std::max(rollAtLanding, feet[f].roll);
+      if (feet[f].planted && (i == 0 || !planted[f])) ball[f] = p.ballPoint(int(f));
+      if (feet[f].planted) {
+        // The ball of the foot, from the returned ankle and heel rise (the feet face +Z, their
+        // left +X; the ankle 8 cm up), stays where the foot was put down.
+        const Eigen::Vector3d flatBall(0.0, -0.08, FootShape{}.ball);
+        const Eigen::Vector3d fromAnkle = Eigen::AngleAxisd(feet[f].roll, Eigen::Vector3d::UnitX()) * flatBall;
+        worstSlide = std::max(worstSlide, (feet[f].position + fromAnkle - ball[f]).norm());
+      }
+      // The ankle's move over the frame a foot lifts and the one after: the heel's rise carried on.
+      if (lifting[f] || (planted[f] && !feet[f].planted)) liftJump = std::max(liftJump, (feet[f].position - lastAnkle[f]).norm());
+      lifting[f] = planted[f] && !feet[f].planted;
+      highestRoll = std::max(highestRoll, feet[f].roll);
+      lastAnkle[f] = feet[f].position;
+      planted[f] = feet[f].planted;
+    }
+  }
+  INFO("ball of the foot moved up to " << worstSlide << " m while planted; heel rise up to " << highestRoll << " rad, "
+                                       << rollAtLanding << " at a landing; the ankle moved up to " << liftJump
+                                       << " m in a lift-off frame");
+  CHECK(worstSlide < 1e-9);
+  CHECK(highestRoll > 0.2);
+  CHECK(highestRoll <= FootPlannerConfig{}.maxHeelRise + 1e-12);
+  CHECK(rollAtLanding == 0.0);
+  CHECK(liftJump < 0.01);
+}
+
+TEST_CASE("foot planner: walking with the head dipping once a step, the feet land on the dips, the foot the sway names",
+          "[runtime]") {
+  // 0.8 m/s for 6 s, 90 Hz. The head dips 2 cm every 0.6 s, lowest at t = 0.3 + 0.6 k (a foot
+  // landing), and sways sideways towards the landing foot: left at k even, right at k odd, or
+  // the other way round (swaySign -1).
+  constexpr double kStep = 0.6, kFirstDip = 0.3;
+  const double swaySign = GENERATE(1.0, -1.0);
+  auto centre = [&](double t, bool dips) {
+    const double phase = 2.0 * M_PI * (t - kFirstDip) / kStep;
+    const double bob = dips ? -0.01 * std::cos(phase) : 0.0;
+    const double sway = 0.15 * kStep / M_PI * std::sin(0.5 * phase);  // its velocity 0.15 cos(phase / 2)
+    return Eigen::Vector3d(swaySign * sway, 0.9 + bob, 0.8 * t);
+  };
+  auto walk = [&](bool dips, std::vector<std::pair<double, int>>& landings) {
+    FootPlanner p = planner();
+    std::array<bool, 2> planted{true, true};
+    for (int i = 0; i <= 6 * 90; ++i) {
+      const double t = i / 90.0;
+      const Eigen::Vector3d c = centre(t, dips);
+      const auto& feet = p.update(t, c, 0.0, c);
+      for (size_t f = 0; f < 2; ++f) {
+        if (feet[f].planted && !planted[f]) landings.emplace_back(t, int(f));
+        planted[f] = feet[f].planted;
+      }
+    }
+    return p.gait().locked(6.0);
+  };
+  std::vector<std::pair<double, int>> onDips, level;
+  REQUIRE(walk(true, onDips));
+  CHECK_FALSE(walk(false, level));
+  // Once the clock has seen three dips (1.5 s) and the feet have come into step (a foot named
+  // that has just stepped makes the other take a quick step first: with the sway reversed,
+  // landings R 2.43 and R 3.53 between the dips), every landing is on a dip, by the foot that dip
+  // belongs to.
+  std::ostringstream seq;
+  for (const auto& [t, foot] : onDips) seq << t << (foot == 0 ? "L " : "R ");
+  INFO("landings " << seq.str());
+  int checked = 0, wrongFoot = 0;
+  double worstOffset = 0.0;
+  for (const auto& [t, foot] : onDips) {
+    if (t < 3.6) continue;
+    const double k = std::round((t - kFirstDip) / kStep);
+    worstOffset = std::max(worstOffset, std::abs(t - (kFirstDip + k * kStep)));
+    if (foot != ((static_cast<long long>(k) % 2 == 0) == (swaySign > 0) ? 0 : 1)) ++wrongFoot;
+    ++checked;
+  }
+  INFO("sway sign " << swaySign << ": " << checked << " landings after 3.6 s, up to " << worstOffset << " s off a dip, " << wrongFoot << " by the wrong foot; "
+               << level.size() << " landings with the head level against " << onDips.size());
+  CHECK(checked >= 4);
+  CHECK(worstOffset <= 1.5 / 90.0);
+  CHECK(wrongFoot == 0);
+  // A level head keeps the quick steps: more of them.
+  CHECK(level.size() > onDips.size());
 }
 
 TEST_CASE("foot planner: re-planting the feet (a re-seed) keeps the count of steps taken", "[runtime]") {

@@ -1,0 +1,81 @@
+// The walk's rhythm from the head's height and sway (runtime/gait_clock.h).
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+
+#include "runtime/gait_clock.h"
+
+using namespace embody::runtime;
+
+namespace {
+
+// 90 Hz for `seconds`: the head at `height(t)`, its sideways velocity `sway(t)`.
+template <class Height, class Sway>
+GaitClock drive(Height height, Sway sway, double seconds) {
+  GaitClock clock;
+  clock.configure({}, 1.0);
+  for (int i = 0; i <= int(seconds * 90.0); ++i) {
+    const double t = i / 90.0;
+    clock.update(t, height(t), sway(t));
+  }
+  return clock;
+}
+
+constexpr double kFrame = 1.0 / 90.0;
+
+}  // namespace
+
+TEST_CASE("GaitClock: a head dipping 2 cm every 0.6 s, swaying to the landing foot: period, next dip and its foot", "[runtime]") {
+  // Lowest at 0.3 + 0.6 k; the sway towards the left foot (positive) at k even.
+  auto height = [](double t) { return 1.6 - 0.01 * std::cos(2.0 * M_PI * (t - 0.3) / 0.6); };
+  auto sway = [](double t) { return 0.15 * std::cos(M_PI * (t - 0.3) / 0.6); };
+  const GaitClock clock = drive(height, sway, 4.0);
+  REQUIRE(clock.locked(4.0));
+  CHECK(clock.period() == Approx(0.6).margin(kFrame));
+  // Dips at 3.9 (k = 6, left) and 4.5 (k = 7, right).
+  CHECK(clock.nextDip(4.0) == Approx(4.5).margin(1.5 * kFrame));
+  CHECK(clock.nextFoot(4.0) == 1);
+  CHECK(clock.nextDip(4.6) == Approx(5.1).margin(2.0 * kFrame));
+  CHECK(clock.nextFoot(4.6) == 0);
+  // Stale: nothing seen for more than 1.5 steps.
+  CHECK_FALSE(clock.locked(5.0));
+}
+
+TEST_CASE("GaitClock: no lock on a level head, irregular dips or a ripple below the dip size, no foot without a sway",
+          "[runtime]") {
+  auto noSway = [](double) { return 0.0; };
+  auto sway = [](double t) { return 0.15 * std::cos(M_PI * (t - 0.3) / 0.6); };
+  CHECK_FALSE(drive([](double) { return 1.6; }, sway, 4.0).locked(4.0));
+  // A 5 mm ripple (breathing, a shuffle): under the 8 mm dip.
+  const GaitClock ripple = drive([](double t) { return 1.6 - 0.0025 * std::cos(2.0 * M_PI * t / 0.6); }, sway, 4.0);
+  CHECK(ripple.dips() == 0);
+  CHECK_FALSE(ripple.locked(4.0));
+  // Dips 0.4 s and 0.8 s apart by turns (a boxer's bounce, a dance): never two periods alike.
+  // Lowest at the segments' ends: 0, 0.4, 1.2, 1.6, ...
+  auto irregular = [](double t) {
+    const double cycle = std::fmod(t, 1.2);
+    return cycle < 0.4 ? 1.59 + 0.01 * std::sin(M_PI * cycle / 0.4) : 1.59 + 0.01 * std::sin(M_PI * (cycle - 0.4) / 0.8);
+  };
+  const GaitClock bounce = drive(irregular, sway, 6.0);
+  CHECK(bounce.dips() >= 6);
+  CHECK_FALSE(bounce.locked(6.0));
+  // Regular dips without a sway: the rhythm, but no foot named.
+  const GaitClock straight = drive([](double t) { return 1.6 - 0.01 * std::cos(2.0 * M_PI * (t - 0.3) / 0.6); }, noSway, 4.0);
+  CHECK(straight.locked(4.0));
+  CHECK(straight.nextFoot(4.0) == -1);
+}
+
+TEST_CASE("GaitClock: non-finite samples are skipped", "[runtime]") {
+  GaitClock clock;
+  clock.configure({}, 1.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int i = 0; i <= 4 * 90; ++i) {
+    const double t = i / 90.0;
+    const bool bad = i % 7 == 3;
+    clock.update(t, bad ? nan : 1.6 - 0.01 * std::cos(2.0 * M_PI * (t - 0.3) / 0.6),
+                 bad ? nan : 0.15 * std::cos(M_PI * (t - 0.3) / 0.6));
+  }
+  REQUIRE(clock.locked(4.0));
+  CHECK(std::isfinite(clock.nextDip(4.0)));
+  CHECK(clock.period() == Approx(0.6).margin(2.0 * kFrame));
+}
