@@ -72,6 +72,20 @@ double soleHeight(const JointTrack& t, int f, const std::vector<int>& sole) {
   return y;
 }
 
+// The clip's body frame at frame f as (forward, left) on the ground: left from the right hip to
+// the left one. False when the hips are not scored or coincide on the ground.
+bool bodyFrame(const JointTrack& clip, const ScoredSkeleton& sk, int f, glm::dvec3& forward, glm::dvec3& left) {
+  const int l = sk.legs[0][0], r = sk.legs[1][0];
+  if (l < 0 || r < 0) return false;
+  left = clip.p(f, l) - clip.p(f, r);
+  left.y = 0.0;
+  const double n = glm::length(left);
+  if (n < 1e-9) return false;
+  left /= n;
+  forward = glm::cross(left, glm::dvec3(0.0, 1.0, 0.0));
+  return true;
+}
+
 double horizontalSpeed(const JointTrack& t, int f, int j, double fps) {
   glm::dvec3 d = t.p(f, j) - t.p(f - 1, j);
   d.y = 0.0;
@@ -92,6 +106,8 @@ Metrics score(const JointTrack& solved, const JointTrack& clip, const ScoredSkel
   const int frames = std::min(solved.frames(), clip.frames());
   m.frames = frames;
   m.perJointError.assign(size_t(clip.joints), 0.0);
+  if (sk.legs[0][0] >= 0 && sk.legs[1][0] >= 0) m.perJointBias.assign(size_t(clip.joints), glm::dvec3(0.0));
+  int biasFrames = 0;
   std::vector<double> error(size_t(clip.joints));
   double rotation = 0.0;
   size_t rotationCount = 0;
@@ -99,6 +115,14 @@ Metrics score(const JointTrack& solved, const JointTrack& clip, const ScoredSkel
     for (int j = 0; j < clip.joints; ++j) {
       error[size_t(j)] = glm::length(solved.p(f, j) - clip.p(f, j));
       m.perJointError[size_t(j)] += error[size_t(j)] / double(frames);
+    }
+    glm::dvec3 forward, left;
+    if (!m.perJointBias.empty() && bodyFrame(clip, sk, f, forward, left)) {
+      for (int j = 0; j < clip.joints; ++j) {
+        const glm::dvec3 d = solved.p(f, j) - clip.p(f, j);
+        m.perJointBias[size_t(j)] += glm::dvec3(glm::dot(d, forward), glm::dot(d, left), d.y);
+      }
+      ++biasFrames;
     }
     for (int g = 0; g < kGroupCount; ++g) {
       if (sk.groups[size_t(g)].empty()) continue;
@@ -126,6 +150,7 @@ Metrics score(const JointTrack& solved, const JointTrack& clip, const ScoredSkel
     m.mpjpe[size_t(g)].p95 = percentile95(m.perFrame[size_t(g)]);
   }
   m.mpjreDegrees = rotationCount ? rotation / double(rotationCount) : 0.0;
+  for (auto& b : m.perJointBias) b = biasFrames ? b / double(biasFrames) : glm::dvec3(0.0);
 
   // Velocities: backward differences.
   double velocity = 0.0;

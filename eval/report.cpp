@@ -58,6 +58,10 @@ Status writeCsv(const ClipEval& e, const fs::path& dir) {
   std::ofstream jf(dir / "joints.csv");
   jf << "joint";
   for (const auto& r : e.runs) jf << "," << methodName(r.method) << "_cm";
+  // The bias columns after every method's mean error (joints.gp plots those by column number).
+  for (const auto& r : e.runs)
+    if (!r.metrics.perJointBias.empty())
+      for (const char* axis : {"forward", "left", "up"}) jf << "," << methodName(r.method) << "_" << axis << "_cm";
   jf << "\n";
   for (int j : e.skeleton.groups[kAll]) {
     jf << e.jointNames[size_t(j)];
@@ -65,6 +69,12 @@ Status writeCsv(const ClipEval& e, const fs::path& dir) {
       std::snprintf(buf, sizeof buf, ",%.4f", cm(r.metrics.perJointError[size_t(j)]));
       jf << buf;
     }
+    for (const auto& r : e.runs)
+      if (!r.metrics.perJointBias.empty()) {
+        const glm::dvec3 b = r.metrics.perJointBias[size_t(j)];
+        std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.4f", cm(b.x), cm(b.y), cm(b.z));
+        jf << buf;
+      }
     jf << "\n";
   }
   if (!f || !jf) return Error{"cannot write the CSV files in " + dir.string()};

@@ -173,3 +173,31 @@ TEST_CASE("eval metrics: spine torsion changing sign inside a region, not betwee
   straight.rotation = {glm::dquat(1, 0, 0, 0), q1, q1 * q1, q1 * q1};  // the same way all along
   CHECK(score(straight, straight, one, 30.0).torsionSignChangeFrames == 0);
 }
+
+TEST_CASE("eval metrics: per-joint bias in the clip's body frame (forward, left, up)", "[eval]") {
+  // Root and two hips, the body turned 90° left (its left -Z, its forward +X). The solution sits
+  // 5 cm ahead of the clip and 2 cm up: bias (0.05, 0, 0.02) for every joint, whatever the turn.
+  JointTrack clip;
+  clip.joints = 3;
+  for (int f = 0; f < 4; ++f)
+    for (const glm::dvec3& p : {glm::dvec3(0.0, 1.0, 0.0), glm::dvec3(0.0, 1.0, -0.1), glm::dvec3(0.0, 1.0, 0.1)}) {
+      clip.position.push_back(p + glm::dvec3(0.3 * f, 0.0, 0.0));
+      clip.rotation.emplace_back(1.0, 0.0, 0.0, 0.0);
+    }
+  JointTrack solved = clip;
+  for (auto& p : solved.position) p += glm::dvec3(0.05, 0.02, 0.0);
+  ScoredSkeleton s;
+  s.groups[kAll] = {0, 1, 2};
+  s.legs[0] = {1, -1, -1};
+  s.legs[1] = {2, -1, -1};
+  const Metrics m = score(solved, clip, s, 30.0);
+  REQUIRE(m.perJointBias.size() == 3);
+  for (const glm::dvec3& b : m.perJointBias) {
+    CHECK(b.x == Approx(0.05));
+    CHECK(b.y == Approx(0.0).margin(1e-12));
+    CHECK(b.z == Approx(0.02));
+  }
+  // Without hips there is no body frame: no bias.
+  s.legs[0][0] = -1;
+  CHECK(score(solved, clip, s, 30.0).perJointBias.empty());
+}
