@@ -155,11 +155,11 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
   if (dt > 0.0 && dt < 0.5) {
     instant = (centre - lastCentre_) / dt;
     const double a = 1.0 - std::exp(-dt / config_.velocitySmoothing);
-    velocity_ += a * ((centre - lastCentre_) / dt - velocity_);
+    velocity_ += a * (instant - velocity_);
     // The mean since the reset until there is a time constant's worth, then exponential: a body
     // planted mid-walk (a clip's first frame, tracking regained) reads as walking at once.
     const double weight = std::max(1.0 - std::exp(-dt / config_.travelSmoothing), dt / std::max(time - travelSince_, dt));
-    travel_ += weight * ((centre - lastCentre_) / dt - travel_);
+    travel_ += weight * (instant - travel_);
     verticalSpeed_ += a * ((height - lastHeight_) / dt - verticalSpeed_);
   } else if (dt >= 0.5) {
     velocity_.setZero();
@@ -240,7 +240,7 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
   }
 
   // Start a step when a foot is out of place and both feet have been down long enough.
-  if (!swinging && rhythm.due && time - lastLanding_ >= rhythm.doubleSupport) {
+  if (!swinging && rhythm.due && time - lastLanding_ >= config_.doubleSupportSeconds) {
     const double threshold = (moving ? config_.walkThreshold : config_.standThreshold) * scale_;
     const bool unbalanced = !overSupport(centerOfMass);
     std::array<double, 2> need{};
@@ -319,7 +319,7 @@ void FootPlanner::startSwing(int f, double time, double duration, double ahead, 
 // mean since a walk started: the velocity trails a walk's start).
 FootPlanner::Rhythm FootPlanner::stepRhythm(double time, bool moving, double speed) const {
   const double step = config_.stepSeconds;
-  Rhythm r{step, config_.doubleSupportSeconds, 0.5 * step, true, -1};
+  Rhythm r{step, 0.5 * step, true, -1};
   if (!moving || !config_.followHeadDips || !gait_.locked(time)) return r;
   const int foot = gait_.nextFoot(time);
   const double period = gait_.period();

@@ -128,7 +128,6 @@ class FootPlanner {
   void startSwing(int foot, double time, double duration, double ahead, const Eigen::Vector3d& to, double toYaw);
   struct Rhythm {
     double swing;          // seconds
-    double doubleSupport;  // seconds on both feet before the next swing
     double ahead;          // seconds the landing spot leads a moving body by
     bool due;              // whether a step may start now
     int foot;              // the foot that must step (-1: the planner's choice)
