@@ -57,6 +57,18 @@ TEST_CASE("foot planner: a fast sidestep never lands a foot across the other one
   INFO("narrowest landing " << narrowest << " m over " << steps << " steps");
   CHECK(steps >= 4);
   CHECK(narrowest >= 0.1 - 1e-9);
+  // The same with the head dipping 2 cm every 0.5 s, its speed surging with each step (the steps'
+  // rhythm may follow the dips): still no foot across the other.
+  int dippingSteps = 0;
+  const double dipping = narrowestLanding(
+      [](double t) {
+        const double x = t < 1.5 ? 1.2 * t - 0.05 * std::sin(4.0 * M_PI * t) : 1.8 - 0.05 * std::sin(6.0 * M_PI);
+        return Eigen::Vector3d(x, 0.9 - 0.01 * std::cos(4.0 * M_PI * t), 0.0);
+      },
+      [](double) { return 0.0; }, 2.5, dippingSteps);
+  INFO("with the head dipping: narrowest landing " << dipping << " m over " << dippingSteps << " steps");
+  CHECK(dippingSteps >= 4);
+  CHECK(dipping >= 0.1 - 1e-9);
 }
 
 TEST_CASE("foot planner: turning on the spot while drifting sideways keeps the feet uncrossed", "[runtime]") {
