@@ -107,6 +107,10 @@ class FootPlanner {
   bool overSupport(const Eigen::Vector3d& point) const;
   Eigen::Vector3d nearestSupportPoint(const Eigen::Vector3d& point, double margin) const;
   Eigen::Vector3d groundVelocity() const { return velocity_; }
+  // The body's travel: its ground velocity averaged over `travelSmoothing`.
+  Eigen::Vector3d travel() const { return travel_; }
+  // 0 standing .. 1 walking (the landing spots' lead, eased over `leadEasing`).
+  double walking() const { return leadWeight_; }
   const GaitClock& gait() const { return gait_; }
 
  private:

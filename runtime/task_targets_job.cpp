@@ -142,7 +142,10 @@ void TaskWriter::setInferredLowerBody() {
   const double drop = r.restHeight[headIndex] - (r.up.dot(headPivot) - r.floor);
   const InferredTrunk trunk = inferTrunk(drop, pitchDown, r.restHeadToHips.norm());
   const double neckTurn = kBentNeckTurn * smoothstep(trunk.bend / kBentNeckTurn);
-  const double yaw = job_.heading->update(faceHeadingOf(headTurn, r.up, r.forward), neckTurn, time);
+  // The previous frame's travel: the planner is updated below, under this heading.
+  const double yaw = job_.heading->facingTravel(job_.heading->update(faceHeadingOf(headTurn, r.up, r.forward), neckTurn, time),
+                                                planner.travel(), planner.initialised() ? planner.walking() : 0.0, r.up,
+                                                r.forward, r.avatarHeight / 1.75);
   const Eigen::Quaterniond heading = yawRotation(yaw, r.up);
   const Eigen::Vector3d side = r.up.cross(heading * r.forward).normalized();
   const Eigen::Quaterniond lean(Eigen::AngleAxisd(trunk.lean, side));

@@ -356,3 +356,30 @@ TEST_CASE("BodyHeading: the body trails a fast turn of the head by a few degrees
   CHECK(easedTrail < 15 * deg);
   CHECK(settled < 0.5 * deg);
 }
+
+TEST_CASE("BodyHeading: a walking body faces where it goes, the head looking about, not stepping sideways or back",
+          "[runtime]") {
+  const double deg = std::numbers::pi / 180.0;
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY(), forward = Eigen::Vector3d::UnitZ();
+  const BodyHeading heading;
+  // Travel along +Z (yaw 0) at 1.2 m/s; the head's heading 15 degrees to the right of it, as the
+  // CMU walk's performer looked.
+  const Eigen::Vector3d ahead(0.0, 0.0, 1.2);
+  CHECK(heading.facingTravel(-15.0 * deg, ahead, 1.0, up, forward, 1.0) == Approx(0.0).margin(1e-12));
+  // Half walking (the planner easing in): half way.
+  CHECK(heading.facingTravel(-15.0 * deg, ahead, 0.5, up, forward, 1.0) == Approx(-7.5 * deg));
+  // Standing, or drifting slower than 0.3 m/s: the head's heading.
+  CHECK(heading.facingTravel(-15.0 * deg, ahead, 0.0, up, forward, 1.0) == Approx(-15.0 * deg));
+  CHECK(heading.facingTravel(-15.0 * deg, Eigen::Vector3d(0.0, 0.0, 0.25), 1.0, up, forward, 1.0) == Approx(-15.0 * deg));
+  // A child-sized avatar (scale 0.6) walking 0.5 m/s walks as fast as an adult at 0.83 m/s.
+  CHECK(heading.facingTravel(-15.0 * deg, Eigen::Vector3d(0.0, 0.0, 0.5), 1.0, up, forward, 0.6) == Approx(0.0).margin(1e-12));
+  // Stepping sideways (travel 90 degrees off) or backwards: the head's heading.
+  CHECK(heading.facingTravel(0.0, Eigen::Vector3d(1.2, 0.0, 0.0), 1.0, up, forward, 1.0) == 0.0);
+  CHECK(heading.facingTravel(0.0, Eigen::Vector3d(0.0, 0.0, -1.2), 1.0, up, forward, 1.0) == 0.0);
+  // Between 25 and 45 degrees off, a share of the way; across the wrap at +-180 the shorter way.
+  const double partial = heading.facingTravel(35.0 * deg, ahead, 1.0, up, forward, 1.0);
+  CHECK(partial > 0.0);
+  CHECK(partial < 35.0 * deg);
+  const Eigen::Vector3d back(0.0, 0.0, -1.2);  // yaw 180
+  CHECK(std::abs(std::remainder(heading.facingTravel(170.0 * deg, back, 1.0, up, forward, 1.0) - M_PI, 2.0 * M_PI)) < 1e-12);
+}
