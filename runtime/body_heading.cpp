@@ -43,11 +43,9 @@ double BodyHeading::update(double headYaw, double neckTurn, double time) {
 
 double BodyHeading::facingTravel(double yaw, const Eigen::Vector3d& travel, double walking, const Eigen::Vector3d& up,
                                  const Eigen::Vector3d& forward, double scale) const {
-  const Eigen::Vector3d side = up.cross(forward);
-  const double along = travel.dot(forward), across = travel.dot(side);
-  const double speed = std::hypot(along, across) / std::max(scale, 1e-9);
+  const double speed = std::hypot(travel.dot(forward), travel.dot(up.cross(forward))) / std::max(scale, 1e-9);
   if (!(walking > 0.0) || !(speed > config_.noSpeed) || !std::isfinite(yaw)) return yaw;
-  const double off = wrapAngle(std::atan2(across, along) - yaw);
+  const double off = wrapAngle(headingOfDirection(travel, up, forward) - yaw);
   const double bySpeed = smoothstep((speed - config_.noSpeed) / (config_.fullSpeed - config_.noSpeed));
   const double byDirection = 1.0 - smoothstep((std::abs(off) - config_.fullWithin) / (config_.noneBeyond - config_.fullWithin));
   return wrapAngle(yaw + std::min(walking, 1.0) * bySpeed * byDirection * off);

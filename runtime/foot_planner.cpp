@@ -60,15 +60,14 @@ double liftProfile(double phase) {
   const double s = std::sin(kPi * phase);
   return s * s;
 }
+}  // namespace
 
-// The heading of direction `f` on the ground (0 when it is vertical).
 double headingOfDirection(const Eigen::Vector3d& f, const Eigen::Vector3d& up, const Eigen::Vector3d& forward) {
   const Eigen::Vector3d side = up.cross(forward);
   const double x = f.dot(forward), y = f.dot(side);
   if (x * x + y * y < 1e-12) return 0.0;
   return std::atan2(y, x);
 }
-}  // namespace
 
 double headingOf(const Eigen::Quaterniond& q, const Eigen::Vector3d& up, const Eigen::Vector3d& forward) {
   return headingOfDirection(q * forward, up, forward);
@@ -172,8 +171,8 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
   lastTime_ = time;
   const double step = config_.stepSeconds;
   // The sideways sway: the centre's velocity across its travel, against the travel's mean.
-  const double travelSpeed = travel_.norm();
-  const Eigen::Vector3d left = travelSpeed > 1e-9 ? Eigen::Vector3d(up_.cross(travel_) / travelSpeed) : Eigen::Vector3d::Zero();
+  const double travelled = travel_.norm();
+  const Eigen::Vector3d left = travelled > 1e-9 ? Eigen::Vector3d(up_.cross(travel_) / travelled) : Eigen::Vector3d::Zero();
   gait_.update(time, height, (instant - travel_).dot(left));
   // Walking keeps the head's height; reaching down or standing up moves the inferred centre too
   // (forward with the head, then back once the bend is recognised), and taken for walking it made
@@ -187,7 +186,7 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
   // average says (a leap starts faster than the average follows), and so does one turned half a
   // step's turn from its feet: turning on the spot, the centre circles and averages out too.
   const double feetTurn = std::max(std::abs(wrapAngle(yaw - feet_[0].yaw)), std::abs(wrapAngle(yaw - feet_[1].yaw)));
-  const bool travelling = travel_.norm() > config_.travelSpeed * scale_ ||
+  const bool travelling = travelled > config_.travelSpeed * scale_ ||
                           (centre - centreOverFeet()).norm() > config_.standThreshold * scale_ || feetTurn > 0.5 * config_.turnRadians;
   const bool moving = groundSpeed > config_.movingSpeed * scale_ && std::abs(verticalSpeed_) < config_.maxClimb * groundSpeed && travelling;
   // The lead eases in and out: switched, it moved a swinging foot's landing spot by up to half a
@@ -224,7 +223,7 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
     foot.planted = false;
   }
 
-  const Rhythm rhythm = stepRhythm(time, moving, std::max(groundSpeed, travel_.norm()));
+  const Rhythm rhythm = stepRhythm(time, moving, std::max(groundSpeed, travelled));
   const double swingTime = rhythm.swing, ahead = rhythm.ahead;
 
   // A planted foot left beyond its leg's reach (a leap, a spin) lifts at once, even while the

@@ -162,7 +162,9 @@ class FootPlanner {
 };
 
 // Heading (radians about `up`, 0 = `forward`, positive turning towards `up x forward`) of a
-// rotation that maps `forward` somewhere: where its forward points on the ground (0 when straight
+// direction on the ground (0 when it is vertical): a travel's, a velocity's.
+double headingOfDirection(const Eigen::Vector3d& f, const Eigen::Vector3d& up, const Eigen::Vector3d& forward);
+// The same for a rotation that maps `forward` somewhere: where its forward points on the ground (0 when straight
 // up or down). For a body segment: the pelvis's heading, the feet's.
 double headingOf(const Eigen::Quaterniond& q, const Eigen::Vector3d& up, const Eigen::Vector3d& forward);
 // The same for a head's turn: where the face points, also looking straight down or past the
