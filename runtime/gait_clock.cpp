@@ -28,7 +28,7 @@ void GaitClock::update(double time, double height, double sway) {
     seekingMin_ = true;
     extreme_ = height;
     extremeTime_ = time;
-    sway_ = sway;
+    sway_ = extremeSway_ = sway;
     lastTime_ = time;
     return;
   }
@@ -70,6 +70,7 @@ void GaitClock::update(double time, double height, double sway) {
     seekingMin_ = true;
     extreme_ = height;
     extremeTime_ = time;
+    extremeSway_ = sway_;
   }
 }
 

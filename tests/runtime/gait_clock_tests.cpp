@@ -79,3 +79,24 @@ TEST_CASE("GaitClock: non-finite samples are skipped", "[runtime]") {
   CHECK(std::isfinite(clock.nextDip(4.0)));
   CHECK(clock.period() == Approx(0.6).margin(2.0 * kFrame));
 }
+
+TEST_CASE("GaitClock: a dip whose lowest point is the first frame below the fall names its foot", "[runtime]") {
+  // The head drops 2 cm in one frame every 0.6 s and climbs back over the next 0.3 s; the sway
+  // points left at the dips at odd multiples of 0.6 s, right at even ones, and is zero elsewhere.
+  // The lowest point is the very frame the fall is seen, so the sway must be read there too.
+  auto height = [](double t) {
+    const double since = std::fmod(t, 0.6);
+    return t < 0.6 ? 1.6 : 1.58 + 0.02 * std::min(since / 0.3, 1.0);
+  };
+  auto sway = [](double t) {
+    const double since = std::fmod(t, 0.6);
+    if (t < 0.6 || since > 0.05) return 0.0;
+    return static_cast<long long>(std::floor(t / 0.6)) % 2 != 0 ? 0.15 : -0.15;
+  };
+  const GaitClock clock = drive(height, sway, 4.0);
+  REQUIRE(clock.locked(4.0));
+  // The last dip at 3.6 (6 x 0.6: right), the next at 4.2 (7 x 0.6: left). Read where the sway
+  // was before the fall (zero), no dip named a foot (-1).
+  CHECK(clock.nextDip(4.0) == Approx(4.2).margin(1.5 * kFrame));
+  CHECK(clock.nextFoot(4.0) == 0);
+}
