@@ -251,9 +251,9 @@ BodySignals AvatarBodySolver::bodySignals(double time, const SolveResult& result
   }
   s.inferredLegs = rig_.layout.inferLowerBody;
   s.iterations = result.iterations;
-  // The errors a body can fix: the head while its target is no higher than standing allows, the
-  // hands while within the arm's reach.
-  if (result.residual[head] >= 0.0f && s.headTargetHeight <= 1.02 * s.standingEyeHeight) s.residual = result.residual[head];
+  // The errors a body can fix: the head's (less what a target above standing height explains),
+  // the hands' while within the arm's reach.
+  if (result.residual[head] >= 0.0f) s.residual = fixableHeadError(result.residual[head], s.headTargetHeight, s.standingEyeHeight);
   for (auto id : {TrackerId::LeftHand, TrackerId::RightHand}) {
     const size_t i = size_t(tracking::index(id));
     if (result.residual[i] >= 0.0f && result.reachable[i]) s.residual = std::max(s.residual, double(result.residual[i]));

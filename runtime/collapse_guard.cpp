@@ -1,5 +1,6 @@
 #include "runtime/collapse_guard.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/enum_names.h"
@@ -12,14 +13,20 @@ constexpr EnumName<CollapseReason> kCollapseReasonNames[] = {{CollapseReason::No
                                                              {CollapseReason::PelvisLow, "pelvis_low"},
                                                              {CollapseReason::Folded, "folded"},
                                                              {CollapseReason::ThroughFloor, "through_floor"},
-                                                             {CollapseReason::CrossedLegs, "crossed_legs"}};
+                                                             {CollapseReason::CrossedLegs, "crossed_legs"},
+                                                             {CollapseReason::Diverged, "diverged"}};
 
 std::string_view collapseReasonName(CollapseReason reason) {
   return enumName(kCollapseReasonNames, reason);
 }
 
+double fixableHeadError(double error, double headTargetHeight, double standingEyeHeight) {
+  return std::max(0.0, error - std::max(0.0, headTargetHeight - 1.02 * standingEyeHeight));
+}
+
 CollapseReason CollapseGuard::assess(const BodySignals& s) const {
   if (!s.finite) return CollapseReason::NonFinite;
+  if (s.residual > config_.divergedResidual * s.scale) return CollapseReason::Diverged;
   const bool headHigh = s.headTargetHeight > config_.crouchHeadFraction * s.standingEyeHeight;
   if (s.lowestTrunkOrKnee < -config_.floorPenetration * s.scale) return CollapseReason::ThroughFloor;
   if (headHigh && s.pelvisHeight < config_.pelvisLowFraction * s.standingPelvisHeight) return CollapseReason::PelvisLow;
@@ -58,7 +65,8 @@ CollapseReason CollapseGuard::update(const BodySignals& s) {
     }
     if (conditionSince_ < 0.0) conditionSince_ = s.time;
     const bool confirmed = reason == CollapseReason::Stalled || s.time - conditionSince_ >= config_.confirmSeconds;
-    if (!confirmed || s.time - lastRecovery_ < config_.cooldownSeconds) return CollapseReason::None;
+    const double cooldown = reason == CollapseReason::Diverged ? config_.divergedCooldownSeconds : config_.cooldownSeconds;
+    if (!confirmed || s.time - lastRecovery_ < cooldown) return CollapseReason::None;
   }
   lastRecovery_ = s.time;
   conditionSince_ = -1.0;

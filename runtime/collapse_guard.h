@@ -16,8 +16,14 @@
 //                 target is high (no bow deep enough to ask for it)
 //   ThroughFloor  a knee, the pelvis or the head is below the floor by `floorPenetration`
 //   CrossedLegs   with inferred legs, a knee or an ankle is on the other leg's side
+//   Diverged      the head or a reachable hand is more than `divergedResidual` off its target: the
+//                 body is being dragged away (in three-point mode by planted feet it cannot reach
+//                 from the head), which the stall window would leave for half a second while the
+//                 error grows
 // A condition other than NonFinite must hold for `confirmSeconds`; after a recovery the guard
-// waits `cooldownSeconds` (the re-seeded body needs a few frames to reach its targets).
+// waits `cooldownSeconds` (the re-seeded body needs a few frames to reach its targets), but only
+// `divergedCooldownSeconds` for Diverged: a re-seeded body is on its targets within the fade, and
+// one dragged off them again is a new failure that the full wait would leave growing.
 // Distances are at the avatar's scale (`BodySignals::scale` = avatar height / 1.75 m).
 #include <cstdint>
 #include <string_view>
@@ -36,7 +42,9 @@ struct CollapseGuardConfig {
   double foldedRadians = 1.3;        // ~75 degrees
   double floorPenetration = 0.05;    // m
   double crossMargin = 0.02;         // m
+  double divergedResidual = 0.2;     // m
   double cooldownSeconds = 1.0;
+  double divergedCooldownSeconds = 0.3;
   bool enabled = true;
 };
 
@@ -51,11 +59,17 @@ struct BodySignals {
   double lowestTrunkOrKnee = 0.0;    // the lowest of the knees, the pelvis and the head
   double legSeparation = 0.0;        // min over knees and ankles of (left - right), across the feet's heading
   bool inferredLegs = false;         // crossing counts only for legs the runtime places
-  double residual = 0.0;             // the worst of the head's and the reachable hands' errors
+  double residual = 0.0;             // the worst of the head's and the reachable hands' errors (the
+                                     // head's less what a target above standing height explains)
   int iterations = 0;                // solver iterations this frame
 };
 
-enum class CollapseReason : uint8_t { None, NonFinite, Stalled, PelvisLow, Folded, ThroughFloor, CrossedLegs };
+// The part of the head's error a body could fix: all of it while the head target is no higher
+// than standing allows (2 % over the standing eye height), less the excess above that otherwise
+// (a taller user, the top of a jump).
+double fixableHeadError(double error, double headTargetHeight, double standingEyeHeight);
+
+enum class CollapseReason : uint8_t { None, NonFinite, Stalled, PelvisLow, Folded, ThroughFloor, CrossedLegs, Diverged };
 std::string_view collapseReasonName(CollapseReason reason);
 
 class CollapseGuard {

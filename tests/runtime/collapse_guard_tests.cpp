@@ -3,6 +3,8 @@
 // (pole_tasks.h) and the pose fade (pose_blend.h).
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "runtime/body_seed.h"
 #include "runtime/collapse_guard.h"
@@ -81,10 +83,10 @@ TEST_CASE("collapse guard: an error that stays high is a stall, one that keeps f
   int stuckAt = -1;
   for (int i = 0; i < 120; ++i) {
     BodySignals s = standing(i / 100.0);
-    s.residual = 0.3;
+    s.residual = 0.15;
     s.iterations = 3;
     if (stuck.update(s) == CollapseReason::Stalled && stuckAt < 0) stuckAt = i;
-    s.residual = 0.3 * std::exp(-i / 100.0);  // falls by ~40 % per half second
+    s.residual = 0.15 * std::exp(-i / 100.0);  // falls by ~40 % per half second
     CHECK(falling.update(s) == CollapseReason::None);
   }
   CHECK(stuckAt == 50);  // 0.5 s (and 150 iterations)
@@ -92,10 +94,61 @@ TEST_CASE("collapse guard: an error that stays high is a stall, one that keeps f
   CollapseGuard slow;
   for (int i = 0; i < 20; ++i) {
     BodySignals s = standing(i / 8.0);
-    s.residual = 0.3;
+    s.residual = 0.15;
     s.iterations = 1;
     CHECK(slow.update(s) == CollapseReason::None);
   }
+}
+
+TEST_CASE("collapse guard: a body dragged off its targets is caught in 0.1 s, also soon after another recovery",
+          "[runtime]") {
+  // Legs crossed at 0.1 s (a recovery), then from 0.5 s the head pulled away 1 cm a frame.
+  // Still dragged away, it is caught again 0.3 s after that.
+  CollapseGuard g;
+  std::vector<std::pair<CollapseReason, int>> recoveries;
+  for (int i = 0; i < 120; ++i) {
+    BodySignals s = standing(i / 100.0);
+    s.iterations = 3;
+    if (i < 20) s.legSeparation = -0.05;
+    if (i >= 50) s.residual = 0.01 * (i - 49);
+    const CollapseReason r = g.update(s);
+    if (r != CollapseReason::None) recoveries.emplace_back(r, i);
+  }
+  // Over 0.2 m from frame 70; confirmed 0.1 s later, 0.7 s after the first recovery (a stall
+  // would have waited 0.5 s, the other conditions the full 1 s cooldown).
+  REQUIRE(recoveries.size() == 3);
+  CHECK(recoveries[0] == std::pair{CollapseReason::CrossedLegs, 10});
+  CHECK(recoveries[1] == std::pair{CollapseReason::Diverged, 80});
+  CHECK(recoveries[2] == std::pair{CollapseReason::Diverged, 110});
+  // An error under the bound is no divergence: only a stall, after 0.5 s.
+  CollapseGuard h;
+  int first = -1;
+  for (int i = 0; i < 80 && first < 0; ++i) {
+    BodySignals s = standing(i / 100.0);
+    s.iterations = 3;
+    s.residual = 0.19;
+    if (h.update(s) != CollapseReason::None) first = i;
+  }
+  CHECK(first == 50);
+  CHECK(h.lastReason() == CollapseReason::Stalled);
+  // At a body a fifth smaller the bound is a fifth smaller.
+  CollapseGuard small;
+  first = -1;
+  for (int i = 0; i < 40 && first < 0; ++i) {
+    BodySignals s = standing(i / 100.0);
+    s.scale = 0.8;
+    s.residual = 0.17;
+    if (small.update(s) != CollapseReason::None) first = i;
+  }
+  CHECK(first == 10);
+  CHECK(small.lastReason() == CollapseReason::Diverged);
+}
+
+TEST_CASE("collapse guard: a head target above standing height only explains that much of its error", "[runtime]") {
+  CHECK(fixableHeadError(0.3, 1.6, 1.64) == Approx(0.3));          // below standing: all of it
+  CHECK(fixableHeadError(0.3, 1.64 * 1.02, 1.64) == Approx(0.3));  // within 2 %
+  CHECK(fixableHeadError(0.3, 1.64 * 1.02 + 0.1, 1.64) == Approx(0.2));
+  CHECK(fixableHeadError(0.05, 1.64 * 1.02 + 0.1, 1.64) == 0.0);  // a taller user: none of it
 }
 
 TEST_CASE("standing seed: under the head, facing between the head and the hands, never below half height",
