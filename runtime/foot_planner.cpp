@@ -318,7 +318,7 @@ void FootPlanner::startSwing(int f, double time, double duration, double ahead, 
 // mean since a walk started: the velocity trails a walk's start).
 FootPlanner::Rhythm FootPlanner::stepRhythm(double time, bool moving, double speed) const {
   const double step = config_.stepSeconds;
-  Rhythm r{step, 0.5 * step, true, -1};
+  Rhythm r{step, config_.quickAheadShare * step, true, -1};
   if (!moving || !config_.followHeadDips || !gait_.locked(time)) return r;
   const int foot = gait_.nextFoot(time);
   const double period = gait_.period();
