@@ -26,13 +26,17 @@ double fixableHeadError(double error, double headTargetHeight, double standingEy
 
 CollapseReason CollapseGuard::assess(const BodySignals& s) const {
   if (!s.finite) return CollapseReason::NonFinite;
-  if (s.residual > config_.divergedResidual * s.scale) return CollapseReason::Diverged;
+  if (diverged(s)) return CollapseReason::Diverged;
   const bool headHigh = s.headTargetHeight > config_.crouchHeadFraction * s.standingEyeHeight;
   if (s.lowestTrunkOrKnee < -config_.floorPenetration * s.scale) return CollapseReason::ThroughFloor;
   if (headHigh && s.pelvisHeight < config_.pelvisLowFraction * s.standingPelvisHeight) return CollapseReason::PelvisLow;
   if (headHigh && s.pelvisTilt > config_.foldedRadians) return CollapseReason::Folded;
   if (s.inferredLegs && s.legSeparation < -config_.crossMargin * s.scale) return CollapseReason::CrossedLegs;
   return CollapseReason::None;
+}
+
+bool CollapseGuard::diverged(const BodySignals& s) const {
+  return onTargets_ && s.residual > config_.divergedResidual * s.scale;
 }
 
 bool CollapseGuard::stalled(const BodySignals& s) {
@@ -51,6 +55,7 @@ bool CollapseGuard::stalled(const BodySignals& s) {
 }
 
 CollapseReason CollapseGuard::update(const BodySignals& s) {
+  if (s.residual <= config_.divergedResidual * s.scale) onTargets_ = true;
   CollapseReason reason = assess(s);
   if (reason != CollapseReason::None) ++collapsedFrames_;
   const bool isStalled = stalled(s);
@@ -71,12 +76,14 @@ CollapseReason CollapseGuard::update(const BodySignals& s) {
   lastRecovery_ = s.time;
   conditionSince_ = -1.0;
   stallSince_ = -1.0;
+  onTargets_ = false;
   ++recoveries_;
   lastReason_ = reason;
   return reason;
 }
 
 void CollapseGuard::reset() {
+  onTargets_ = false;
   conditionSince_ = -1.0;
   stallSince_ = -1.0;
   lastRecovery_ = -1e9;

@@ -16,10 +16,11 @@
 //                 target is high (no bow deep enough to ask for it)
 //   ThroughFloor  a knee, the pelvis or the head is below the floor by `floorPenetration`
 //   CrossedLegs   with inferred legs, a knee or an ankle is on the other leg's side
-//   Diverged      the head or a reachable hand is more than `divergedResidual` off its target: the
-//                 body is being dragged away (in three-point mode by planted feet it cannot reach
-//                 from the head), which the stall window would leave for half a second while the
-//                 error grows
+//   Diverged      the head or a reachable hand is more than `divergedResidual` off its target,
+//                 having been within it since the last recovery: the body is being dragged away
+//                 (in three-point mode by planted feet it cannot reach from the head), which the
+//                 stall window would leave for half a second while the error grows. A target the
+//                 body never reached (a head on the floor, one far out of reach) is a stall.
 // A condition other than NonFinite must hold for `confirmSeconds`; after a recovery the guard
 // waits `cooldownSeconds` (the re-seeded body needs a few frames to reach its targets), but only
 // `divergedCooldownSeconds` for Diverged: a re-seeded body is on its targets within the fade, and
@@ -88,7 +89,9 @@ class CollapseGuard {
 
  private:
   bool stalled(const BodySignals& s);
+  bool diverged(const BodySignals& s) const;
   CollapseGuardConfig config_;
+  bool onTargets_ = false;  // the error has been within divergedResidual since the last recovery
   double conditionSince_ = -1.0, stallSince_ = -1.0, stallReference_ = 0.0, lastRecovery_ = -1e9;
   int stallIterations_ = 0;
   int recoveries_ = 0, collapsedFrames_ = 0;
