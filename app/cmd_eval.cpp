@@ -1,7 +1,8 @@
 // embody eval: the body scored against real motion capture (eval/, docs/eval.md). The avatar is
 // the clip's own skeleton; only the chosen trackers reach the runtime; every joint of the solved
 // body is set beside the clip's. One clip: a method table and the report files in --out. A
-// folder: every clip at every tracker set, one table.
+// folder, or several rates: every clip at every tracker set and rate, one table with a mean row
+// per tracker set.
 #include <unistd.h>
 
 #include <algorithm>
@@ -30,6 +31,8 @@ struct EvalJob {
   std::vector<fs::path> clips;
   bool folder = false;
   std::vector<eval::TrackerSet> sets;
+  std::vector<double> rates{0.0};  // evaluation rates (0: the clip's own)
+  bool tabled() const { return folder || rates.size() > 1; }
   eval::EvalOptions options;
   double bvhScale = 0.0;
   fs::path out;
@@ -38,11 +41,15 @@ struct EvalJob {
   std::string device = "auto";
 };
 
-// One table row per (clip, tracker set): MPJPE of each method, or why the clip was not scored.
+// One table row per (clip, tracker set, rate): MPJPE of each method and the coupled body's
+// figures that issue #15's bars name, or why the clip was not scored.
 struct Row {
   std::string clip, trackers, error;
-  std::array<double, 3> mpjpe{}, hands{}, lower{};
-  double mpjre = 0.0, jitter = 0.0, clipJitter = 0.0, seconds = 0.0;
+  double fps = 0.0;
+  std::array<double, 3> mpjpe{};
+  std::array<double, eval::kGroupCount> coupled{};  // cm, per group
+  double jitterRatio = 0.0, skating = 0.0, seconds = 0.0;
+  int kneeReversed = 0, elbowReversed = 0, collapsed = 0;
 };
 
 int fail(const std::string& message, int code) {
@@ -76,15 +83,15 @@ bool evaluateOne(const tracking::BvhAvatar& avatar, const EvalJob& job, eval::Tr
     if (auto s = app::writeEvalSheet(avatar, *e, dir / "contact_sheet.png", job.device); !s)
       notes->push_back("contact sheet not drawn: " + s.error());
   row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  for (size_t k = 0; k < e->runs.size(); ++k) {
-    const auto& m = e->runs[k].metrics;
-    row.mpjpe[k] = 100.0 * m.mpjpe[eval::kAll].mean;
-    row.hands[k] = 100.0 * m.mpjpe[eval::kHands].mean;
-    row.lower[k] = 100.0 * m.mpjpe[eval::kLower].mean;
-  }
-  row.mpjre = e->runs[0].metrics.mpjreDegrees;
-  row.jitter = e->runs[0].metrics.jitter;
-  row.clipJitter = e->runs[0].metrics.clipJitter;
+  row.fps = e->fps;
+  for (size_t k = 0; k < e->runs.size() && k < row.mpjpe.size(); ++k) row.mpjpe[k] = 100.0 * e->runs[k].metrics.mpjpe[eval::kAll].mean;
+  const eval::Metrics& m = e->runs[0].metrics;  // the coupled spine
+  for (int g = 0; g < eval::kGroupCount; ++g) row.coupled[size_t(g)] = 100.0 * m.mpjpe[size_t(g)].mean;
+  row.jitterRatio = m.clipJitter > 0.0 ? m.jitter / m.clipJitter : 0.0;
+  row.skating = 100.0 * m.footSkating;
+  row.kneeReversed = m.kneeReverseFrames;
+  row.elbowReversed = m.elbowReverseFrames;
+  row.collapsed = m.collapsedFrames;
   if (verbose) {
     std::printf("%s: %d frames at %.6g Hz, trackers %s, %d IK iterations a frame, %zu joints scored\n", e->clip.c_str(),
                 e->frames, e->fps, row.trackers.c_str(), o.ikIterations, e->skeleton.groups[eval::kAll].size());
@@ -105,57 +112,122 @@ void progressBar(size_t done, size_t total, const std::string& what) {
   std::fflush(stdout);
 }
 
-std::string table(const std::vector<Row>& rows) {
+std::string rateName(double fps) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", fps);
+  return buf;
+}
+
+// The rows, then per tracker set the mean over its scored rows (every clip and rate): the
+// figures docs/eval.md reports (jitter as a multiple of the clip's own; reversed and collapsed
+// frames summed).
+std::string table(const std::vector<Row>& rows, const std::vector<eval::TrackerSet>& sets) {
   std::string out =
-      "| clip | trackers | MPJPE cm coupled | uncoupled | naive | hands cm (coupled) | lower cm (coupled / naive) | "
-      "MPJRE ° | jitter m/s³ (clip) |\n|---|---|---|---|---|---|---|---|---|\n";
-  char buf[400];
-  for (const auto& r : rows) {
-    if (!r.error.empty()) {
-      out += "| " + r.clip + " | " + r.trackers + " | not scored: " + r.error + " | | | | | | |\n";
-      continue;
-    }
-    std::snprintf(buf, sizeof buf, "| %s | %s | %.2f | %.2f | %.2f | %.2f | %.2f / %.2f | %.1f | %.0f (%.0f) |\n", r.clip.c_str(),
-                  r.trackers.c_str(), r.mpjpe[0], r.mpjpe[1], r.mpjpe[2], r.hands[0], r.lower[0], r.lower[2], r.mpjre, r.jitter,
-                  r.clipJitter);
+      "| clip | trackers | fps | MPJPE cm coupled | uncoupled | naive | hands | head | upper | lower | root | "
+      "jitter × clip | skating cm/s | reversed knee/elbow | collapsed |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  char buf[512];
+  auto line = [&](const std::string& clip, const std::string& trackers, const std::string& fps, const Row& r) {
+    std::snprintf(buf, sizeof buf, "| %s | %s | %s | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.1f | %d/%d | %d |\n",
+                  clip.c_str(), trackers.c_str(), fps.c_str(), r.mpjpe[0], r.mpjpe[1], r.mpjpe[2], r.coupled[eval::kHands],
+                  r.coupled[eval::kHead], r.coupled[eval::kUpper], r.coupled[eval::kLower], r.coupled[eval::kRoot], r.jitterRatio,
+                  r.skating, r.kneeReversed, r.elbowReversed, r.collapsed);
     out += buf;
+  };
+  for (const auto& r : rows) {
+    if (!r.error.empty()) out += "| " + r.clip + " | " + r.trackers + " | | not scored: " + r.error + " | | | | | | | | | | | |\n";
+    else line(r.clip, r.trackers, rateName(r.fps), r);
+  }
+  for (eval::TrackerSet set : sets) {
+    Row mean;
+    std::vector<double> rates;
+    int n = 0;
+    for (const auto& r : rows) {
+      if (!r.error.empty() || r.trackers != eval::trackerSetName(set)) continue;
+      ++n;
+      for (size_t k = 0; k < mean.mpjpe.size(); ++k) mean.mpjpe[k] += r.mpjpe[k];
+      for (size_t g = 0; g < mean.coupled.size(); ++g) mean.coupled[g] += r.coupled[g];
+      mean.jitterRatio += r.jitterRatio, mean.skating += r.skating;
+      mean.kneeReversed += r.kneeReversed, mean.elbowReversed += r.elbowReversed, mean.collapsed += r.collapsed;
+      if (std::find(rates.begin(), rates.end(), r.fps) == rates.end()) rates.push_back(r.fps);
+    }
+    if (n < 2) continue;
+    for (auto& v : mean.mpjpe) v /= n;
+    for (auto& v : mean.coupled) v /= n;
+    mean.jitterRatio /= n, mean.skating /= n;
+    std::string fps;
+    for (double f : rates) fps += (fps.empty() ? "" : ", ") + rateName(f);
+    line("**mean of " + std::to_string(n) + "**", eval::trackerSetName(set), fps, mean);
   }
   return out;
 }
 
 int runJob(const EvalJob& job) {
   std::vector<Row> rows;
-  const bool bar = job.folder && isatty(STDOUT_FILENO);
-  const size_t total = job.clips.size() * job.sets.size();
+  const bool bar = job.tabled() && isatty(STDOUT_FILENO);
+  const size_t total = job.clips.size() * job.sets.size() * job.rates.size();
   size_t done = 0;
   int failures = 0;
   for (const auto& clip : job.clips) {
     tracking::BvhTrackerOptions bo;
     bo.scale = job.bvhScale;
     auto avatar = tracking::loadBvhAvatar(clip.string(), bo);
-    for (eval::TrackerSet set : job.sets) {
-      Row row;
-      row.clip = clip.filename().string();
-      if (bar) progressBar(done, total, row.clip + " @" + eval::trackerSetName(set));
-      const fs::path dir = job.folder ? job.out / clip.stem() / (std::string("trackers_") + eval::trackerSetName(set)) : job.out;
-      if (!avatar) row.error = avatar.error(), row.trackers = eval::trackerSetName(set);
-      else evaluateOne(*avatar, job, set, dir, row, !job.folder);
-      if (!row.error.empty()) {
-        ++failures;
-        if (!job.folder) return fail(row.error, 1);
+    for (eval::TrackerSet set : job.sets)
+      for (double fps : job.rates) {
+        Row row;
+        row.clip = clip.filename().string();
+        row.fps = fps;
+        if (bar) progressBar(done, total, row.clip + " @" + eval::trackerSetName(set));
+        fs::path dir = job.out;
+        if (job.tabled()) {
+          dir = job.out / clip.stem() / (std::string("trackers_") + eval::trackerSetName(set));
+          if (job.rates.size() > 1) dir /= "fps_" + rateName(fps);
+        }
+        EvalJob at = job;
+        at.options.fps = fps;
+        if (!avatar) row.error = avatar.error(), row.trackers = eval::trackerSetName(set);
+        else evaluateOne(*avatar, at, set, dir, row, !job.tabled());
+        if (!row.error.empty()) {
+          ++failures;
+          if (!job.tabled()) return fail(row.error, 1);
+        }
+        rows.push_back(std::move(row));
+        ++done;
       }
-      rows.push_back(std::move(row));
-      ++done;
-    }
   }
   if (bar) progressBar(done, total, "done"), std::printf("\n");
-  if (!job.folder) return 0;
-  const std::string t = table(rows);
+  if (!job.tabled()) return 0;
+  const std::string t = table(rows, job.sets);
   std::printf("%s", t.c_str());
   std::ofstream(job.out / "summary.md") << t;
-  std::printf("wrote %s (and one folder of metrics per clip and tracker set)\n", (job.out / "summary.md").c_str());
+  std::printf("wrote %s (and one folder of metrics per clip, tracker set%s)\n", (job.out / "summary.md").c_str(),
+              job.rates.size() > 1 ? " and rate" : "");
   if (failures) std::fprintf(stderr, "error: %d of %zu clip runs were not scored (see the table)\n", failures, total);
   return failures ? 1 : 0;
+}
+
+// "90" or "60,90,120": each 1 .. 1000 Hz, no repeats.
+std::vector<double> parseRates(const std::string& text) {
+  std::vector<double> rates;
+  size_t at = 0;
+  while (at <= text.size()) {
+    const size_t comma = std::min(text.find(',', at), text.size());
+    const std::string item = text.substr(at, comma - at);
+    size_t used = 0;
+    double hz = 0.0;
+    try {
+      hz = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (item.empty() || used != item.size() || !(hz >= 1.0 && hz <= 1000.0))
+      throw std::invalid_argument("--fps must be rates of 1 .. 1000 Hz, separated by commas (got '" + text + "')");
+    if (std::find(rates.begin(), rates.end(), hz) != rates.end())
+      throw std::invalid_argument("--fps names " + item + " Hz twice");
+    rates.push_back(hz);
+    at = comma + 1;
+  }
+  return rates;
 }
 
 int runEval(app::Argv argv) {
@@ -167,7 +239,9 @@ int runEval(app::Argv argv) {
   args.option("motion", "CLIP.bvh|DIR", "a BVH clip, or a folder: every *.bvh in it");
   args.option("trackers", "SET", "3 (HMD + controllers), 4 (+ pelvis), 6 (+ feet), full (+ a marker on every joint); "
               "a folder runs 3, 4, 6 and full unless given", "3");
-  args.option("fps", "HZ", "evaluation rate (default: the clip's own)");
+  args.option("fps", "HZ[,HZ...]", "evaluation rate (default: the clip's own); several (60,90,120) score each and "
+              "average them in one table: a step starts on another frame at another rate, and the mean over rates judges "
+              "a change to the stepping more steadily than one rate");
   args.option("ik-iterations", "N", "IK iterations per frame (fixed: the score repeats to the bit)", "10");
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (default: fit the clip to 1.75 m)");
   args.option("out", "DIR", "output folder", "out/eval");
@@ -179,8 +253,7 @@ int runEval(app::Argv argv) {
   EvalJob job;
   try {
     if (!args.has("motion")) throw std::invalid_argument("--motion CLIP.bvh|DIR is required");
-    if (args.has("fps")) job.options.fps = args.number("fps");
-    if (args.has("fps") && !(job.options.fps >= 1.0 && job.options.fps <= 1000.0)) throw std::invalid_argument("--fps must be 1 .. 1000");
+    if (args.has("fps")) job.rates = parseRates(args.get("fps"));
     job.options.ikIterations = args.integer("ik-iterations");
     if (job.options.ikIterations < 1 || job.options.ikIterations > 1000) throw std::invalid_argument("--ik-iterations must be 1 .. 1000");
     if (args.has("bvh-scale")) job.bvhScale = args.number("bvh-scale");

@@ -2,6 +2,7 @@
 // hierarchy in solved.bvh, full markers reproducing the clip, glTF export through the Khronos
 // validator, and one clear line with exit 2 or 1 on bad input.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <fstream>
@@ -9,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <utility>
+#include <vector>
 
 #include "cli/cli_support.h"
 #include "test_paths.h"
@@ -73,6 +75,25 @@ void checkGroupMeans(const nlohmann::json& metrics, std::initializer_list<std::p
       INFO(m << ", " << group);
       CHECK(metrics["methods"][m]["mpjpe_cm"][group]["mean"].get<double>() <= bound);
     }
+}
+
+// The cells of the summary.md row that starts with `prefix` (empty when there is none).
+std::vector<std::string> summaryRow(const std::string& summary, const std::string& prefix) {
+  std::istringstream in(summary);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind(prefix, 0) != 0) continue;
+    std::vector<std::string> cells;
+    std::istringstream row(line.substr(1));
+    std::string cell;
+    while (std::getline(row, cell, '|')) {
+      while (!cell.empty() && cell.front() == ' ') cell.erase(cell.begin());
+      while (!cell.empty() && cell.back() == ' ') cell.pop_back();
+      cells.push_back(cell);
+    }
+    return cells;
+  }
+  return {};
 }
 
 }  // namespace
@@ -168,6 +189,52 @@ TEST_CASE("embody eval --trackers full on a T-pose rest: import, solve and expor
       "eval --motion " + clip + " --trackers full --fps 240 --ik-iterations 10 --no-plots --no-sheet --out " + out.string(),
       out);
   checkGroupMeans(j, {{"all", 0.5}, {"upper", 0.5}});
+}
+
+TEST_CASE("embody eval --fps 15,30: a row per rate and their mean, each rate as it scores alone", "[cli][eval]") {
+  // The Mixamo fixture's four frames played ten times over (1.3 s): enough frames at both rates.
+  const fs::path multi = outDir("eval_rates"), single = outDir("eval_rate30");
+  fs::create_directories(multi);
+  const std::string fixture = fileText(std::string(embody::test::kSourceDir) + "/tests/tracking/fixtures/mixamo.bvh");
+  const size_t frames = fixture.find("Frames:"), data = fixture.find('\n', fixture.find("Frame Time:")) + 1;
+  REQUIRE(frames != std::string::npos);
+  std::string longer = fixture.substr(0, frames) + "Frames: 40\n" + fixture.substr(fixture.find("Frame Time:"), data - fixture.find("Frame Time:"));
+  for (int k = 0; k < 10; ++k) longer += fixture.substr(data);
+  const std::string clip = (multi / "mixamo.bvh").string();
+  std::ofstream(clip) << longer;
+  const std::string common = " --trackers 3 --ik-iterations 4 --no-plots --no-sheet --out ";
+  auto r = runEmbody("eval --motion " + clip + " --fps 15,30" + common + multi.string(), true);
+  INFO(r.output);
+  REQUIRE(r.exitCode == 0);
+  r = runEmbody("eval --motion " + clip + " --fps 30" + common + single.string(), true);
+  REQUIRE(r.exitCode == 0);
+  // One report per rate; the 30 Hz one is the single-rate run's, to the bit.
+  const fs::path at = multi / "mixamo" / "trackers_3";
+  REQUIRE(fs::exists(at / "fps_15" / "metrics.json"));
+  auto strip = [](nlohmann::json m) {
+    for (auto& [k, v] : m["methods"].items()) v.erase("seconds");
+    return m.dump();
+  };
+  CHECK(strip(readJson(at / "fps_30" / "metrics.json")) == strip(readJson(single / "metrics.json")));
+  // The table: a row per rate and a mean row whose figures are the rows' mean.
+  const std::string summary = fileText(multi / "summary.md");
+  const auto at15 = summaryRow(summary, "| mixamo.bvh | 3 | 15 |"), at30 = summaryRow(summary, "| mixamo.bvh | 3 | 30 |");
+  const auto mean = summaryRow(summary, "| **mean of 2** | 3 | 15, 30 |");
+  REQUIRE(at15.size() == 15);
+  REQUIRE(at30.size() == 15);
+  REQUIRE(mean.size() == 15);
+  for (size_t c = 3; c < 12; ++c) {
+    INFO("column " << c);
+    CHECK(std::stod(mean[c]) == Approx(0.5 * (std::stod(at15[c]) + std::stod(at30[c]))).margin(0.011));
+  }
+  CHECK(std::stod(at30[3]) == Approx(readJson(single / "metrics.json")["methods"]["coupled"]["mpjpe_cm"]["all"]["mean"].get<double>()).margin(0.005));
+  // Bad rate lists: one clear line, exit 2.
+  for (const char* bad : {"0", "30,30", "30,x", "30,", "2000"}) {
+    INFO(bad);
+    r = runEmbody("eval --motion " + clip + " --fps " + bad + common + (multi / "bad").string(), true);
+    CHECK(r.exitCode == 2);
+    CHECK(r.output.find("--fps") != std::string::npos);
+  }
 }
 
 TEST_CASE("embody eval: bad input gives one clear line and exit 2 or 1", "[cli][eval]") {
