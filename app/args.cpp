@@ -1,5 +1,6 @@
 #include "app/args.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -106,18 +107,38 @@ std::string Args::get(const std::string& name) const {
   return it == values_.end() ? std::string() : it->second;
 }
 
-double Args::number(const std::string& name) const {
-  const std::string v = get(name);
+namespace {
+// The whole of `v` as a finite number.
+bool parseFinite(const std::string& v, double& d) {
   size_t used = 0;
-  double d = 0;
   try {
     d = std::stod(v, &used);
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used != v.size() || v.empty() || !std::isfinite(d))
-    throw std::invalid_argument("--" + name + " expects a finite number, got '" + v + "'");
+  return !v.empty() && used == v.size() && std::isfinite(d);
+}
+}  // namespace
+
+double Args::number(const std::string& name) const {
+  const std::string v = get(name);
+  double d = 0;
+  if (!parseFinite(v, d)) throw std::invalid_argument("--" + name + " expects a finite number, got '" + v + "'");
   return d;
+}
+
+std::vector<double> Args::numbers(const std::string& name) const {
+  const std::string v = get(name);
+  std::vector<double> out;
+  for (size_t at = 0; at <= v.size();) {
+    const size_t comma = std::min(v.find(',', at), v.size());
+    double d = 0;
+    if (!parseFinite(v.substr(at, comma - at), d))
+      throw std::invalid_argument("--" + name + " expects finite numbers separated by commas, got '" + v + "'");
+    out.push_back(d);
+    at = comma + 1;
+  }
+  return out;
 }
 
 int Args::integer(const std::string& name) const {

@@ -28,6 +28,7 @@ class Args {
   bool has(const std::string& name) const;  // given on the command line (or has a default)
   std::string get(const std::string& name) const;  // "" when absent
   double number(const std::string& name) const;    // throws std::invalid_argument with a clear message
+  std::vector<double> numbers(const std::string& name) const;  // "60,90,120"; throws as number()
   int integer(const std::string& name) const;
   std::string usage() const;
 

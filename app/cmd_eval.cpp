@@ -206,26 +206,13 @@ int runJob(const EvalJob& job) {
   return failures ? 1 : 0;
 }
 
-// "90" or "60,90,120": each 1 .. 1000 Hz, no repeats.
-std::vector<double> parseRates(const std::string& text) {
-  std::vector<double> rates;
-  size_t at = 0;
-  while (at <= text.size()) {
-    const size_t comma = std::min(text.find(',', at), text.size());
-    const std::string item = text.substr(at, comma - at);
-    size_t used = 0;
-    double hz = 0.0;
-    try {
-      hz = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (item.empty() || used != item.size() || !(hz >= 1.0 && hz <= 1000.0))
-      throw std::invalid_argument("--fps must be rates of 1 .. 1000 Hz, separated by commas (got '" + text + "')");
-    if (std::find(rates.begin(), rates.end(), hz) != rates.end())
-      throw std::invalid_argument("--fps names " + item + " Hz twice");
-    rates.push_back(hz);
-    at = comma + 1;
+// The rates of --fps ("90" or "60,90,120"): each 1 .. 1000 Hz, none twice.
+std::vector<double> ratesOf(const app::Args& args) {
+  const std::vector<double> rates = args.numbers("fps");
+  for (size_t k = 0; k < rates.size(); ++k) {
+    if (!(rates[k] >= 1.0 && rates[k] <= 1000.0)) throw std::invalid_argument("--fps must be 1 .. 1000 Hz (got " + rateName(rates[k]) + ")");
+    if (std::find(rates.begin(), rates.begin() + long(k), rates[k]) != rates.begin() + long(k))
+      throw std::invalid_argument("--fps names " + rateName(rates[k]) + " Hz twice");
   }
   return rates;
 }
@@ -253,7 +240,7 @@ int runEval(app::Argv argv) {
   EvalJob job;
   try {
     if (!args.has("motion")) throw std::invalid_argument("--motion CLIP.bvh|DIR is required");
-    if (args.has("fps")) job.rates = parseRates(args.get("fps"));
+    if (args.has("fps")) job.rates = ratesOf(args);
     job.options.ikIterations = args.integer("ik-iterations");
     if (job.options.ikIterations < 1 || job.options.ikIterations > 1000) throw std::invalid_argument("--ik-iterations must be 1 .. 1000");
     if (args.has("bvh-scale")) job.bvhScale = args.number("bvh-scale");
