@@ -52,14 +52,12 @@ struct FootPlannerConfig {
   double travelSmoothing = 1.0;      // seconds, the travel's time constant: a sway averages out
   double leadEasing = 0.2;           // seconds over which the landing spots start or stop leading
   // How far past the landing a moving body's landing spot leads it, in steps (`stepSeconds`),
-  // while the steps are the planner's own (no walker's rhythm, below). Half a step put the body
-  // over each foot at mid-stance, but the quick steps' stances are short and the feet came down
-  // far ahead: on cmu_131_02 each leg was straight (>= 99.5 % of its length) in 56-58 % of the
-  // walking frames, mostly planted ahead of the hips, where the performer's knees never
-  // straightened (bent 20-28 degrees at p10), and the head, a level below the feet, was dragged.
-  // 0.15: `embody eval`, 3 trackers, 4 iterations, the eight clips at 60, 90 and 120 Hz: MPJPE
-  // 7.50 -> 7.33 cm, jitter x clip 2.10 -> 1.81, foot skating 59 -> 45 cm/s, reversed
-  // knee/elbow frames 125/45 -> 103/29 (every share from 0.05 to 0.3 beat 0.5; docs/eval.md).
+  // while the steps are the planner's own (no walker's rhythm, below). Half a step was meant to
+  // put the body over each foot at mid-stance, but the quick steps' stances are short. 0.15,
+  // swept from 0 to 0.5 with `embody eval --fps 60,90,120` (3 trackers, 4 iterations, the eight
+  // clips): MPJPE 7.50 -> 7.33 cm, jitter x clip 2.10 -> 1.81, foot skating 59 -> 45 cm/s,
+  // reversed knee/elbow frames 125/45 -> 103/29; every share from 0.05 to 0.3 beat 0.5. Most on
+  // cmu_007_01, a walk with a level head (all quick steps): skating 187 -> 40 cm/s (docs/eval.md).
   double quickAheadShare = 0.15;
   double reachRadius = 0.45;         // a planted foot this far from its spot lifts at once
   // Walking with the head dipping once a step (gait_clock.h), steps land on the dips, the foot
