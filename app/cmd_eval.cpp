@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "app/args.h"
+#include "app/bvh_options.h"
 #include "app/eval_sheet.h"
 #include "eval/clip_eval.h"
 #include "eval/report.h"
@@ -35,6 +36,7 @@ struct EvalJob {
   bool tabled() const { return folder || rates.size() > 1; }
   eval::EvalOptions options;
   double bvhScale = 0.0;
+  avatar::BvhBodyOptions bvhBody;  // --bvh-up, --bvh-forward, --bvh-bone-map
   fs::path out;
   bool plots = true;
   bool sheet = true;
@@ -171,6 +173,7 @@ int runJob(const EvalJob& job) {
   for (const auto& clip : job.clips) {
     tracking::BvhTrackerOptions bo;
     bo.scale = job.bvhScale;
+    bo.body = job.bvhBody;
     auto avatar = tracking::loadBvhAvatar(clip.string(), bo);
     for (eval::TrackerSet set : job.sets)
       for (double fps : job.rates) {
@@ -231,6 +234,7 @@ int runEval(app::Argv argv) {
               "a change to the stepping more steadily than one rate");
   args.option("ik-iterations", "N", "IK iterations per frame (fixed: the score repeats to the bit)", "10");
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (default: fit the clip to 1.75 m)");
+  app::declareBvhOptions(args);
   args.option("out", "DIR", "output folder", "out/eval");
   args.flag("no-plots", "do not run gnuplot (the .gp scripts are still written)");
   args.flag("no-sheet", "no contact sheet (it needs a Vulkan device: the solution solid, the clip as an orange ghost skeleton)");
@@ -238,6 +242,7 @@ int runEval(app::Argv argv) {
   if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
 
   EvalJob job;
+  app::BvhOverrides bvh;
   try {
     if (!args.has("motion")) throw std::invalid_argument("--motion CLIP.bvh|DIR is required");
     if (args.has("fps")) job.rates = ratesOf(args);
@@ -245,9 +250,13 @@ int runEval(app::Argv argv) {
     if (job.options.ikIterations < 1 || job.options.ikIterations > 1000) throw std::invalid_argument("--ik-iterations must be 1 .. 1000");
     if (args.has("bvh-scale")) job.bvhScale = args.number("bvh-scale");
     if (args.has("bvh-scale") && !(job.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");
+    bvh = app::readBvhOptions(args);
   } catch (const std::invalid_argument& e) {
     return fail(e.what(), 2);
   }
+  auto body = app::bvhBodyOptions(bvh);
+  if (!body) return fail(body.error(), 1);
+  job.bvhBody = std::move(*body);
   const std::string sets = args.get("trackers");
   const bool given = std::find(argv.begin(), argv.end(), "--trackers") != argv.end() ||
                      std::any_of(argv.begin(), argv.end(), [](const std::string& a) { return a.rfind("--trackers=", 0) == 0; });

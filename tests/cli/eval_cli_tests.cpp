@@ -96,6 +96,19 @@ std::vector<std::string> summaryRow(const std::string& summary, const std::strin
   return {};
 }
 
+// The Mixamo fixture's four frames played ten times over (1.3 s at 30 Hz), written into `dir`:
+// enough frames to score at 15 and 30 Hz. Returns its path.
+std::string longMixamoClip(const fs::path& dir) {
+  fs::create_directories(dir);
+  const std::string fixture = fileText(std::string(embody::test::kSourceDir) + "/tests/tracking/fixtures/mixamo.bvh");
+  const size_t frames = fixture.find("Frames:"), time = fixture.find("Frame Time:"), data = fixture.find('\n', time) + 1;
+  std::string longer = fixture.substr(0, frames) + "Frames: 40\n" + fixture.substr(time, data - time);
+  for (int k = 0; k < 10; ++k) longer += fixture.substr(data);
+  const fs::path clip = dir / "mixamo.bvh";
+  std::ofstream(clip) << longer;
+  return clip.string();
+}
+
 }  // namespace
 
 TEST_CASE("embody eval: metrics.json for three methods, solved.bvh on the clip's hierarchy, the same bytes twice",
@@ -192,16 +205,8 @@ TEST_CASE("embody eval --trackers full on a T-pose rest: import, solve and expor
 }
 
 TEST_CASE("embody eval --fps 15,30: a row per rate and their mean, each rate as it scores alone", "[cli][eval]") {
-  // The Mixamo fixture's four frames played ten times over (1.3 s): enough frames at both rates.
   const fs::path multi = outDir("eval_rates"), single = outDir("eval_rate30");
-  fs::create_directories(multi);
-  const std::string fixture = fileText(std::string(embody::test::kSourceDir) + "/tests/tracking/fixtures/mixamo.bvh");
-  const size_t frames = fixture.find("Frames:"), data = fixture.find('\n', fixture.find("Frame Time:")) + 1;
-  REQUIRE(frames != std::string::npos);
-  std::string longer = fixture.substr(0, frames) + "Frames: 40\n" + fixture.substr(fixture.find("Frame Time:"), data - fixture.find("Frame Time:"));
-  for (int k = 0; k < 10; ++k) longer += fixture.substr(data);
-  const std::string clip = (multi / "mixamo.bvh").string();
-  std::ofstream(clip) << longer;
+  const std::string clip = longMixamoClip(multi);
   const std::string common = " --trackers 3 --ik-iterations 4 --no-plots --no-sheet --out ";
   auto r = runEmbody("eval --motion " + clip + " --fps 15,30" + common + multi.string(), true);
   INFO(r.output);
@@ -235,6 +240,35 @@ TEST_CASE("embody eval --fps 15,30: a row per rate and their mean, each rate as 
     CHECK(r.exitCode == 2);
     CHECK(r.output.find("--fps") != std::string::npos);
   }
+}
+
+TEST_CASE("embody eval --bvh-up/--bvh-forward/--bvh-bone-map reach the clip's import", "[cli][eval]") {
+  // The loader's own messages name these options ("cannot tell which way is up: ... give --bvh-up
+  // +Y"), so eval takes them as the other --motion commands do.
+  const fs::path dir = outDir("eval_bvh_options");
+  const std::string clip = longMixamoClip(dir);
+  const std::string common = " --trackers 3 --fps 30 --ik-iterations 4 --no-plots --no-sheet --out ";
+  auto methods = [&](const std::string& extra, const std::string& name) {
+    auto r = runEmbody("eval --motion " + clip + extra + common + (dir / name).string(), true);
+    INFO(r.output);
+    REQUIRE(r.exitCode == 0);
+    auto m = readJson(dir / name / "metrics.json")["methods"];
+    for (auto& [k, v] : m.items()) v.erase("seconds");
+    return m.dump();
+  };
+  const std::string measured = methods("", "measured");
+  // The axes the clip measures to, given: the same score.
+  CHECK(methods(" --bvh-up +Y --bvh-forward +Z", "given") == measured);
+  // The head tracker on the neck instead (a bone map): another score.
+  std::ofstream(dir / "map.json") << R"({"head": "mixamorig:Neck"})";
+  CHECK(methods(" --bvh-bone-map " + (dir / "map.json").string(), "mapped") != measured);
+  // Bad values: one line, exit 2 (an axis) or 1 (a file that is not there).
+  auto r = runEmbody("eval --motion " + clip + " --bvh-up up" + common + (dir / "bad").string(), true);
+  CHECK(r.exitCode == 2);
+  CHECK(r.output.find("--bvh-up") != std::string::npos);
+  r = runEmbody("eval --motion " + clip + " --bvh-bone-map " + (dir / "missing.json").string() + common + (dir / "bad").string(), true);
+  CHECK(r.exitCode == 1);
+  CHECK(r.output.find("--bvh-bone-map") != std::string::npos);
 }
 
 TEST_CASE("embody eval: bad input gives one clear line and exit 2 or 1", "[cli][eval]") {
