@@ -1,5 +1,7 @@
 #include "app/job_inputs.h"
 
+#include <filesystem>
+
 #include "app/avatar_arg.h"
 #include "avatar/body/calibration.h"
 
@@ -30,8 +32,15 @@ Result<JobInputs> openJobInputs(const RenderJob& job) {
     profile = std::move(loaded).value();
     if (in.userHeight == 0.0f) in.userHeight = float(profile->userHeight);
   }
+  auto bvhBody = bvhBodyOptions(job.bvh);
+  if (!bvhBody) return Error{bvhBody.error()};
   if (isBvhPath(job.avatar) && job.boneMap.empty()) {  // keep the clip: --export writes its hierarchy
-    auto bvh = tracking::loadBvhAvatar(job.avatar, {});
+    // The --bvh-* overrides describe the --motion file; an --avatar that is that file takes them
+    // too (a clip whose axes need them failed as the avatar with a message asking for them).
+    tracking::BvhTrackerOptions avatarImport;
+    std::error_code ec;
+    if (!job.motion.empty() && std::filesystem::equivalent(job.avatar, job.motion, ec)) avatarImport.body = *bvhBody;
+    auto bvh = tracking::loadBvhAvatar(job.avatar, avatarImport);
     if (!bvh) return Error{bvh.error()};
     in.asset = bvh->asset;
     in.bvhAvatar = std::move(bvh).value();
@@ -47,9 +56,7 @@ Result<JobInputs> openJobInputs(const RenderJob& job) {
   }
   in.sourceOptions.userHeight = in.userHeight > 0.0f ? in.userHeight : 1.75f;
   in.sourceOptions.bvhScale = job.bvhScale;
-  auto bvh = bvhBodyOptions(job.bvh);
-  if (!bvh) return Error{bvh.error()};
-  in.sourceOptions.bvh = std::move(*bvh);
+  in.sourceOptions.bvh = std::move(*bvhBody);
   if (job.threePoint) in.sourceOptions.trackers = tracking::TrackerMask::threePoint();
   auto opened = tracking::openPoseSource(job.motion, in.sourceOptions);
   if (!opened) return Error{opened.error()};

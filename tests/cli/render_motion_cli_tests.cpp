@@ -5,6 +5,9 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <vector>
+#include <string>
+#include <sstream>
 
 #include "cli/cli_support.h"
 #include "test_paths.h"
@@ -194,4 +197,37 @@ TEST_CASE("embody render --ik-iterations rejects counts outside 1 .. 1000", "[cl
     CHECK(r.exitCode == 2);
     CHECK(r.output.find("--ik-iterations") != std::string::npos);
   }
+}
+
+TEST_CASE("embody render --avatar CLIP.bvh --motion CLIP.bvh takes the --bvh-* overrides for both", "[cli][render]") {
+  // The Mixamo fixture spun about its X axis over 48 frames: no direction keeps the head above the
+  // feet, so the axes must be given. As the avatar the clip was loaded without them and failed
+  // with a message asking for the very --bvh-up the command had been given.
+  const fs::path out = outDir("render_bvh_overrides");
+  fs::create_directories(out);
+  const std::string fixture = fileBytes(std::string(embody::test::kSourceDir) + "/tests/tracking/fixtures/mixamo.bvh");
+  const size_t motion = fixture.find("MOTION"), time = fixture.find("Frame Time:"), data = fixture.find('\n', time) + 1;
+  REQUIRE(motion != std::string::npos);
+  std::vector<std::string> frames;
+  std::istringstream lines(fixture.substr(data));
+  for (std::string line; std::getline(lines, line);)
+    if (!line.empty()) frames.push_back(line);
+  REQUIRE(frames.size() >= 4);
+  std::string tumble = fixture.substr(0, motion) + "MOTION\nFrames: 48\n" + fixture.substr(time, data - time);
+  for (int k = 0; k < 48; ++k) {
+    std::istringstream values(frames[size_t(k) % frames.size()]);
+    std::string v;
+    for (int c = 0; values >> v; ++c) tumble += (c ? " " : "") + (c == 5 ? std::to_string(7.5 * k) : v);
+    tumble += "\n";
+  }
+  const std::string clip = (out / "tumble.bvh").string();
+  std::ofstream(clip) << tumble;
+  const std::string common = " --frames 2 --fps 30 --size 64x64 --device lavapipe --out ";
+  auto r = runEmbody("render --avatar " + clip + " --motion " + clip + common + (out / "measured").string(), true);
+  CHECK(r.exitCode == 1);
+  CHECK(r.output.find("--bvh-up") != std::string::npos);
+  r = runEmbody("render --avatar " + clip + " --motion " + clip + " --bvh-up +Y --bvh-forward +Z" + common + (out / "given").string(), true);
+  INFO(r.output);
+  CHECK(r.exitCode == 0);
+  CHECK(readJson(out / "given" / "stats.json")["frames"] == 2);
 }
