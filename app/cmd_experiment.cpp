@@ -14,6 +14,7 @@
 #include <string>
 
 #include "app/args.h"
+#include "app/bvh_options.h"
 #include "app/cli.h"
 #include "app/experiments.h"
 
@@ -51,7 +52,7 @@ struct AllOptions {
   MocapOptions mocap;
 };
 
-AllOptions readOptions(const app::Args& args, std::string& modelError) {
+AllOptions readOptions(const app::Args& args, std::string& loadError) {
   AllOptions a;
   const CommonOptions common = readCommonOptions(args);
   a.isolated.common = a.balance.common = a.periodic.common = a.mocap.common = common;
@@ -68,9 +69,12 @@ AllOptions readOptions(const app::Args& args, std::string& modelError) {
   a.mocap.iterationsPerFrame = intOption(args, "iterations-per-frame", 20, 1, 10000);
   a.mocap.maxFrames = intOption(args, "frames", 0, 0, 1000000);
   a.mocap.spine = spineOption(args, "full");
+  auto bvh = app::bvhBodyOptions(app::readBvhOptions(args));
+  if (!bvh) loadError = bvh.error();
+  else a.mocap.bvh = std::move(*bvh);
   auto model = ik::spine::loadSpineModel(args.get("model"));
   if (!model)
-    modelError = model.error();
+    loadError = model.error();
   else
     a.isolated.model = std::move(*model);
   return a;
@@ -124,6 +128,7 @@ int runExperiment(app::Argv argv) {
   args.option("motion", "FILE.bvh",
               std::string("mocap: the clip (") + kDefaultMotion + ", run from the source tree)");
   args.option("iterations-per-frame", "N", "mocap: solver iterations per clip frame (20)");
+  app::declareBvhOptions(args);  // mocap: the clip's import overrides
   args.option("frames", "N", "mocap: at most this many clip frames (0 = all)");
   if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
   const std::string name = args.get("name");
@@ -132,13 +137,13 @@ int runExperiment(app::Argv argv) {
                            "' (expected: isolated-spine, balance, periodic, mocap, all)");
   if (args.get("out").empty()) return app::usageError("--out DIR is required");
   AllOptions a;
-  std::string modelError;
+  std::string loadError;
   try {
-    a = readOptions(args, modelError);
+    a = readOptions(args, loadError);
   } catch (const std::invalid_argument& e) {
     return app::usageError(e.what());
   }
-  if (!modelError.empty()) return fail(modelError);
+  if (!loadError.empty()) return fail(loadError);
   nlohmann::json summary;
   if (name == "isolated-spine") return runIsolatedSpine(a.isolated, summary);
   if (name == "balance") return runBalance(a.balance, summary);

@@ -285,6 +285,7 @@ int runMocap(const MocapOptions& o, nlohmann::json& summary) {
   const avatar::AvatarAsset asset = avatar::buildDefaultAvatar();
   tracking::BvhTrackerOptions bo;
   bo.userHeight = 1.75f;  // the mannequin's height
+  bo.body = o.bvh;
   auto clip = tracking::loadBvhAvatar(o.motion, bo);
   if (!clip) {
     const bool relative = fs::path(o.motion).is_relative() && !fs::exists(o.motion);

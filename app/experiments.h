@@ -10,6 +10,7 @@
 #include <string>
 
 #include "app/experiment_support.h"
+#include "avatar/bvh/bvh_body.h"
 #include "ik/spine/isolated_experiment.h"
 
 namespace embody::app::experiment {
@@ -42,6 +43,7 @@ struct MocapOptions {
   int settleIterations = 100;  // on the first frame
   int maxFrames = 0;           // 0 = every frame of the clip
   std::string spine = "full";
+  avatar::BvhBodyOptions bvh;  // --bvh-up, --bvh-forward, --bvh-bone-map
 };
 
 // Each returns the process exit code (0, 1 runtime error) and fills `summary`.

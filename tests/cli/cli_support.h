@@ -1,16 +1,19 @@
 #pragma once
 // Runs the built `embody` binary (path from CTest's EMBODY_BIN) and captures its output; the
-// output folders, JSON and PNG readers the CLI tests share.
+// output folders, JSON and PNG readers and the test clips the CLI tests share.
 #include <array>
 #include <catch2/catch.hpp>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <sys/wait.h>
 #include <utility>
+#include <vector>
 
 #include "test_paths.h"
 
@@ -73,6 +76,32 @@ inline std::pair<uint32_t, uint32_t> pngSize(const std::filesystem::path& p) {
   if (!f) return {0, 0};
   auto be = [&](int o) { return uint32_t(h[o]) << 24 | uint32_t(h[o + 1]) << 16 | uint32_t(h[o + 2]) << 8 | h[o + 3]; };
   return {be(16), be(20)};
+}
+
+// A fixture clip from tests/tracking/fixtures (`name`, e.g. "cmu.bvh") looped to `frames` frames
+// with its root spun about one axis (the sixth root channel, 7.5 degrees a frame): no direction
+// keeps the head above the feet, so the import cannot measure the axes and asks for --bvh-up and
+// --bvh-forward. Written to `path`; returns it.
+inline std::string tumblingClip(const std::string& name, const std::filesystem::path& path, int frames = 48) {
+  std::ifstream in(std::string(kSourceDir) + "/tests/tracking/fixtures/" + name);
+  const std::string fixture((std::istreambuf_iterator<char>(in)), {});
+  const size_t motion = fixture.find("MOTION"), time = fixture.find("Frame Time:"), data = fixture.find('\n', time) + 1;
+  REQUIRE(motion != std::string::npos);
+  std::vector<std::string> rows;
+  std::istringstream lines(fixture.substr(data));
+  for (std::string line; std::getline(lines, line);)
+    if (!line.empty()) rows.push_back(line);
+  REQUIRE(!rows.empty());
+  std::string tumble = fixture.substr(0, motion) + "MOTION\nFrames: " + std::to_string(frames) + "\n" + fixture.substr(time, data - time);
+  for (int k = 0; k < frames; ++k) {
+    std::istringstream values(rows[size_t(k) % rows.size()]);
+    std::string v;
+    for (int c = 0; values >> v; ++c) tumble += (c ? " " : "") + (c == 5 ? std::to_string(7.5 * k) : v);
+    tumble += "\n";
+  }
+  std::filesystem::create_directories(path.parent_path());
+  std::ofstream(path) << tumble;
+  return path.string();
 }
 
 }  // namespace embody::test

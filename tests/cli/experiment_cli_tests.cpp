@@ -5,8 +5,10 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "cli/cli_support.h"
 
@@ -14,6 +16,7 @@ using embody::test::outDir;
 using embody::test::pngSize;
 using embody::test::readJson;
 using embody::test::runEmbody;
+using embody::test::tumblingClip;
 namespace fs = std::filesystem;
 
 namespace {
@@ -184,4 +187,22 @@ TEST_CASE("embody experiment: bad options and files fail with one clear line", "
   auto missing = runEmbody("experiment mocap --motion /nonexistent.bvh --out " + dir.string(), true);
   CHECK(missing.exitCode == 1);
   CHECK(missing.output.find("error:") != std::string::npos);
+}
+
+TEST_CASE("embody experiment mocap takes the --bvh-* overrides: a clip whose axes must be given", "[cli][experiment]") {
+  // The CMU fixture spun about one root axis over 48 frames: no direction keeps the head above
+  // the feet. Without the axes the import stops and names --bvh-up; given them, the run scores.
+  const fs::path dir = outDir("experiment_mocap_overrides");
+  fs::create_directories(dir);
+  const std::string clip = tumblingClip("cmu.bvh", dir / "tumble.bvh");
+  const std::string common = " --frames 4 --iterations-per-frame 5 --no-frames --no-plots --out ";
+  auto r = runEmbody("experiment mocap --motion " + clip + common + (dir / "measured").string(), true);
+  CHECK(r.exitCode == 1);
+  CHECK(r.output.find("--bvh-up") != std::string::npos);
+  r = runEmbody("experiment mocap --motion " + clip + " --bvh-up +Y --bvh-forward +Z" + common + (dir / "given").string(), true);
+  INFO(r.output);
+  REQUIRE(r.exitCode == 0);
+  CHECK(readJson(dir / "given" / "summary.json")["setup"]["frames"] == 4);
+  r = runEmbody("experiment mocap --motion " + clip + " --bvh-up sideways" + common + (dir / "bad").string(), true);
+  CHECK(r.exitCode == 2);
 }

@@ -5,9 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <vector>
 #include <string>
-#include <sstream>
 
 #include "cli/cli_support.h"
 #include "test_paths.h"
@@ -205,23 +203,7 @@ TEST_CASE("embody render --avatar CLIP.bvh --motion CLIP.bvh takes the --bvh-* o
   // with a message asking for the very --bvh-up the command had been given.
   const fs::path out = outDir("render_bvh_overrides");
   fs::create_directories(out);
-  const std::string fixture = fileBytes(std::string(embody::test::kSourceDir) + "/tests/tracking/fixtures/mixamo.bvh");
-  const size_t motion = fixture.find("MOTION"), time = fixture.find("Frame Time:"), data = fixture.find('\n', time) + 1;
-  REQUIRE(motion != std::string::npos);
-  std::vector<std::string> frames;
-  std::istringstream lines(fixture.substr(data));
-  for (std::string line; std::getline(lines, line);)
-    if (!line.empty()) frames.push_back(line);
-  REQUIRE(frames.size() >= 4);
-  std::string tumble = fixture.substr(0, motion) + "MOTION\nFrames: 48\n" + fixture.substr(time, data - time);
-  for (int k = 0; k < 48; ++k) {
-    std::istringstream values(frames[size_t(k) % frames.size()]);
-    std::string v;
-    for (int c = 0; values >> v; ++c) tumble += (c ? " " : "") + (c == 5 ? std::to_string(7.5 * k) : v);
-    tumble += "\n";
-  }
-  const std::string clip = (out / "tumble.bvh").string();
-  std::ofstream(clip) << tumble;
+  const std::string clip = tumblingClip("mixamo.bvh", out / "tumble.bvh");
   const std::string common = " --frames 2 --fps 30 --size 64x64 --device lavapipe --out ";
   auto r = runEmbody("render --avatar " + clip + " --motion " + clip + common + (out / "measured").string(), true);
   CHECK(r.exitCode == 1);
