@@ -59,12 +59,13 @@ int fail(const std::string& message, int code) {
   return code;
 }
 
-// Runs one clip at one tracker set, writes its report into `dir`, fills `row`.
-bool evaluateOne(const tracking::BvhAvatar& avatar, const EvalJob& job, eval::TrackerSet set, const fs::path& dir, Row& row,
-                 bool verbose) {
+// Runs one clip at one tracker set and rate (0: its own), writes its report into `dir`, fills `row`.
+bool evaluateOne(const tracking::BvhAvatar& avatar, const EvalJob& job, eval::TrackerSet set, double fps, const fs::path& dir,
+                 Row& row, bool verbose) {
   row.trackers = eval::trackerSetName(set);
   eval::EvalOptions o = job.options;
   o.trackers = set;
+  o.fps = fps;
   o.keepPoses = job.sheet ? 12 : 0;
   const auto started = std::chrono::steady_clock::now();
   auto solved = tracking::SolvedMotionBvh::forBvhAvatar(avatar);
@@ -179,17 +180,14 @@ int runJob(const EvalJob& job) {
       for (double fps : job.rates) {
         Row row;
         row.clip = clip.filename().string();
-        row.fps = fps;
         if (bar) progressBar(done, total, row.clip + " @" + eval::trackerSetName(set));
         fs::path dir = job.out;
         if (job.tabled()) {
           dir = job.out / clip.stem() / (std::string("trackers_") + eval::trackerSetName(set));
           if (job.rates.size() > 1) dir /= "fps_" + rateName(fps);
         }
-        EvalJob at = job;
-        at.options.fps = fps;
         if (!avatar) row.error = avatar.error(), row.trackers = eval::trackerSetName(set);
-        else evaluateOne(*avatar, at, set, dir, row, !job.tabled());
+        else evaluateOne(*avatar, job, set, fps, dir, row, !job.tabled());
         if (!row.error.empty()) {
           ++failures;
           if (!job.tabled()) return fail(row.error, 1);

@@ -311,8 +311,8 @@ void FootPlanner::startSwing(int f, double time, double duration, double ahead, 
 }
 
 // The rhythm of the next step. Standing, or walking without a regular head dip: quick steps
-// (stepSeconds) as soon as doubleSupportSeconds allow, landing half a swing ahead of a moving
-// body. Walking with one (gait_clock.h), steps land on the dips, the foot the sway names.
+// (stepSeconds) as soon as doubleSupportSeconds allow, landing quickAheadShare of a step ahead of
+// a moving body. Walking with one (gait_clock.h), steps land on the dips, the foot the sway names.
 //
 // `speed` is the body's ground speed, the larger of the low-passed velocity and the travel (its
 // mean since a walk started: the velocity trails a walk's start).

@@ -78,11 +78,11 @@ inline std::pair<uint32_t, uint32_t> pngSize(const std::filesystem::path& p) {
   return {be(16), be(20)};
 }
 
-// A fixture clip from tests/tracking/fixtures (`name`, e.g. "cmu.bvh") looped to `frames` frames
-// with its root spun about one axis (the sixth root channel, 7.5 degrees a frame): no direction
-// keeps the head above the feet, so the import cannot measure the axes and asks for --bvh-up and
-// --bvh-forward. Written to `path`; returns it.
-inline std::string tumblingClip(const std::string& name, const std::filesystem::path& path, int frames = 48) {
+// A fixture clip from tests/tracking/fixtures (`name`, e.g. "cmu.bvh") played `frames` frames
+// long, its frames looped; with `spinDegrees`, its root spun about one axis by that much a frame
+// (the sixth root channel). Written to `path`; returns it.
+inline std::string loopedClip(const std::string& name, const std::filesystem::path& path, int frames,
+                              double spinDegrees = 0.0) {
   std::ifstream in(std::string(kSourceDir) + "/tests/tracking/fixtures/" + name);
   const std::string fixture((std::istreambuf_iterator<char>(in)), {});
   const size_t motion = fixture.find("MOTION"), time = fixture.find("Frame Time:"), data = fixture.find('\n', time) + 1;
@@ -92,16 +92,22 @@ inline std::string tumblingClip(const std::string& name, const std::filesystem::
   for (std::string line; std::getline(lines, line);)
     if (!line.empty()) rows.push_back(line);
   REQUIRE(!rows.empty());
-  std::string tumble = fixture.substr(0, motion) + "MOTION\nFrames: " + std::to_string(frames) + "\n" + fixture.substr(time, data - time);
+  std::string clip = fixture.substr(0, motion) + "MOTION\nFrames: " + std::to_string(frames) + "\n" + fixture.substr(time, data - time);
   for (int k = 0; k < frames; ++k) {
     std::istringstream values(rows[size_t(k) % rows.size()]);
     std::string v;
-    for (int c = 0; values >> v; ++c) tumble += (c ? " " : "") + (c == 5 ? std::to_string(7.5 * k) : v);
-    tumble += "\n";
+    for (int c = 0; values >> v; ++c) clip += (c ? " " : "") + (c == 5 && spinDegrees != 0.0 ? std::to_string(spinDegrees * k) : v);
+    clip += "\n";
   }
   std::filesystem::create_directories(path.parent_path());
-  std::ofstream(path) << tumble;
+  std::ofstream(path) << clip;
   return path.string();
+}
+
+// The fixture spun 7.5 degrees a frame over 48 frames: no direction keeps the head above the
+// feet, so the import cannot measure the axes and asks for --bvh-up and --bvh-forward.
+inline std::string tumblingClip(const std::string& name, const std::filesystem::path& path) {
+  return loopedClip(name, path, 48, 7.5);
 }
 
 }  // namespace embody::test

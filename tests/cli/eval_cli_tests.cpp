@@ -98,16 +98,7 @@ std::vector<std::string> summaryRow(const std::string& summary, const std::strin
 
 // The Mixamo fixture's four frames played ten times over (1.3 s at 30 Hz), written into `dir`:
 // enough frames to score at 15 and 30 Hz. Returns its path.
-std::string longMixamoClip(const fs::path& dir) {
-  fs::create_directories(dir);
-  const std::string fixture = fileText(std::string(embody::test::kSourceDir) + "/tests/tracking/fixtures/mixamo.bvh");
-  const size_t frames = fixture.find("Frames:"), time = fixture.find("Frame Time:"), data = fixture.find('\n', time) + 1;
-  std::string longer = fixture.substr(0, frames) + "Frames: 40\n" + fixture.substr(time, data - time);
-  for (int k = 0; k < 10; ++k) longer += fixture.substr(data);
-  const fs::path clip = dir / "mixamo.bvh";
-  std::ofstream(clip) << longer;
-  return clip.string();
-}
+std::string longMixamoClip(const fs::path& dir) { return loopedClip("mixamo.bvh", dir / "mixamo.bvh", 40); }
 
 }  // namespace
 
