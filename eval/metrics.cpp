@@ -131,8 +131,9 @@ Metrics score(const JointTrack& solved, const JointTrack& clip, const ScoredSkel
       m.perFrame[size_t(g)].push_back(sum / double(sk.groups[size_t(g)].size()));
     }
     for (int j : sk.groups[kAll]) rotation += angleDegrees(solved.q(f, j), clip.q(f, j)), ++rotationCount;
-    if (reversed(solved, clip, f, sk.legs[0]) || reversed(solved, clip, f, sk.legs[1])) ++m.kneeReverseFrames;
-    if (reversed(solved, clip, f, sk.arms[0]) || reversed(solved, clip, f, sk.arms[1])) ++m.elbowReverseFrames;
+    unsigned char flags = 0;
+    if (reversed(solved, clip, f, sk.legs[0]) || reversed(solved, clip, f, sk.legs[1])) ++m.kneeReverseFrames, flags |= kKneeReversed;
+    if (reversed(solved, clip, f, sk.arms[0]) || reversed(solved, clip, f, sk.arms[1])) ++m.elbowReverseFrames, flags |= kElbowReversed;
     bool solvedChange = false, clipChange = false;
     for (const auto& region : sk.spineRegions) {
       solvedChange = solvedChange || torsionSignChange(solved, f, region);
@@ -142,8 +143,9 @@ Metrics score(const JointTrack& solved, const JointTrack& clip, const ScoredSkel
     m.clipTorsionSignChangeFrames += clipChange;
     if (sk.pelvis >= 0 && sk.standingPelvisHeight > 0.0) {
       const double half = 0.5 * sk.standingPelvisHeight;
-      if (solved.p(f, sk.pelvis).y < half && clip.p(f, sk.pelvis).y >= half) ++m.collapsedFrames;
+      if (solved.p(f, sk.pelvis).y < half && clip.p(f, sk.pelvis).y >= half) ++m.collapsedFrames, flags |= kCollapsed;
     }
+    m.perFrameFlags.push_back(flags);
   }
   for (int g = 0; g < kGroupCount; ++g) {
     m.mpjpe[size_t(g)].mean = mean(m.perFrame[size_t(g)]);

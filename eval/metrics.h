@@ -83,7 +83,12 @@ struct Metrics {
   std::vector<double> perJointError;                 // mean metres per joint (every joint of the track)
   std::vector<glm::dvec3> perJointBias;              // mean (forward, left, up) metres per joint; empty without hips
   std::array<std::vector<double>, kGroupCount> perFrame;  // per-frame group mean, metres
+  // Per frame, which plausibility counts it added to (bits of PlausibilityFlag): where in a
+  // clip the knees reversed or the body collapsed, for frames.csv.
+  std::vector<unsigned char> perFrameFlags;
 };
+
+enum PlausibilityFlag : unsigned char { kKneeReversed = 1, kElbowReversed = 2, kCollapsed = 4 };
 
 // Both tracks must have the same joints and frames (>= 1); fps > 0.
 Metrics score(const JointTrack& solved, const JointTrack& clip, const ScoredSkeleton& skeleton, double fps);

@@ -42,6 +42,8 @@ Status writeCsv(const ClipEval& e, const fs::path& dir) {
   f << "frame,time_s";
   for (const auto& r : e.runs)
     for (int g = 0; g < kGroupCount; ++g) f << "," << methodName(r.method) << "_" << groupName(Group(g)) << "_cm";
+  for (const auto& r : e.runs)
+    for (const char* flag : {"knee_reversed", "elbow_reversed", "collapsed"}) f << "," << methodName(r.method) << "_" << flag;
   f << "\n";
   char buf[64];
   for (int i = 0; i < e.frames; ++i) {
@@ -53,6 +55,11 @@ Status writeCsv(const ClipEval& e, const fs::path& dir) {
         std::snprintf(buf, sizeof buf, ",%.4f", size_t(i) < v.size() ? cm(v[size_t(i)]) : 0.0);
         f << buf;
       }
+    for (const auto& r : e.runs) {
+      const auto& flags = r.metrics.perFrameFlags;
+      const unsigned char b = size_t(i) < flags.size() ? flags[size_t(i)] : 0;
+      f << ',' << int((b & kKneeReversed) != 0) << ',' << int((b & kElbowReversed) != 0) << ',' << int((b & kCollapsed) != 0);
+    }
     f << "\n";
   }
   std::ofstream jf(dir / "joints.csv");

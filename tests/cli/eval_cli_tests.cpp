@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <utility>
@@ -78,6 +79,15 @@ void checkGroupMeans(const nlohmann::json& metrics, std::initializer_list<std::p
 }
 
 // The cells of the summary.md row that starts with `prefix` (empty when there is none).
+// One line of frames.csv, split at its commas (no quoting there).
+std::vector<std::string> splitCsv(const std::string& line) {
+  std::vector<std::string> cells;
+  std::istringstream row(line);
+  std::string cell;
+  while (std::getline(row, cell, ',')) cells.push_back(cell);
+  return cells;
+}
+
 std::vector<std::string> summaryRow(const std::string& summary, const std::string& prefix) {
   std::istringstream in(summary);
   std::string line;
@@ -137,6 +147,30 @@ TEST_CASE("embody eval: metrics.json for three methods, solved.bvh on the clip's
   const std::string solved = fileText(outs[0] / "solved.bvh");
   CHECK(solved == fileText(outs[1] / "solved.bvh"));
   CHECK(fileText(outs[0] / "frames.csv") == fileText(outs[1] / "frames.csv"));
+  // frames.csv's 0/1 plausibility columns add up to metrics.json's counts, per method.
+  {
+    std::istringstream csv(fileText(outs[0] / "frames.csv"));
+    std::string line;
+    std::getline(csv, line);
+    const auto header = splitCsv(line);
+    std::map<std::string, int> sums;
+    int rows = 0;
+    while (std::getline(csv, line)) {
+      const auto cells = splitCsv(line);
+      REQUIRE(cells.size() == header.size());
+      for (size_t i = 0; i < header.size(); ++i)
+        if (header[i].ends_with("_reversed") || header[i].ends_with("_collapsed")) sums[header[i]] += std::stoi(cells[i]);
+      ++rows;
+    }
+    CHECK(rows == j["frames"].get<int>());
+    for (const char* m : {"coupled", "uncoupled", "naive"}) {
+      INFO(m);
+      const auto& mj = j["methods"][m];
+      CHECK(sums.at(std::string(m) + "_knee_reversed") == mj["knee_reverse_frames"].get<int>());
+      CHECK(sums.at(std::string(m) + "_elbow_reversed") == mj["elbow_reverse_frames"].get<int>());
+      CHECK(sums.at(std::string(m) + "_collapsed") == mj["collapsed_frames"].get<int>());
+    }
+  }
   // solved.bvh: the clip's hierarchy (names, offsets, channel order), frames at the eval rate.
   CHECK(hierarchy(solved) == hierarchy(fileText(clip)));
   CHECK(frameTime(solved) == Approx(1.0 / 30.0));

@@ -142,6 +142,20 @@ TEST_CASE("eval metrics: a knee bent the other way round is a reverse bend, a fa
   solved = clip;
   solved.position[0].y = 0.4;
   CHECK(score(solved, clip, s, 30.0).collapsedFrames == 1);
+
+  // Per frame, which count each frame went to (frames.csv's 0/1 columns): a second frame with
+  // the knee reversed and the pelvis fallen, after the first that is both.
+  JointTrack twoClip = clip, twoSolved = solved;
+  twoClip.position.insert(twoClip.position.end(), clip.position.begin(), clip.position.end());
+  twoClip.rotation.assign(6, glm::dquat(1, 0, 0, 0));
+  twoSolved.position.insert(twoSolved.position.end(), clip.position.begin(), clip.position.end());
+  twoSolved.position[1].z = -0.2;  // frame 0: reversed and fallen
+  twoSolved.position[3].y = 0.4;   // frame 1: fallen only (its knee is the clip's)
+  twoSolved.rotation = twoClip.rotation;
+  const Metrics two = score(twoSolved, twoClip, s, 30.0);
+  CHECK(two.kneeReverseFrames == 1);
+  CHECK(two.collapsedFrames == 2);
+  CHECK(two.perFrameFlags == std::vector<unsigned char>{kKneeReversed | kCollapsed, kCollapsed});
 }
 
 TEST_CASE("eval metrics: p95 is the nearest-rank 95th percentile", "[eval]") {
