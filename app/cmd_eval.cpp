@@ -54,11 +54,6 @@ struct Row {
   int kneeReversed = 0, elbowReversed = 0, collapsed = 0;
 };
 
-int fail(const std::string& message, int code) {
-  std::fprintf(stderr, "error: %s\n", message.c_str());
-  return code;
-}
-
 // Runs one clip at one tracker set and rate (0: its own), writes its report into `dir`, fills `row`.
 bool evaluateOne(const tracking::BvhAvatar& avatar, const EvalJob& job, eval::TrackerSet set, double fps, const fs::path& dir,
                  Row& row, bool verbose) {
@@ -190,7 +185,7 @@ int runJob(const EvalJob& job) {
         else evaluateOne(*avatar, job, set, fps, dir, row, !job.tabled());
         if (!row.error.empty()) {
           ++failures;
-          if (!job.tabled()) return fail(row.error, 1);
+          if (!job.tabled()) return app::runtimeError(row.error);
         }
         rows.push_back(std::move(row));
         ++done;
@@ -250,10 +245,10 @@ int runEval(app::Argv argv) {
     if (args.has("bvh-scale") && !(job.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");
     bvh = app::readBvhOptions(args);
   } catch (const std::invalid_argument& e) {
-    return fail(e.what(), 2);
+    return app::usageError(e.what());
   }
   auto body = app::bvhBodyOptions(bvh);
-  if (!body) return fail(body.error(), 1);
+  if (!body) return app::runtimeError(body.error());
   job.bvhBody = std::move(*body);
   const std::string sets = args.get("trackers");
   const bool given = std::find(argv.begin(), argv.end(), "--trackers") != argv.end() ||
@@ -263,7 +258,7 @@ int runEval(app::Argv argv) {
     job.sets = {eval::TrackerSet::Three, eval::TrackerSet::Four, eval::TrackerSet::Six, eval::TrackerSet::Full};
   } else {
     eval::TrackerSet set;
-    if (!eval::parseTrackerSet(sets, set)) return fail("--trackers must be 3, 4, 6 or full (got '" + sets + "')", 2);
+    if (!eval::parseTrackerSet(sets, set)) return app::usageError("--trackers must be 3, 4, 6 or full (got '" + sets + "')");
     job.sets = {set};
   }
   const fs::path motion = args.get("motion");
@@ -276,9 +271,9 @@ int runEval(app::Argv argv) {
       if (entry.is_regular_file() && ext == ".bvh") job.clips.push_back(entry.path());
     }
     std::sort(job.clips.begin(), job.clips.end());
-    if (job.clips.empty()) return fail(motion.string() + ": no .bvh files in this folder", 1);
+    if (job.clips.empty()) return app::runtimeError(motion.string() + ": no .bvh files in this folder");
   } else {
-    if (!fs::exists(motion, ec)) return fail(motion.string() + ": no such file or folder", 1);
+    if (!fs::exists(motion, ec)) return app::runtimeError(motion.string() + ": no such file or folder");
     job.clips.push_back(motion);
   }
   job.out = args.get("out");
@@ -286,7 +281,7 @@ int runEval(app::Argv argv) {
   job.sheet = !args.has("no-sheet");
   job.device = args.get("device");
   fs::create_directories(job.out, ec);
-  if (ec) return fail("cannot create " + job.out.string() + ": " + ec.message(), 1);
+  if (ec) return app::runtimeError("cannot create " + job.out.string() + ": " + ec.message());
   return runJob(job);
 }
 

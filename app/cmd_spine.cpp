@@ -7,6 +7,7 @@
 #include <numbers>
 #include <string>
 
+#include "core/angles.h"
 #include "app/args.h"
 #include "ik/spine/spine_description.h"
 #include "ik/spine/spine_model.h"
@@ -14,7 +15,7 @@
 namespace {
 
 using namespace embody;
-constexpr double kDeg = std::numbers::pi / 180.0;
+using embody::kDeg;
 
 const char* jointsOf(const ik::spine::Site& s, bool coupled) {
   if (!coupled) return "ball";

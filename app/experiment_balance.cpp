@@ -11,13 +11,14 @@
 #include <cstdio>
 #include <numbers>
 
+#include "core/angles.h"
 #include "app/experiments.h"
 #include "avatar/procedural/default_avatar.h"
 
 namespace embody::app::experiment {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+using embody::kDeg;
 
 struct BalanceTasks {
   ik::TaskId com = -1, leftHeel = -1, leftToes = -1, rightToes = -1, leftHand = -1, rightHand = -1, head = -1;

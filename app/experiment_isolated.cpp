@@ -3,13 +3,14 @@
 #include <cstdio>
 #include <numbers>
 
+#include "core/angles.h"
 #include "app/experiments.h"
 #include "ik/spine/isolated_experiment.h"
 
 namespace embody::app::experiment {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+using embody::kDeg;
 
 // Figure 7 of the paper: task errors and joint variation per iteration (log scale).
 std::string convergencePlots() {

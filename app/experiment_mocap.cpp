@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <numbers>
 
+#include "core/angles.h"
 #include "app/experiments.h"
 #include "avatar/procedural/default_avatar.h"
 #include "tracking/bvh_avatar.h"
@@ -21,7 +22,7 @@
 namespace embody::app::experiment {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+using embody::kDeg;
 using avatar::HumanBone;
 
 size_t at(int index) {

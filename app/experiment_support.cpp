@@ -6,6 +6,7 @@
 #include <fstream>
 #include <numbers>
 
+#include "core/angles.h"
 #include "app/render_job.h"
 #include "engine/avatar_renderer.h"
 #include "engine/device.h"
@@ -16,7 +17,7 @@
 namespace embody::app::experiment {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+using embody::kDeg;
 
 std::string shellQuote(const std::string& s) {
   std::string out = "'";

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/angles.h"
 #include "avatar/body/neutral_pose.h"
 #include "avatar/glm_eigen.h"
 #include "ik/expmap.h"
@@ -14,7 +15,7 @@
 namespace embody::avatar {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+using embody::kDeg;
 
 // Per intervertebral joint, bottom (vl5 = L5-S1) to top (skullbase = Occ-C1): flexion+extension,
 // lateral bending to one side, axial rotation to one side, degrees. White & Panjabi (1990) as

@@ -11,12 +11,14 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <nlohmann/json.hpp>
 
+#include "avatar/gltf/component_type.h"
+
 namespace embody::avatar {
 namespace {
 
 using nlohmann::json;
 
-constexpr int kFloat = 5126, kUShort = 5123, kUInt = 5125;
+using gltf::kFloat, gltf::kUShort, gltf::kUInt;
 constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
 
 class BinBuilder {

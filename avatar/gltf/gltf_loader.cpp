@@ -16,6 +16,7 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <limits>
 
+#include "avatar/gltf/component_type.h"
 #include "avatar/gltf/mtoon_json.h"
 
 namespace embody::avatar {
@@ -205,8 +206,9 @@ double readComponent(const uint8_t* p, int type, bool normalized) {
 }
 
 constexpr size_t kMaxMorphTargets = 1024;  // per primitive
-constexpr int kFloat = TINYGLTF_COMPONENT_TYPE_FLOAT, kUByte = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
-              kUShort = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, kUInt = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+using gltf::kFloat, gltf::kUByte, gltf::kUShort, gltf::kUInt;
+static_assert(kFloat == TINYGLTF_COMPONENT_TYPE_FLOAT && kUByte == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+              kUShort == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT && kUInt == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT);
 
 class AccessorReader {
  public:

@@ -1,6 +1,8 @@
 // Finger rig (rest geometry of the humanoid finger bones) and the per-frame retargeting job.
 #include "avatar/hand/finger_retarget.h"
 
+#include "core/angles.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -8,7 +10,7 @@
 namespace embody::avatar {
 namespace {
 
-constexpr float kDeg = 0.017453292519943295f;
+constexpr float kDegF = float(embody::kDeg);
 
 bool finite(const glm::vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
@@ -75,7 +77,7 @@ FingerLimits defaultFingerLimits(int finger, int segment) {
   static constexpr L kThumb[3] = {{-35, 65, 55, 0}, {-25, 80, 35, 0}, {-25, 95, 20, 0}};
   static constexpr L kFinger[3] = {{-30, 95, 25, 10}, {-5, 115, 8, 5}, {-15, 95, 8, 5}};
   const L& l = finger == 0 ? kThumb[segment] : kFinger[segment];
-  return {l.minFlex * kDeg, l.maxFlex * kDeg, l.spread * kDeg, l.twist * kDeg};
+  return {l.minFlex * kDegF, l.maxFlex * kDegF, l.spread * kDegF, l.twist * kDegF};
 }
 
 HumanBone fingerHumanBone(bool left, int finger, int segment) {

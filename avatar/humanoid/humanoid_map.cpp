@@ -384,7 +384,7 @@ namespace {
 
 // obj[key], or null when obj is not an object or lacks the key (json::value() throws on a
 // non-object, and a file may put any type anywhere).
-nlohmann::json member(const nlohmann::json& obj, const char* key) {
+nlohmann::json memberOrNull(const nlohmann::json& obj, const char* key) {
   if (!obj.is_object()) return nullptr;
   const auto it = obj.find(key);
   return it == obj.end() ? nlohmann::json() : *it;
@@ -402,7 +402,7 @@ HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const 
   if (!doc.is_object() || !doc.contains("extensions") || !doc["extensions"].is_object()) return map;
   const auto& ext = doc["extensions"];
   if (ext.contains("VRMC_vrm") && ext["VRMC_vrm"].is_object()) {
-    const nlohmann::json hb = member(member(ext["VRMC_vrm"], "humanoid"), "humanBones");
+    const nlohmann::json hb = memberOrNull(memberOrNull(ext["VRMC_vrm"], "humanoid"), "humanBones");
     if (hb.is_object() && !hb.empty()) {
       present = true;
       for (const auto& [name, entry] : hb.items()) {
@@ -419,7 +419,7 @@ HumanoidMap mapByVrm(const nlohmann::json& doc, const Skeleton& skeleton, const 
       }
     }
   } else if (ext.contains("VRM") && ext["VRM"].is_object()) {
-    const nlohmann::json hb = member(member(ext["VRM"], "humanoid"), "humanBones");
+    const nlohmann::json hb = memberOrNull(memberOrNull(ext["VRM"], "humanoid"), "humanBones");
     if (hb.is_array() && !hb.empty()) {
       present = true;
       for (const auto& entry : hb) {

@@ -6,13 +6,14 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 
+#include "core/angles.h"
 #include "ik/solver.h"
 #include "ik/spine/spine_model.h"
 
 namespace embody::ik::spine {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+using embody::kDeg;
 
 Result<ExperimentRun> runOne(const SpineDescription& d, bool coupled, const ExperimentOptions& o,
                              ExperimentResult& result) {

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/angles.h"
 #include "core/enum_names.h"
 #include "ik/spine/spine_default_data.h"
 
@@ -15,7 +16,7 @@ namespace embody::ik::spine {
 namespace {
 
 using nlohmann::json;
-constexpr double kDeg = std::numbers::pi / 180.0;
+using embody::kDeg;
 
 Error fail(const std::string& message) { return Error{"spine description: " + message}; }
 

@@ -223,12 +223,7 @@ void checkFingersMapped(const AvatarAsset& a, HumanoidFile& f) {
   CHECK(rig.notes.empty());
 }
 
-embody::Result<AvatarAsset> loadPrepared(HumanoidFile& f) {
-  auto a = loadGltfFromMemory(f.glb(), "");
-  if (!a.ok()) return a;
-  if (auto s = prepareAvatar(a.value(), ""); !s.ok()) return embody::Error{s.error()};
-  return a;
-}
+using embody::test::loadPrepared;
 }  // namespace
 
 TEST_CASE("Mixamo, VRM 1.0 and VRM 0.x finger bones all map", "[fingers][humanoid]") {

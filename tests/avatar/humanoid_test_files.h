@@ -10,6 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "avatar/avatar_loader.h"
+#include "avatar/gltf/gltf_loader.h"
+#include "core/result.h"
 #include "gltf_test_files.h"
 
 namespace embody::test {
@@ -259,6 +262,15 @@ inline std::map<std::string, std::string> mixamoBoneNames() {
   }
   for (auto& [bone, name] : m) name = "mixamorig:" + name;
   return m;
+}
+
+// The file loaded and prepared as an avatar (humanoid mapping and checks), with `boneMap` as
+// --bone-map gives it (empty: none).
+inline Result<avatar::AvatarAsset> loadPrepared(HumanoidFile& f, const std::string& boneMap = "") {
+  auto a = avatar::loadGltfFromMemory(f.glb(), "");
+  if (!a.ok()) return a;
+  if (auto s = avatar::prepareAvatar(a.value(), boneMap); !s.ok()) return Error{s.error()};
+  return a;
 }
 
 }  // namespace embody::test

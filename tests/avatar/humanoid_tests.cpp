@@ -73,12 +73,7 @@ using embody::test::HumanoidFile;
 using embody::test::humanoidJointSpecs;
 
 namespace {
-embody::Result<AvatarAsset> loadPrepared(HumanoidFile& f, const std::string& boneMap = "") {
-  auto a = loadGltfFromMemory(f.glb(), "");
-  if (!a.ok()) return a;
-  if (auto s = prepareAvatar(a.value(), boneMap); !s.ok()) return embody::Error{s.error()};
-  return a;
-}
+using embody::test::loadPrepared;
 
 std::map<std::string, std::string> meaninglessNames() {
   std::map<std::string, std::string> m;

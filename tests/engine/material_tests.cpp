@@ -25,11 +25,11 @@ using namespace embody;
 
 namespace {
 
-const test::TileGrid kGrid{4, 3};
+const test::TileGrid kMaterialGrid{4, 3};
 constexpr float kTile = test::TileGrid::kTile;
 const glm::vec4 kGreen(0.0f, 0.63f, 0.0f, 1.0f), kRed(0.78f, 0.0f, 0.0f, 1.0f);
 
-glm::vec2 tileCorner(int column, int row) { return kGrid.corner(column, row); }
+glm::vec2 tileCorner(int column, int row) { return kMaterialGrid.corner(column, row); }
 
 // Paints a check mark (or a cross) in white over a coloured square of `size` pixels at (x0, y0).
 void paintGlyph(avatar::Image& img, int x0, int y0, int size, glm::vec4 background, bool check) {
@@ -172,10 +172,10 @@ avatar::AvatarAsset materialTestAsset() {
   return a;
 }
 
-engine::Camera tileCamera() { return kGrid.camera(); }
+engine::Camera tileCamera() { return kMaterialGrid.camera(); }
 
 glm::ivec2 pixelOf(const engine::Camera& cam, int column, int row, glm::vec2 f, uint32_t width, uint32_t height) {
-  return kGrid.pixel(cam, column, row, f, width, height);
+  return kMaterialGrid.pixel(cam, column, row, f, width, height);
 }
 
 using test::rgbaAt;

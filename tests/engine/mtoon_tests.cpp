@@ -198,7 +198,7 @@ TEST_CASE("MToon: hostile values load with one warning each and the specificatio
 
 namespace {
 
-const test::TileGrid kGrid{4, 4};
+const test::TileGrid kMtoonGrid{4, 4};
 
 // The specification's MToon formulas (Lighting, Global Illumination, Rim Lighting) for one
 // material, normal and view direction, with the renderer's lights; textures given as their
@@ -243,7 +243,7 @@ struct MToonTiles {
   }
   // A quad over part of a tile (fractions), at depth z, facing the camera; every vertex has `normal`.
   void quad(int column, int row, int material, glm::vec3 normal, glm::vec4 rect = {0, 0, 1, 1}, float z = 0.0f) {
-    const glm::vec2 c = kGrid.corner(column, row);
+    const glm::vec2 c = kMtoonGrid.corner(column, row);
     const uint32_t first = uint32_t(asset.mesh.indices.size()), base = uint32_t(asset.mesh.vertices.size());
     for (int k = 0; k < 4; ++k) {
       avatar::SkinnedVertex v;
@@ -365,14 +365,14 @@ TEST_CASE("MToon shading follows the specification's formulas, render queue and 
   engine::FrameOptions fo;
   fo.grid = false;
   fo.clearColor = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
-  const engine::Camera cam = kGrid.camera();
+  const engine::Camera cam = kMtoonGrid.camera();
   auto img = (*r)->render(avatar::SkeletonPose::rest(scene.asset.skeleton), cam, fo);
   REQUIRE(img);
-  auto at = [&](int column, int row, glm::vec2 f) { return test::rgbaAt(*img, kGrid.pixel(cam, column, row, f, 256, 256)); };
+  auto at = [&](int column, int row, glm::vec2 f) { return test::rgbaAt(*img, kMtoonGrid.pixel(cam, column, row, f, 256, 256)); };
 
   for (size_t i = 0; i < tiles.size(); ++i) {
     const int column = int(i % 4), row = int(i / 4);
-    const glm::vec2 centre = kGrid.corner(column, row) + glm::vec2(0.5f);
+    const glm::vec2 centre = kMtoonGrid.corner(column, row) + glm::vec2(0.5f);
     const glm::vec3 v = glm::normalize(glm::vec3(0, 0, 10) - glm::vec3(centre, 0.0f));
     const glm::vec3 expected = mtoonReference(tiles[i].material, tiles[i].normal, v, light, tiles[i].shadeTexel, tiles[i].matcapTexel);
     const glm::ivec4 got = at(column, row, {0.5f, 0.5f});

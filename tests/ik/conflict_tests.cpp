@@ -15,11 +15,6 @@ using namespace embody::ik;
 
 namespace {
 
-const Model& humanoid() {
-  static const Model m = test::sampleHumanoid().value();
-  return m;
-}
-
 // Worst position / rotation residual over the tasks of levels [0, lastLevel].
 double worstUpTo(const Model& model, const SolveReport& r, int lastLevel) {
   double worst = 0.0;
@@ -39,7 +34,7 @@ ConflictStats runConflicts(const SolveOptions& options) {
   // (feasible together); the hands (3) get targets 0.4-1.5 m away from theirs, in random
   // directions: far out of reach with the feet, CoM and head held. Solved one iteration at a
   // time from the neutral pose, warm-started over 3 successive target sets, 150 iterations each.
-  const Model& model = humanoid();
+  const Model& model = test::sharedSampleHumanoid();
   const TaskId lh = model.findTask("left_hand"), rh = model.findTask("right_hand");
   std::mt19937 rng(2024);
   std::uniform_real_distribution<double> dist(0.4, 1.5);

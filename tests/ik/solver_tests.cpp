@@ -16,22 +16,9 @@ using test::randomTargets;
 using test::twoJointModel;
 using test::worstInequality;
 
-namespace {
-
-const Model& humanoid() {
-  static const Model m = test::sampleHumanoid().value();
-  return m;
-}
-const Model& coupledSpine() {
-  static const Model m = test::sampleSpine(true).value();
-  return m;
-}
-
-}  // namespace
-
 TEST_CASE("fast (reduced) path equals the reference projector path on random problems") {
   std::mt19937 rng(21);
-  std::vector<const Model*> models = {&humanoid(), &coupledSpine()};
+  std::vector<const Model*> models = {&test::sharedSampleHumanoid(), &test::sharedSampleSpine(true)};
   std::vector<Model> randoms;
   for (int i = 0; i < 10; ++i) randoms.push_back(test::randomAllTypesModel(rng, i % 2 == 0));
   for (const Model& m : randoms) models.push_back(&m);
@@ -68,7 +55,7 @@ TEST_CASE("fast (reduced) path equals the reference projector path on random pro
 
 TEST_CASE("strict priority: lower levels leave J_a dq of every higher level unchanged") {
   std::mt19937 rng(5);
-  for (const Model* model : {&humanoid(), &coupledSpine()}) {
+  for (const Model* model : {&test::sharedSampleHumanoid(), &test::sharedSampleSpine(true)}) {
     for (Path path : {Path::Fast, Path::Reference}) {
       for (int trial = 0; trial < 10; ++trial) {
         Data data(*model);
@@ -98,7 +85,7 @@ TEST_CASE("strict priority: lower levels leave J_a dq of every higher level unch
 }
 
 TEST_CASE("strict priority over a full solve: a conflicting lower task cannot pull the feet off") {
-  const Model& model = humanoid();
+  const Model& model = test::sharedSampleHumanoid();
   std::mt19937 rng(8);
   for (int trial = 0; trial < 10; ++trial) {
     Data data(model);
@@ -111,7 +98,7 @@ TEST_CASE("strict priority over a full solve: a conflicting lower task cannot pu
 }
 
 TEST_CASE("equalities hold to 1e-9 after 10,000 iterations of random targets (no drift)") {
-  const Model& model = coupledSpine();
+  const Model& model = test::sharedSampleSpine(true);
   std::mt19937 rng(99);
   Data data(model);
   SolveOptions o;
@@ -130,7 +117,7 @@ TEST_CASE("equalities hold to 1e-9 after 10,000 iterations of random targets (no
 }
 
 TEST_CASE("joint limits are never violated beyond tolerance on the humanoid") {
-  const Model& model = humanoid();
+  const Model& model = test::sharedSampleHumanoid();
   std::mt19937 rng(31);
   Data data(model);
   SolveOptions o;
@@ -201,7 +188,7 @@ TEST_CASE("a violated row dependent on the active set is skipped, reported only 
 TEST_CASE("reachable random targets on the humanoid are met to 1e-4 m within 60 iterations") {
   // Targets: every task's value at a random configuration drawn from the middle half of each
   // joint's range (root rotation within ±0.5 rad); solved from the neutral pose.
-  const Model& model = humanoid();
+  const Model& model = test::sharedSampleHumanoid();
   std::mt19937 rng(1234);
   int met = 0, problems = 200, worstIterations = 0;
   SolveOptions o;
@@ -250,7 +237,7 @@ TEST_CASE("100,000 random problems produce no NaN") {
   }
   CHECK(nonFinite == 0);
   // And 200 full solves on the humanoid from random starts, half of them unreachable.
-  const Model& model = humanoid();
+  const Model& model = test::sharedSampleHumanoid();
   Data hd(model);
   SolveOptions ho;
   ho.max_iterations = 30;
@@ -263,7 +250,7 @@ TEST_CASE("100,000 random problems produce no NaN") {
 }
 
 TEST_CASE("non-finite targets, weights and configurations are rejected with the state unchanged") {
-  const Model& model = humanoid();
+  const Model& model = test::sharedSampleHumanoid();
   Data data(model);
   std::mt19937 rng(3);
   randomTargets(model, data, rng, 0.5);
@@ -304,7 +291,7 @@ TEST_CASE("non-finite targets, weights and configurations are rejected with the 
 }
 
 TEST_CASE("unreachable targets: the error decreases, stays bounded, and does not oscillate") {
-  const Model& model = humanoid();
+  const Model& model = test::sharedSampleHumanoid();
   Data data(model);
   const TaskId lh = model.findTask("left_hand"), rh = model.findTask("right_hand");
   REQUIRE(data.setTarget(lh, Eigen::Vector3d(2.5, 1.4, 0.5)));
@@ -353,7 +340,7 @@ TEST_CASE("a solver given a deadline returns by the deadline plus at most one it
       return r;
     }
   } clock;
-  const Model& model = humanoid();
+  const Model& model = test::sharedSampleHumanoid();
   Data data(model);
   REQUIRE(data.setTarget(model.findTask("left_hand"), Eigen::Vector3d(3.0, 1.0, 0.0)));  // unreachable
   SolveOptions o;
@@ -376,7 +363,7 @@ TEST_CASE("a solver given a deadline returns by the deadline plus at most one it
 }
 
 TEST_CASE("tasks switch on and off without rebuilding, a solved Data converges in zero iterations") {
-  const Model& model = humanoid();
+  const Model& model = test::sharedSampleHumanoid();
   Data data(model);
   CHECK(solve(model, data).converged());
   CHECK(data.report().iterations == 0);
@@ -486,7 +473,7 @@ TEST_CASE("J N over the coupled dofs' task rows equals the dense product, fast e
 }
 
 TEST_CASE("min_iterations: a solve whose tasks are all within tolerance still takes that many iterations") {
-  const Model& model = humanoid();
+  const Model& model = test::sharedSampleHumanoid();
   Data data(model);
   kinematics(model, data, false);
   // Targets 0.05 mm off the current values: within every task's tolerance (0.1 mm by default).

@@ -18,7 +18,7 @@ using namespace embody;
 using xr_runtime::BodySample;
 
 namespace {
-std::string regression(const std::string& name) {
+std::string xrPosesRegression(const std::string& name) {
   std::ifstream f(std::string(test::kSourceDir) + "/fuzz/regressions/xr_poses/" + name, std::ios::binary);
   REQUIRE(f);
   return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
@@ -40,7 +40,7 @@ TEST_CASE("xr poses: a trigger of the wrong JSON type is read, a valid flag of t
   // The runtime reads its pose files with the project's trace reader (tracking::parseTrace): a
   // malformed "valid" is an error naming the line (the runtime then uses its synthetic motion).
   std::vector<BodySample> samples;
-  const std::string text = regression("trigger_not_number.jsonl");
+  const std::string text = xrPosesRegression("trigger_not_number.jsonl");
   REQUIRE(parseTrace(text.substr(0, text.find('\n') + 1), samples).empty());
   REQUIRE(samples.size() == 1);
   CHECK(samples[0].leftTrigger == 0.0f);   // "trigger": "pull"
@@ -53,7 +53,7 @@ TEST_CASE("xr poses: a trigger of the wrong JSON type is read, a valid flag of t
 TEST_CASE("xr poses: a trace whose times span more than a day is an error naming the file",
           "[reliability][xr_poses]") {
   std::vector<BodySample> samples;
-  const std::string e = parseTrace(regression("time_span_overflow.jsonl"), samples);
+  const std::string e = parseTrace(xrPosesRegression("time_span_overflow.jsonl"), samples);
   CHECK(e.find("poses.jsonl") == 0);
   CHECK(e.find("day") != std::string::npos);
   CHECK(samples.empty());
@@ -62,7 +62,7 @@ TEST_CASE("xr poses: a trace whose times span more than a day is an error naming
 TEST_CASE("xr poses: a BVH claiming 2e9 frames is an error without the allocation",
           "[reliability][xr_poses]") {
   std::vector<BodySample> samples;
-  const std::string text = regression("frames_claim.bvh");
+  const std::string text = xrPosesRegression("frames_claim.bvh");
   std::string e;
   test::AllocationCounts counts;
   {
@@ -74,7 +74,7 @@ TEST_CASE("xr poses: a BVH claiming 2e9 frames is an error without the allocatio
   CHECK(counts.largestBytes < (size_t{1} << 20));
   // Under the limit but beyond the data: the frames present are used, nothing is reserved for
   // the claim.
-  std::string shortFile = regression("frames_claim.bvh");
+  std::string shortFile = xrPosesRegression("frames_claim.bvh");
   shortFile.replace(shortFile.find("2000000000"), 10, "2000000");
   {
     test::CountAllocations counter;
@@ -87,13 +87,13 @@ TEST_CASE("xr poses: a BVH claiming 2e9 frames is an error without the allocatio
 TEST_CASE("xr poses: a BVH joint with two CHANNELS lines is refused (it read past the frame)",
           "[reliability][xr_poses]") {
   std::vector<BodySample> samples;
-  CHECK(parseBvh(regression("channels_twice.bvh"), samples).find("second CHANNELS") != std::string::npos);
+  CHECK(parseBvh(xrPosesRegression("channels_twice.bvh"), samples).find("second CHANNELS") != std::string::npos);
 }
 
 TEST_CASE("xr poses: an overflowing BVH chain is an error or lost tracking, never a NaN pose",
           "[reliability][xr_poses]") {
   std::vector<BodySample> samples;
-  const std::string e = parseBvh(regression("offset_overflow.bvh"), samples);
+  const std::string e = parseBvh(xrPosesRegression("offset_overflow.bvh"), samples);
   INFO(e);
   CHECK(e.empty() != samples.empty());
   for (const auto& s : samples)

@@ -9,6 +9,7 @@
 #include "runtime/ik_stage.h"
 #include "test_paths.h"
 #include "tracking/pose_source.h"
+#include "runtime/runtime_test_support.h"
 
 using namespace embody;
 using namespace embody::runtime;
@@ -16,10 +17,7 @@ using tracking::TrackerId;
 
 namespace {
 
-const avatar::AvatarAsset& defaultAvatar() {
-  static const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
-  return a;
-}
+using embody::test::defaultAvatar;
 
 struct Figures {
   StatsSummary summary;

@@ -15,6 +15,7 @@
 #include "test_paths.h"
 #include "tracking/pose_source.h"
 #include "tracking/synthetic_source.h"
+#include "runtime/runtime_test_support.h"
 
 using namespace embody;
 using namespace embody::runtime;
@@ -31,10 +32,8 @@ constexpr double kGenerousBudget = 10.0;
 constexpr double kGenerousBudget = 1.0;
 #endif
 
-const avatar::AvatarAsset& defaultAvatar() {
-  static const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
-  return a;
-}
+using embody::test::defaultAvatar;
+using embody::test::openSource;
 
 struct FootTrace {
   std::vector<Eigen::Vector3d> position[2];  // the avatar's ankles, per frame
@@ -90,18 +89,10 @@ Run drive(const avatar::AvatarAsset& avatar, tracking::PoseSource& source, const
   return run;
 }
 
-std::unique_ptr<tracking::PoseSource> open(const std::string& spec, tracking::TrackerMask mask = tracking::TrackerMask::all()) {
-  tracking::SourceOptions o;
-  o.userHeight = 1.75f;
-  o.trackers = mask;
-  auto src = tracking::openPoseSource(spec, o);
-  REQUIRE(src.ok());
-  return std::move(src).value();
-}
 
 void checkFullBodyWalk(const avatar::AvatarAsset& avatar, double headLimit = 0.01) {
   EMBODY_REQUIRE_SHARED_ASSET(bvh, "cmu_12_01_walk.bvh");
-  auto src = open(bvh);
+  auto src = openSource(bvh);
   AvatarBodyOptions o;
   o.userHeight = 1.75f;
   const int frames = int(src->duration() * 60.0);
@@ -141,7 +132,7 @@ TEST_CASE("BVH walk, every tracker, CesiumMan: head within 1.2 cm, hands within 
 
 TEST_CASE("three-point walk: the avatar steps foot by foot, planted feet do not slide, head within 1 cm") {
   EMBODY_REQUIRE_SHARED_ASSET(bvh, "cmu_12_01_walk.bvh");
-  auto src = open(bvh, tracking::TrackerMask::threePoint());
+  auto src = openSource(bvh, tracking::TrackerMask::threePoint());
   AvatarBodyOptions o;
   o.userHeight = 1.75f;
   o.trackers = tracking::TrackerMask::threePoint();
@@ -194,7 +185,7 @@ TEST_CASE("three-point walk: the avatar steps foot by foot, planted feet do not 
 }
 
 TEST_CASE("three-point standing still: the feet stay planted") {
-  auto src = open("synthetic:idle", tracking::TrackerMask::threePoint());
+  auto src = openSource("synthetic:idle", tracking::TrackerMask::threePoint());
   AvatarBodyOptions o;
   o.userHeight = 1.75f;
   o.trackers = tracking::TrackerMask::threePoint();
@@ -208,7 +199,7 @@ TEST_CASE("three-point jump: a head above what straight legs reach lifts both fe
   // Standing idle; between 1 and 2 s the head and hands rise 15 cm and come down (a smooth bump,
   // 0.3 m/s at most). Straight legs under the hips reach a few cm above the rest pose's eyes: the
   // rest must come from the feet leaving the floor, or the eyes stay below the HMD.
-  auto src = open("synthetic:idle", tracking::TrackerMask::threePoint());
+  auto src = openSource("synthetic:idle", tracking::TrackerMask::threePoint());
   AvatarBodyOptions o;
   o.userHeight = 1.75f;
   o.trackers = tracking::TrackerMask::threePoint();
@@ -247,7 +238,7 @@ TEST_CASE("three-point turning on the spot: the body steps round with the head, 
   // (the legs would otherwise cross, or twist past the hips' range), the pelvis and trunk follow
   // the head. A pirouette (two turns in 1.2 s) still crosses the legs and is re-seeded once
   // (docs/eval.md, "Session 13").
-  auto src = open("synthetic:idle", tracking::TrackerMask::threePoint());
+  auto src = openSource("synthetic:idle", tracking::TrackerMask::threePoint());
   AvatarBodyOptions o;
   o.userHeight = 1.75f;
   o.trackers = tracking::TrackerMask::threePoint();
@@ -288,7 +279,7 @@ TEST_CASE("three-point turning on the spot: the body steps round with the head, 
 }
 
 TEST_CASE("hands lost for 1 s: within arm's reach of the shoulder every frame, at most 3 m/s when tracking returns") {
-  auto src = open("synthetic:figure8");
+  auto src = openSource("synthetic:figure8");
   AvatarBodyOptions o;
   o.userHeight = 1.75f;
   const double fps = 90.0;
@@ -340,7 +331,7 @@ class TickingClock final : public Clock {
 }  // namespace
 
 TEST_CASE("the avatar solver given a deadline returns by the deadline plus at most one iteration") {
-  auto src = open("synthetic:reach");
+  auto src = openSource("synthetic:reach");
   AvatarBodyOptions o;
   o.userHeight = 1.75f;
   auto solver = AvatarBodySolver::create(defaultAvatar(), o);
@@ -374,7 +365,7 @@ TEST_CASE("figures: CMU walk, coupled and uncoupled spine, pelvis and balance ro
   EMBODY_REQUIRE_SHARED_ASSET(bvh, "cmu_12_01_walk.bvh");
   for (int mode = 0; mode < 6; ++mode) {
     const bool three = mode >= 4;
-    auto src = open(bvh, three ? tracking::TrackerMask::threePoint() : tracking::TrackerMask::all());
+    auto src = openSource(bvh, three ? tracking::TrackerMask::threePoint() : tracking::TrackerMask::all());
     AvatarBodyOptions o;
     o.userHeight = 1.75f;
     o.coupledSpine = mode % 2 == 0;

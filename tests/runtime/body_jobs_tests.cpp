@@ -16,6 +16,7 @@
 #include "runtime/task_targets_job.h"
 #include "runtime/tracker_targets_job.h"
 #include "tracking/body_dimensions.h"
+#include "runtime/runtime_test_support.h"
 
 using namespace embody;
 using namespace embody::runtime;
@@ -24,16 +25,13 @@ using tracking::TrackerStatus;
 
 namespace {
 
-const avatar::AvatarAsset& mannequin() {
-  static const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
-  return a;
-}
+using embody::test::defaultAvatar;
 
 size_t at(TrackerId id) { return size_t(tracking::index(id)); }
 
 BodyRig rigFor(const AvatarBodyOptions& options) {
   int refused = 0;
-  auto rig = buildBodyRig(mannequin(), options, refused);
+  auto rig = buildBodyRig(defaultAvatar(), options, refused);
   REQUIRE(rig.ok());
   CHECK(refused == 0);
   return std::move(rig).value();
@@ -495,10 +493,10 @@ TEST_CASE("SkeletonPoseJob: Validate rejects a pose of another size, the rest co
   ik::Data data(rig.body.model);
   REQUIRE(data.setConfiguration(rig.body.restConfiguration));
   ik::kinematics(rig.body.model, data, false);
-  const avatar::SkeletonPose rest = avatar::SkeletonPose::rest(mannequin().skeleton);
+  const avatar::SkeletonPose rest = avatar::SkeletonPose::rest(defaultAvatar().skeleton);
   avatar::SkeletonPose pose = rest;
   for (auto& t : pose.local) t.rotation = glm::angleAxis(1.0f, glm::vec3(0, 0, 1));  // anything but rest
-  SkeletonPoseJob job{&rig.body, &mannequin(), &data, &pose};
+  SkeletonPoseJob job{&rig.body, &defaultAvatar(), &data, &pose};
   CHECK(job.Validate());
   avatar::SkeletonPose small;
   SkeletonPoseJob bad = job;
@@ -511,7 +509,7 @@ TEST_CASE("SkeletonPoseJob: Validate rejects a pose of another size, the rest co
   REQUIRE(job.Run());
   REQUIRE(pose.local.size() == rest.local.size());
   for (size_t j = 0; j < rest.local.size(); ++j) {
-    INFO(mannequin().skeleton.joints[j].name);
+    INFO(defaultAvatar().skeleton.joints[j].name);
     CHECK(std::abs(glm::dot(pose.local[j].rotation, rest.local[j].rotation)) > 1.0f - 1e-5f);
     CHECK(glm::length(pose.local[j].translation - rest.local[j].translation) < 1e-4f);
   }

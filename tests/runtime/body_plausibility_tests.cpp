@@ -13,6 +13,7 @@
 #include "test_paths.h"
 #include "tracking/pose_source.h"
 #include "core/percentile.h"
+#include "runtime/runtime_test_support.h"
 
 using namespace embody;
 using namespace embody::runtime;
@@ -20,10 +21,8 @@ using tracking::TrackerId;
 
 namespace {
 
-const avatar::AvatarAsset& defaultAvatar() {
-  static const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
-  return a;
-}
+using embody::test::defaultAvatar;
+using embody::test::openSource;
 
 // What a frame of a run looked like.
 struct Measures {
@@ -85,14 +84,6 @@ Measures run(tracking::PoseSource& source, const AvatarBodyOptions& options, int
   return m;
 }
 
-std::unique_ptr<tracking::PoseSource> open(const std::string& spec, tracking::TrackerMask mask) {
-  tracking::SourceOptions o;
-  o.userHeight = 1.75f;
-  o.trackers = mask;
-  auto src = tracking::openPoseSource(spec, o);
-  REQUIRE(src.ok());
-  return std::move(src).value();
-}
 
 AvatarBodyOptions optionsFor(tracking::TrackerMask mask) {
   AvatarBodyOptions o;
@@ -108,7 +99,7 @@ AvatarBodyOptions optionsFor(tracking::TrackerMask mask) {
 void holdStill(tracking::TrackerMask mask, int frames, const std::function<void(int, tracking::PoseSample&)>& change,
                const std::function<void(int, const AvatarBodySolver&)>& after,
                const std::function<void(AvatarBodyOptions&)>& configure = {}) {
-  const tracking::PoseSample still = open("synthetic:idle", mask)->sample(0.0);
+  const tracking::PoseSample still = openSource("synthetic:idle", mask)->sample(0.0);
   AvatarBodyOptions o = optionsFor(mask);
   o.maxIterations = 4;
   if (configure) configure(o);
@@ -138,7 +129,7 @@ double maxAfter(const std::vector<double>& v, size_t from) {
 }  // namespace
 
 TEST_CASE("a body laid on the floor stands up under the head within half a second", "[runtime][plausibility]") {
-  auto src = open("synthetic:idle", tracking::TrackerMask::threePoint());
+  auto src = openSource("synthetic:idle", tracking::TrackerMask::threePoint());
   const double fps = 90.0;
   double standingPelvis = 0.0;
   // Two iterations a frame, as a 1 ms budget gives on a slow machine: too few to climb out of
@@ -172,7 +163,7 @@ TEST_CASE("a body laid on the floor stands up under the head within half a secon
 }
 
 TEST_CASE("a head glitch to the floor and back: the body stands again, never NaN", "[runtime][plausibility]") {
-  auto src = open("synthetic:idle", tracking::TrackerMask::threePoint());
+  auto src = openSource("synthetic:idle", tracking::TrackerMask::threePoint());
   const double fps = 90.0;
   auto solver = AvatarBodySolver::create(defaultAvatar(), optionsFor(tracking::TrackerMask::threePoint()));
   REQUIRE(solver.ok());
@@ -210,7 +201,7 @@ TEST_CASE("a head glitch to the floor and back: the body stands again, never NaN
 
 TEST_CASE("three-point squat: the knees bend forward over the feet and the head reaches its depth",
           "[runtime][plausibility]") {
-  auto src = open("synthetic:squat", tracking::TrackerMask::threePoint());
+  auto src = openSource("synthetic:squat", tracking::TrackerMask::threePoint());
   const double fps = 90.0;
   const Measures m = run(*src, optionsFor(tracking::TrackerMask::threePoint()), int(src->duration() * fps), fps);
   std::vector<double> sorted = m.headError;
@@ -231,7 +222,7 @@ TEST_CASE("no knee or elbow bends backwards over the synthetic motions, three tr
   for (const char* motion : {"synthetic:reach", "synthetic:bow", "synthetic:look", "synthetic:figure8"}) {
     for (bool three : {true, false}) {
       const auto mask = three ? tracking::TrackerMask::threePoint() : tracking::TrackerMask::all();
-      auto src = open(motion, mask);
+      auto src = openSource(motion, mask);
       const double fps = 60.0;
       const Measures m = run(*src, optionsFor(mask), int(std::min(src->duration(), 6.0) * fps), fps);
       INFO(motion << (three ? " three-point" : " all trackers") << ": hinge minima " << m.minHinge[0] << " "
@@ -316,7 +307,7 @@ TEST_CASE("three points on a wide-legged rest pose: the feet stand under the hip
   auto solver = AvatarBodySolver::create(wide, optionsFor(tracking::TrackerMask::threePoint()));
   REQUIRE(solver.ok());
   AvatarBodySolver& s = **solver;
-  auto src = open("synthetic:idle", tracking::TrackerMask::threePoint());
+  auto src = openSource("synthetic:idle", tracking::TrackerMask::threePoint());
   ManualClock clock;
   IkStageConfig cfg;
   cfg.guard.userHeight = 1.75f;

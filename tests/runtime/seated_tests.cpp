@@ -18,16 +18,14 @@
 #include "runtime/seated_stats.h"
 #include "runtime/tracked_avatar_body.h"
 #include "tracking/pose_source.h"
+#include "runtime/runtime_test_support.h"
 
 using namespace embody;
 using tracking::TrackerId;
 
 namespace {
 
-const avatar::AvatarAsset& mannequin() {
-  static const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
-  return a;
-}
+using embody::test::defaultAvatar;
 
 constexpr float kSeatedEye = 1.20f;  // a 1.75 m user on a chair about 45 cm high
 constexpr double kRad = std::numbers::pi / 180.0;
@@ -58,7 +56,7 @@ runtime::TrackedBodyOptions seatedOptions(float seatHeight = 0.0f) {
 
 struct Body {
   std::unique_ptr<runtime::TrackedAvatarBody> body;
-  avatar::SkeletonPose pose = avatar::SkeletonPose::rest(mannequin().skeleton);
+  avatar::SkeletonPose pose = avatar::SkeletonPose::rest(defaultAvatar().skeleton);
   bool solve(const tracking::PoseSample& s) { return body->solve(s, pose); }
   const runtime::AvatarBodySolver& solver() const { return body->solver(); }
   runtime::LowerBodyPosture posture() const { return solver().posture(); }
@@ -70,7 +68,7 @@ struct Body {
 
 Body seatedBody(float seatHeight = 0.0f) {
   Body b;
-  auto created = runtime::TrackedAvatarBody::create(mannequin(), seatedOptions(seatHeight));
+  auto created = runtime::TrackedAvatarBody::create(defaultAvatar(), seatedOptions(seatHeight));
   REQUIRE(created.ok());
   b.body = std::move(created).value();
   return b;
@@ -83,10 +81,10 @@ struct MeshHeights {
 };
 MeshHeights skinnedHeights(const Body& b) {
   std::vector<glm::mat4> globals, palette;
-  avatar::computeGlobals(mannequin().skeleton, b.pose, globals);
-  avatar::computeSkinningPalette(mannequin(), globals, palette);
+  avatar::computeGlobals(defaultAvatar().skeleton, b.pose, globals);
+  avatar::computeSkinningPalette(defaultAvatar(), globals, palette);
   std::vector<glm::vec3> positions, normals;
-  avatar::skinOnCpu(mannequin().mesh, palette, positions, normals);
+  avatar::skinOnCpu(defaultAvatar().mesh, palette, positions, normals);
   MeshHeights h;
   for (const auto& p : positions) h.lowest = std::min(h.lowest, p.y);
   return h;
@@ -287,7 +285,7 @@ TEST_CASE("seated layout: the seat at priority 1, no balance row, the upright pe
   CHECK(l.describe().find("seated") != std::string::npos);
   // Without legs in the humanoid map, seated mode is refused with a clear error (not tested
   // here: every built-in avatar has legs); a standing solver reports no seat.
-  auto standing = runtime::AvatarBodySolver::create(mannequin());
+  auto standing = runtime::AvatarBodySolver::create(defaultAvatar());
   REQUIRE(standing.ok());
   CHECK_FALSE((*standing)->seated());
   CHECK((*standing)->seat() == nullptr);
@@ -302,7 +300,7 @@ TEST_CASE("seated: synthetic:seated through the IK stage sits, reaches and sways
   o.trackers = (*src)->trackers();  // all six: the seated layout leaves hips and feet out
   o.userHeight = 1.75f;
   o.seat.enabled = true;
-  auto solver = runtime::AvatarBodySolver::create(mannequin(), o);
+  auto solver = runtime::AvatarBodySolver::create(defaultAvatar(), o);
   REQUIRE(solver.ok());
   runtime::ManualClock clock;
   runtime::IkStageConfig cfg;
@@ -310,7 +308,7 @@ TEST_CASE("seated: synthetic:seated through the IK stage sits, reaches and sways
   cfg.guard.userHeight = 1.75f;
   runtime::IkStage stage(**solver, clock, cfg);
   runtime::SolvedFrame frame;
-  frame.pose = avatar::SkeletonPose::rest(mannequin().skeleton);
+  frame.pose = avatar::SkeletonPose::rest(defaultAvatar().skeleton);
   runtime::StatsRecorder rec;
   runtime::SeatedStats seated;
   for (int i = 0; i < int((*src)->duration() * 30.0); ++i) {

@@ -6,15 +6,13 @@
 
 #include "avatar/procedural/default_avatar.h"
 #include "runtime/tracked_avatar_body.h"
+#include "runtime/runtime_test_support.h"
 
 using namespace embody;
 
 namespace {
 
-const avatar::AvatarAsset& mannequin() {
-  static const avatar::AvatarAsset a = avatar::buildDefaultAvatar();
-  return a;
-}
+using embody::test::defaultAvatar;
 
 tracking::PoseSample threePoint(float headY, double t) {
   tracking::PoseSample s;
@@ -44,9 +42,9 @@ runtime::TrackedBodyOptions options() {
 
 TEST_CASE("TrackedAvatarBody puts the avatar's wrists on the tracked wrists, in tracking metres", "[runtime]") {
   // (Seated mode has its own tests: seated_tests.cpp.)
-  auto body = runtime::TrackedAvatarBody::create(mannequin(), options());
+  auto body = runtime::TrackedAvatarBody::create(defaultAvatar(), options());
   REQUIRE(body.ok());
-  avatar::SkeletonPose pose = avatar::SkeletonPose::rest(mannequin().skeleton);
+  avatar::SkeletonPose pose = avatar::SkeletonPose::rest(defaultAvatar().skeleton);
   tracking::PoseSample s;
   for (int i = 0; i < 90; ++i) {
     s = threePoint(1.62f, i / 90.0);
@@ -64,16 +62,16 @@ TEST_CASE("TrackedAvatarBody puts the avatar's wrists on the tracked wrists, in 
   CHECK(glm::distance(back, p) < 1e-4f);
   // The skeleton's roots carry that map: the posed avatar is scaled to the user (eye 1.62 m).
   for (size_t j = 0; j < pose.local.size(); ++j)
-    if (mannequin().skeleton.joints[j].parent < 0) {
+    if (defaultAvatar().skeleton.joints[j].parent < 0) {
       CHECK(std::isfinite(pose.local[j].translation.x));
       CHECK(pose.local[j].scale.x == Approx(1.0 / (*body)->solver().scale()).epsilon(1e-4));
     }
 }
 
 TEST_CASE("TrackedAvatarBody waits for a valid head and never produces NaN from a broken sample", "[runtime]") {
-  auto body = runtime::TrackedAvatarBody::create(mannequin(), options());
+  auto body = runtime::TrackedAvatarBody::create(defaultAvatar(), options());
   REQUIRE(body.ok());
-  avatar::SkeletonPose pose = avatar::SkeletonPose::rest(mannequin().skeleton);
+  avatar::SkeletonPose pose = avatar::SkeletonPose::rest(defaultAvatar().skeleton);
   tracking::PoseSample none;  // nothing valid: no calibration yet
   CHECK_FALSE((*body)->solve(none, pose));
   REQUIRE((*body)->solve(threePoint(1.62f, 0.0), pose));

@@ -3,7 +3,9 @@
 #include <catch2/catch.hpp>
 #include <numbers>
 
+#include "core/angles.h"
 #include "ik/spine/spine_analysis.h"
+#include "spine/build_spine.h"
 #include "ik/spine/spine_description.h"
 #include "ik/spine/spine_model.h"
 
@@ -12,14 +14,9 @@ using namespace embody::ik::spine;
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+using embody::kDeg;
 
-IsolatedSpine build(const SpineDescription& d) {
-  auto s = buildIsolatedSpine(d);
-  INFO((s ? std::string() : s.error()));
-  REQUIRE(s.ok());
-  return std::move(*s);
-}
+using embody::test::buildSpineOrFail;
 
 }  // namespace
 
@@ -27,7 +24,7 @@ TEST_CASE("the paper's layout: 17 swing + 7 revolute joints, 32 equality rows, 9
   auto d = loadSpineModel("paper");
   REQUIRE(d.ok());
   CHECK(d->name == "paper");
-  const IsolatedSpine s = build(*d);
+  const IsolatedSpine s = buildSpineOrFail(*d);
   const SpineSummary sum = summarize(*d, s);
   CHECK(sum.swing_joints == 17);
   CHECK(sum.revolute_joints == 7);
@@ -42,12 +39,12 @@ TEST_CASE("the paper's layout: 17 swing + 7 revolute joints, 32 equality rows, 9
       CHECK(d->sites[k].name == "vc4");
     }
   CHECK(differing == 1);
-  CHECK(summarize(full, build(full)).equalities == 33);
+  CHECK(summarize(full, buildSpineOrFail(full)).equalities == 33);
 }
 
 TEST_CASE("torsion sign changes between regions: the last carrier below against the first above") {
   const SpineDescription& d = defaultSimplifiedSpine();
-  const IsolatedSpine s = build(d);
+  const IsolatedSpine s = buildSpineOrFail(d);
   // Carriers of torsion: lumbar_middle; thoracic_middle, thoracic_upper; cervical_lower, cervical_upper.
   std::vector<SiteMotion> m(d.sites.size());
   auto set = [&](const char* name, double deg) {
@@ -72,7 +69,7 @@ TEST_CASE("torsion sign changes between regions: the last carrier below against 
 
 TEST_CASE("the largest swing over its limit reads each direction's own limit") {
   const SpineDescription& d = defaultFullSpine();
-  const IsolatedSpine s = build(d);
+  const IsolatedSpine s = buildSpineOrFail(d);
   std::vector<SiteMotion> m(d.sites.size());
   CHECK(maxNormalisedSwing(d, s.joints, m) == 0.0);
   const Eigen::Vector3d& r = s.joints.ranges[0];  // vl5, a swing site

@@ -7,8 +7,10 @@
 #include <numbers>
 #include <random>
 
+#include "core/angles.h"
 #include "ik/solver.h"
 #include "ik/spine/spine_analysis.h"
+#include "spine/build_spine.h"
 #include "ik/spine/spine_description.h"
 #include "ik/spine/spine_model.h"
 
@@ -17,14 +19,9 @@ using namespace embody::ik::spine;
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+using embody::kDeg;
 
-IsolatedSpine build(const SpineDescription& d, SpineOptions o = {}) {
-  auto s = buildIsolatedSpine(d, o);
-  INFO((s ? std::string() : s.error()));
-  REQUIRE(s.ok());
-  return std::move(*s);
-}
+using embody::test::buildSpineOrFail;
 
 int rank(const Eigen::MatrixXd& m) {
   if (m.rows() == 0) return 0;
@@ -37,7 +34,7 @@ int rank(const Eigen::MatrixXd& m) {
 
 TEST_CASE("full coupled spine: 24 vertebrae, 18 swing + 6 revolute joints, 42 dofs, 9 free") {
   const SpineDescription& d = defaultFullSpine();
-  const IsolatedSpine s = build(d);
+  const IsolatedSpine s = buildSpineOrFail(d);
   const SpineSummary sum = summarize(d, s);
   CHECK(sum.vertebrae == 24);
   CHECK(sum.sites == 24);
@@ -62,7 +59,7 @@ TEST_CASE("full coupled spine: 24 vertebrae, 18 swing + 6 revolute joints, 42 do
 
 TEST_CASE("every equality row has exactly two entries on the same component of one region") {
   const SpineDescription& d = defaultFullSpine();
-  const IsolatedSpine s = build(d);
+  const IsolatedSpine s = buildSpineOrFail(d);
   for (const ik::EqualityRow& row : s.model.equalities) {
     INFO(row.name);
     REQUIRE(row.terms.size() == 2);
@@ -87,7 +84,7 @@ TEST_CASE("uncoupled spine: 24 ball joints, 72 free dofs, no coupling rows") {
   const SpineDescription& d = defaultFullSpine();
   SpineOptions o;
   o.coupled = false;
-  const IsolatedSpine s = build(d, o);
+  const IsolatedSpine s = buildSpineOrFail(d, o);
   const SpineSummary sum = summarize(d, s);
   CHECK(sum.ball_joints == 24);
   CHECK(sum.dof_total == 72);
@@ -104,7 +101,7 @@ TEST_CASE("simplified spine: 8 sites (3 lumbar, 3 thoracic, 2 cervical), 8 swing
   CHECK(perRegion[0] == 3);
   CHECK(perRegion[1] == 3);
   CHECK(perRegion[2] == 2);
-  const SpineSummary sum = summarize(d, build(d));
+  const SpineSummary sum = summarize(d, buildSpineOrFail(d));
   CHECK(sum.vertebrae == 24);
   CHECK(sum.sites == 8);
   CHECK(sum.swing_joints == 8);
@@ -163,7 +160,7 @@ TEST_CASE("after random targets every equality holds to 1e-9 and the higher-prio
     for (bool axis : {false, true}) {
       SpineOptions o;
       o.axis_coupling = axis;
-      const IsolatedSpine s = build(*d, o);
+      const IsolatedSpine s = buildSpineOrFail(*d, o);
       ik::Data data(s.model);
       ik::kinematics(s.model, data, false);
       const Eigen::Vector3d neck = data.taskPosition(s.neck_position);
@@ -194,7 +191,7 @@ TEST_CASE("after random targets every equality holds to 1e-9 and the higher-prio
 
 TEST_CASE("inter-region bands hold on the anatomical spine over 600 iterations of a moving target") {
   const SpineDescription& d = defaultFullSpine();
-  const IsolatedSpine s = build(d, {});
+  const IsolatedSpine s = buildSpineOrFail(d, {});
   std::vector<size_t> bands;
   for (size_t i = 0; i < s.model.inequalities.size(); ++i)
     if (s.model.inequalities[i].name.rfind("band ", 0) == 0) bands.push_back(i);
@@ -239,7 +236,7 @@ TEST_CASE("axis coupling ties torsion to bending: cervical same side, lumbar opp
   const SpineDescription& d = defaultFullSpine();
   SpineOptions o;
   o.axis_coupling = true;
-  const IsolatedSpine s = build(d, o);
+  const IsolatedSpine s = buildSpineOrFail(d, o);
   const SpineSummary sum = summarize(d, s);
   CHECK(sum.axis_equalities == 2);
   CHECK(sum.dof_free == 7);
@@ -260,7 +257,7 @@ TEST_CASE("axis coupling ties torsion to bending: cervical same side, lumbar opp
 TEST_CASE("check_all_limits puts limits on every joint") {
   SpineOptions o;
   o.check_all_limits = true;
-  const IsolatedSpine s = build(defaultFullSpine(), o);
+  const IsolatedSpine s = buildSpineOrFail(defaultFullSpine(), o);
   CHECK(s.joints.limit_inequalities == 18 * 4 + 6 * 2);
 }
 

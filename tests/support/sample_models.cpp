@@ -4,11 +4,13 @@
 #include <numbers>
 #include <string>
 
+#include "core/angles.h"
+
 namespace embody::test {
 using namespace embody::ik;  // a fixture of the IK library: its vocabulary throughout
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+using embody::kDeg;
 
 Eigen::Isometry3d at(double x, double y, double z) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
@@ -160,6 +162,16 @@ Result<Model> sampleSpine(bool coupled) {
   b.addTask({.name = "head_position", .type = TaskType::Position, .joint = head, .level = 1});
   b.addTask({.name = "chest_orientation", .type = TaskType::Orientation, .joint = chest, .level = 2});
   return b.build();
+}
+
+const ik::Model& sharedSampleHumanoid() {
+  static const ik::Model m = sampleHumanoid().value();
+  return m;
+}
+
+const ik::Model& sharedSampleSpine(bool coupled) {
+  static const ik::Model coupledModel = sampleSpine(true).value(), uncoupledModel = sampleSpine(false).value();
+  return coupled ? coupledModel : uncoupledModel;
 }
 
 }  // namespace embody::test

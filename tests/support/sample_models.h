@@ -21,4 +21,8 @@ Result<ik::Model> sampleHumanoid();
 // Tasks: level 0 "head_orientation", level 1 "head_position", level 2 "chest_orientation".
 Result<ik::Model> sampleSpine(bool coupled);
 
+// The same models built once per process (tests that only read them share one).
+const ik::Model& sharedSampleHumanoid();
+const ik::Model& sharedSampleSpine(bool coupled);
+
 }  // namespace embody::test

@@ -9,7 +9,7 @@
 using namespace embody::tracking;
 
 namespace {
-constexpr double kDt = 1.0 / 90.0;
+constexpr double kFrameSeconds = 1.0 / 90.0;
 
 bool finite(const TrackerPose& p) { return isUsable(p); }
 }  // namespace
@@ -24,7 +24,7 @@ TEST_CASE("hands lost for 1 s mid-run: held, eased, recovered without exceeding 
     bool sawHeld = false, sawEasing = false, sawRecovering = false;
     float maxSpeedAfterReturn = 0.0f, maxReachWhileLost = 0.0f;
     for (int i = 0; i < 90 * 6; ++i) {
-      const double t = i * kDt;
+      const double t = i * kFrameSeconds;
       PoseSample s = src->sample(t);
       const bool lost = t >= 2.0 && t < 3.0;
       if (lost) {
@@ -45,7 +45,7 @@ TEST_CASE("hands lost for 1 s mid-run: held, eased, recovered without exceeding 
         }
         if (t >= 3.0 && i > 0)
           maxSpeedAfterReturn = std::max(
-              maxSpeedAfterReturn, glm::length(g.pose[id].position - prevOut[id].position) / static_cast<float>(kDt));
+              maxSpeedAfterReturn, glm::length(g.pose[id].position - prevOut[id].position) / static_cast<float>(kFrameSeconds));
         if (t > 4.5) CHECK(st == TrackerStatus::Tracked);  // caught up again
       }
       prevOut = g.pose;
@@ -92,19 +92,19 @@ TEST_CASE("implausible jumps are rejected, a lasting jump is accepted and blende
   s[TrackerId::Head] = {glm::vec3(0, 1.64f, 0), glm::quat(1, 0, 0, 0), true};
   s[TrackerId::RightHand] = {glm::vec3(0.2f, 1.0f, -0.2f), glm::quat(1, 0, 0, 0), true};
   guard.update(s);
-  s.time = kDt;
+  s.time = kFrameSeconds;
   s[TrackerId::RightHand].position = glm::vec3(2.2f, 1.0f, -0.2f);  // 2 m in 11 ms: a glitch
   const GuardedSample& g = guard.update(s);
   CHECK(g[TrackerId::RightHand] == TrackerStatus::Held);
   CHECK(g.pose[TrackerId::RightHand].position.x == Approx(0.2f));
-  s.time = 2 * kDt;
+  s.time = 2 * kFrameSeconds;
   s[TrackerId::RightHand].position = glm::vec3(0.21f, 1.0f, -0.2f);  // back to plausible
   CHECK(guard.update(s)[TrackerId::RightHand] != TrackerStatus::Held);
   // A jump that lasts (the play space was recentred) is taken after 0.25 s, speed-limited.
   float maxStep = 0.0f;
   glm::vec3 prev = guard.update(s).pose[TrackerId::RightHand].position;
   for (int i = 3; i < 200; ++i) {
-    s.time = i * kDt;
+    s.time = i * kFrameSeconds;
     s[TrackerId::Head].position = glm::vec3(1.0f, 1.64f, 0);
     s[TrackerId::RightHand].position = glm::vec3(1.2f, 1.0f, -0.2f);
     const GuardedSample& h = guard.update(s);
@@ -113,7 +113,7 @@ TEST_CASE("implausible jumps are rejected, a lasting jump is accepted and blende
   }
   CHECK(guard.update(s)[TrackerId::RightHand] == TrackerStatus::Tracked);
   CHECK(prev.x == Approx(1.2f));
-  CHECK(maxStep / kDt < 3.0);
+  CHECK(maxStep / kFrameSeconds < 3.0);
 }
 
 TEST_CASE("never-seen trackers: hands neutral, hips and feet absent, head at eye height, all finite") {
@@ -166,7 +166,7 @@ TEST_CASE("a hand recovering towards a target beyond the estimated reach still a
   auto src = SyntheticSource::create("bow").value();
   TrackingGuard guard;
   for (int i = 0; i < 90 * 4; ++i) {
-    const double t = 1.5 + i * kDt;  // deep in the bow
+    const double t = 1.5 + i * kFrameSeconds;  // deep in the bow
     PoseSample s = src->sample(t);
     if (i < 90) s[TrackerId::LeftHand].valid = false;
     const GuardedSample& g = guard.update(s);
