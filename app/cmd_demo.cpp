@@ -23,9 +23,9 @@ const app::Command* findCommand(const char* name) {
 }
 
 // The mirror's command line: the demo's own shared options (what the user gave, and the
-// defaults), for 900 frames.
+// defaults), for --mirror-frames frames.
 std::vector<std::string> mirrorArgs(const app::Args& demo) {
-  std::vector<std::string> out = {"--frames", "900"};
+  std::vector<std::string> out = {"--frames", demo.get("mirror-frames")};
   for (const char* name : {"avatar", "bone-map", "motion", "fps", "bvh-scale", "spine", "user-height", "profile", "ik-budget-ms"})
     if (demo.has(name)) out.insert(out.end(), {std::string("--") + name, demo.get(name)});
   for (const char* flag : {"three-point", "uncoupled-spine"})
@@ -43,6 +43,7 @@ int runDemo(app::Argv argv) {
   args.option("frames", "N", "frames to render", "270");
   args.option("device", "SELECTOR", "Vulkan device: auto, an index, 'lavapipe', or part of its name", "auto");
   args.flag("no-mirror", "do not open the mirror window even when a display is available");
+  args.option("mirror-frames", "N", "frames the mirror window shows (10 s at 90 Hz)", "900");
   if (auto o = args.parse(argv); o != app::Args::Outcome::Ok) return app::Args::exitCode(o);
 
   app::RenderJob job;
@@ -50,6 +51,7 @@ int runDemo(app::Argv argv) {
     app::readJobOptions(args, app::kAllJobOptions | app::kIterationOptions, job);
     job.frames = args.integer("frames");
     if (job.frames < 1) throw std::invalid_argument("--frames must be at least 1");
+    if (args.integer("mirror-frames") < 1) throw std::invalid_argument("--mirror-frames must be at least 1");
   } catch (const std::invalid_argument& e) {
     return app::usageError(e.what());
   }

@@ -63,6 +63,7 @@ TEST_CASE("each command's own bad values exit 2 with one line naming the option"
       {"mirror", {"--view stereo", "--view"}},
       {"mirror", {"--screenshot /tmp/x.png", "--screenshot"}},
       {"demo --no-mirror", {"--frames 0", "--frames"}},
+      {"demo --no-mirror", {"--mirror-frames 0", "--mirror-frames"}},
       {"xr", {"--frames -1", "--frames"}},
       {"xr", {"--body sideways", "--body"}},
       {"xr", {"--height 9", "--height"}},
