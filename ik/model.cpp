@@ -23,7 +23,7 @@ Eigen::Vector3d orthogonalUnit(const Eigen::Vector3d& axis, const Eigen::Vector3
   return u.normalized();
 }
 
-Error fail(const std::string& what) { return Error{"ik model: " + what}; }
+Error modelError(const std::string& what) { return Error{"ik model: " + what}; }
 
 std::string levelName(const Model& model, TaskId t) {
   return "'" + model.tasks[t].desc.name + "' (level " + std::to_string(model.tasks[t].desc.level) +
@@ -158,16 +158,16 @@ Status buildJoint(const JointDesc& desc, size_t i, std::set<std::string>& names,
   j.desc = desc;
   JointDesc& d = j.desc;
   const std::string who = "joint " + std::to_string(i) + " '" + d.name + "'";
-  if (d.name.empty()) return fail(who + ": empty name");
-  if (!names.insert(d.name).second) return fail(who + ": duplicate name");
+  if (d.name.empty()) return modelError(who + ": empty name");
+  if (!names.insert(d.name).second) return modelError(who + ": duplicate name");
   if (d.parent != kNoParent && (d.parent < 0 || d.parent >= static_cast<JointId>(i)))
-    return fail(who + ": parent " + std::to_string(d.parent) + " must be an earlier joint");
-  if (!finite(d.rest)) return fail(who + ": rest transform is not finite");
+    return modelError(who + ": parent " + std::to_string(d.parent) + " must be an earlier joint");
+  if (!finite(d.rest)) return modelError(who + ": rest transform is not finite");
   const Eigen::Matrix3d r = d.rest.linear();
   if (!(r.transpose() * r).isApprox(Eigen::Matrix3d::Identity(), 1e-6) || r.determinant() < 0)
-    return fail(who + ": rest transform's linear part is not a rotation");
+    return modelError(who + ": rest transform's linear part is not a rotation");
   if (d.type == JointType::Revolute || d.type == JointType::Swing) {
-    if (!d.axis.allFinite() || d.axis.norm() < 1e-9) return fail(who + ": axis must be finite and non-zero");
+    if (!d.axis.allFinite() || d.axis.norm() < 1e-9) return modelError(who + ": axis must be finite and non-zero");
     d.axis.normalize();
   }
   j.dof_count = dofCount(d.type);
@@ -177,17 +177,17 @@ Status buildJoint(const JointDesc& desc, size_t i, std::set<std::string>& names,
   if (d.lower.empty()) d.lower.assign(n, -kUnbounded);
   if (d.upper.empty()) d.upper.assign(n, kUnbounded);
   if (d.lower.size() != n || d.upper.size() != n)
-    return fail(who + ": limits need " + std::to_string(n) + " entries (a limit names a missing dof?)");
+    return modelError(who + ": limits need " + std::to_string(n) + " entries (a limit names a missing dof?)");
   for (size_t k = 0; k < n; ++k) {
     if (std::isnan(d.lower[k]) || std::isnan(d.upper[k]) || d.lower[k] > d.upper[k])
-      return fail(who + ": limits of dof " + std::to_string(k) + " are not an interval");
+      return modelError(who + ": limits of dof " + std::to_string(k) + " are not an interval");
   }
   if (d.neutral.empty()) d.neutral.assign(n, 0.0);
-  if (d.neutral.size() != n) return fail(who + ": neutral needs " + std::to_string(n) + " entries");
+  if (d.neutral.size() != n) return modelError(who + ": neutral needs " + std::to_string(n) + " entries");
   for (size_t k = 0; k < n; ++k)
-    if (!std::isfinite(d.neutral[k])) return fail(who + ": neutral value of dof " + std::to_string(k) + " is not finite");
-  if (!std::isfinite(d.mass) || d.mass < 0) return fail(who + ": mass must be finite and >= 0");
-  if (!d.com.allFinite()) return fail(who + ": centre of mass is not finite");
+    if (!std::isfinite(d.neutral[k])) return modelError(who + ": neutral value of dof " + std::to_string(k) + " is not finite");
+  if (!std::isfinite(d.mass) || d.mass < 0) return modelError(who + ": mass must be finite and >= 0");
+  if (!d.com.allFinite()) return modelError(who + ": centre of mass is not finite");
   if (d.type == JointType::Swing) {
     j.swing_basis.col(0) = orthogonalUnit(d.axis, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ());
     j.swing_basis.col(1) = d.axis.cross(j.swing_basis.col(0));
@@ -200,19 +200,19 @@ Status buildJoint(const JointDesc& desc, size_t i, std::set<std::string>& names,
 // A row's terms: joints and dofs exist, coefficients finite and not all zero; written densely.
 Status checkTerms(const Model& m, const std::vector<LinearTerm>& terms, const std::string& who,
                   Eigen::Ref<Eigen::RowVectorXd, 0, Eigen::InnerStride<>> dense) {
-  if (terms.empty()) return fail(who + ": no terms");
+  if (terms.empty()) return modelError(who + ": no terms");
   dense.setZero();
   for (const LinearTerm& t : terms) {
     if (t.dof.joint < 0 || t.dof.joint >= static_cast<JointId>(m.joints.size()))
-      return fail(who + ": joint " + std::to_string(t.dof.joint) + " does not exist");
+      return modelError(who + ": joint " + std::to_string(t.dof.joint) + " does not exist");
     const Model::Joint& j = m.joints[t.dof.joint];
     if (t.dof.component < 0 || t.dof.component >= j.dof_count)
-      return fail(who + ": joint '" + j.desc.name + "' (" + toString(j.desc.type) + ") has no dof " +
+      return modelError(who + ": joint '" + j.desc.name + "' (" + toString(j.desc.type) + ") has no dof " +
                   std::to_string(t.dof.component));
-    if (!std::isfinite(t.coefficient)) return fail(who + ": coefficient is not finite");
+    if (!std::isfinite(t.coefficient)) return modelError(who + ": coefficient is not finite");
     dense(m.dofIndex(t.dof)) += t.coefficient;
   }
-  if (dense.norm() == 0) return fail(who + ": all coefficients are zero");
+  if (dense.norm() == 0) return modelError(who + ": all coefficients are zero");
   return Status::success();
 }
 
@@ -225,7 +225,7 @@ Status addEqualities(const std::vector<EqualityRow>& equalities, Model& m) {
     const EqualityRow& row = equalities[i];
     const std::string who = "equality " + std::to_string(i) + " '" + row.name + "'";
     if (Status s = checkTerms(m, row.terms, who, m.equality_matrix.row(i)); !s) return Error{s.error()};
-    if (!std::isfinite(row.rhs)) return fail(who + ": rhs is not finite");
+    if (!std::isfinite(row.rhs)) return modelError(who + ": rhs is not finite");
     m.equality_rhs(i) = row.rhs;
     m.equalities.push_back(row);
   }
@@ -243,7 +243,7 @@ Status addInequalities(const std::vector<InequalityRow>& inequalities, Model& m)
       if (row.kind != kind) continue;
       const std::string who = "inequality " + std::to_string(i) + " '" + row.name + "'";
       if (Status s = checkTerms(m, row.terms, who, scratch); !s) return Error{s.error()};
-      if (!std::isfinite(row.rhs)) return fail(who + ": rhs is not finite");
+      if (!std::isfinite(row.rhs)) return modelError(who + ": rhs is not finite");
       m.inequalities.push_back(row);
     }
   }
@@ -289,15 +289,15 @@ Status recruitJoints(const TaskDesc& d, const std::string& who, bool com, const 
   switch (d.recruit) {
     case Recruit::ToRoot: t.recruited = t.ancestors; break;
     case Recruit::Depth:
-      if (d.depth <= 0) return fail(who + ": recruit depth must be > 0");
-      if (com) return fail(who + ": a centre-of-mass task recruits to the root or an explicit list");
+      if (d.depth <= 0) return modelError(who + ": recruit depth must be > 0");
+      if (com) return modelError(who + ": a centre-of-mass task recruits to the root or an explicit list");
       for (size_t k = 0; k < chain.size() && static_cast<int>(k) < d.depth; ++k) t.recruited[chain[k]] = 1;
       break;
     case Recruit::Explicit:
       for (JointId j : d.joints) {
-        if (j < 0 || j >= static_cast<JointId>(m.joints.size())) return fail(who + ": recruited joint " + std::to_string(j) + " does not exist");
+        if (j < 0 || j >= static_cast<JointId>(m.joints.size())) return modelError(who + ": recruited joint " + std::to_string(j) + " does not exist");
         if (!t.ancestors[j])
-          return fail(who + ": recruits joint '" + m.joints[j].desc.name + "', which is not an ancestor of '" +
+          return modelError(who + ": recruits joint '" + m.joints[j].desc.name + "', which is not an ancestor of '" +
                       m.joints[d.joint].desc.name + "'");
         t.recruited[j] = 1;
       }
@@ -310,30 +310,30 @@ Status recruitJoints(const TaskDesc& d, const std::string& who, bool com, const 
 Status buildTask(const std::vector<TaskDesc>& tasks, size_t i, Model& m) {
   const TaskDesc& d = tasks[i];
   const std::string who = "task " + std::to_string(i) + " '" + d.name + "'";
-  if (d.name.empty()) return fail(who + ": empty name");
+  if (d.name.empty()) return modelError(who + ": empty name");
   for (size_t k = 0; k < i; ++k)
-    if (tasks[k].name == d.name) return fail(who + ": duplicate name");
+    if (tasks[k].name == d.name) return modelError(who + ": duplicate name");
   Model::Task t;
   t.desc = d;
   const bool com = d.type == TaskType::CenterOfMass;
   if (!com && (d.joint < 0 || d.joint >= static_cast<JointId>(m.joints.size())))
-    return fail(who + ": joint " + std::to_string(d.joint) + " does not exist");
-  if (!d.offset.allFinite()) return fail(who + ": offset is not finite");
-  if (!(std::isfinite(d.weight) && d.weight > 0)) return fail(who + ": weight must be finite and > 0");
+    return modelError(who + ": joint " + std::to_string(d.joint) + " does not exist");
+  if (!d.offset.allFinite()) return modelError(who + ": offset is not finite");
+  if (!(std::isfinite(d.weight) && d.weight > 0)) return modelError(who + ": weight must be finite and > 0");
   if (!(d.max_position_error > 0 && d.max_rotation_error > 0))
-    return fail(who + ": error clamps must be > 0");
+    return modelError(who + ": error clamps must be > 0");
   if (!(d.position_tolerance >= 0 && d.rotation_tolerance >= 0))
-    return fail(who + ": tolerances must be >= 0");
+    return modelError(who + ": tolerances must be >= 0");
   switch (d.type) {
     case TaskType::Position:
-      if ((d.axes & kAxesXYZ) == 0 || (d.axes & ~kAxesXYZ) != 0) return fail(who + ": axes must be a non-empty subset of xyz");
+      if ((d.axes & kAxesXYZ) == 0 || (d.axes & ~kAxesXYZ) != 0) return modelError(who + ": axes must be a non-empty subset of xyz");
       t.rows = ((d.axes & kAxisX) ? 1 : 0) + ((d.axes & kAxisY) ? 1 : 0) + ((d.axes & kAxisZ) ? 1 : 0);
       break;
     case TaskType::Orientation: t.rows = 3; break;
     case TaskType::Pose: t.rows = 6; break;
     case TaskType::CenterOfMass:
       t.rows = 2;
-      if (!(m.total_mass > 0)) return fail(who + ": a centre-of-mass task needs segment masses");
+      if (!(m.total_mass > 0)) return modelError(who + ": a centre-of-mass task needs segment masses");
       break;
   }
   const size_t nj = m.joints.size();
@@ -347,9 +347,9 @@ Status buildTask(const std::vector<TaskDesc>& tasks, size_t i, Model& m) {
   }
   if (Status s = recruitJoints(d, who, com, chain, m, t); !s) return s;
   if (d.reference != kNoParent) {
-    if (d.type != TaskType::Orientation) return fail(who + ": only an orientation task takes a reference joint");
+    if (d.type != TaskType::Orientation) return modelError(who + ": only an orientation task takes a reference joint");
     if (d.reference < 0 || d.reference >= static_cast<JointId>(nj) || d.reference == d.joint || !t.ancestors[d.reference])
-      return fail(who + ": reference joint " + std::to_string(d.reference) + " is not an ancestor of its joint");
+      return modelError(who + ": reference joint " + std::to_string(d.reference) + " is not an ancestor of its joint");
   }
   m.tasks.push_back(std::move(t));
   return Status::success();
@@ -383,15 +383,15 @@ void buildLevels(Model& m) {
 
 Result<Model> ModelBuilder::build() const {
   Model m;
-  if (joints_.empty()) return fail("no joints");
-  if (!up_.allFinite() || up_.norm() < 1e-9) return fail("the up axis must be a finite non-zero vector");
+  if (joints_.empty()) return modelError("no joints");
+  if (!up_.allFinite() || up_.norm() < 1e-9) return modelError("the up axis must be a finite non-zero vector");
   m.up = up_.normalized();
   m.ground_axes.col(0) = orthogonalUnit(m.up, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ());
   m.ground_axes.col(1) = m.up.cross(m.ground_axes.col(0)).normalized();
   std::set<std::string> names;
   for (size_t i = 0; i < joints_.size(); ++i)
     if (Status s = buildJoint(joints_[i], i, names, m); !s) return Error{s.error()};
-  if (m.dofs == 0) return fail("the model has no dofs");
+  if (m.dofs == 0) return modelError("the model has no dofs");
   m.neutral.setZero(m.dofs);
   for (const Model::Joint& j : m.joints)
     for (int k = 0; k < j.dof_count; ++k) m.neutral(j.first_dof + k) = j.desc.neutral[k];

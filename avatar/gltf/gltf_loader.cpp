@@ -22,7 +22,7 @@
 namespace embody::avatar {
 namespace {
 
-Error fail(const std::string& what) {
+Error loadError(const std::string& what) {
   return Error{what};
 }
 
@@ -104,25 +104,25 @@ Result<GlbChunks> splitContainer(const std::vector<uint8_t>& bytes) {
   if (bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0) {
     out.isGlb = true;
     if (bytes.size() < 20)
-      return fail("truncated GLB: " + std::to_string(bytes.size()) + " bytes, header needs 20");
+      return loadError("truncated GLB: " + std::to_string(bytes.size()) + " bytes, header needs 20");
     const uint32_t version = readU32(&bytes[4]);
     const uint32_t total = readU32(&bytes[8]);
-    if (version != 2) return fail("GLB version " + std::to_string(version) + " is not supported (need 2)");
+    if (version != 2) return loadError("GLB version " + std::to_string(version) + " is not supported (need 2)");
     if (total > bytes.size())
-      return fail("truncated GLB: header says " + std::to_string(total) + " bytes, file has " +
+      return loadError("truncated GLB: header says " + std::to_string(total) + " bytes, file has " +
                   std::to_string(bytes.size()));
-    if (total < 20) return fail("GLB header length " + std::to_string(total) + " is smaller than the header");
+    if (total < 20) return loadError("GLB header length " + std::to_string(total) + " is smaller than the header");
     const uint32_t jsonLength = readU32(&bytes[12]);
     const uint32_t jsonType = readU32(&bytes[16]);
-    if (jsonType != 0x4E4F534Au) return fail("GLB first chunk is not JSON");
+    if (jsonType != 0x4E4F534Au) return loadError("GLB first chunk is not JSON");
     if (static_cast<uint64_t>(jsonLength) + 20 > total)
-      return fail("truncated GLB: JSON chunk of " + std::to_string(jsonLength) + " bytes runs past the end");
+      return loadError("truncated GLB: JSON chunk of " + std::to_string(jsonLength) + " bytes runs past the end");
     uint64_t at = 20 + static_cast<uint64_t>(jsonLength);
     at = (at + 3) & ~uint64_t{3};
     if (at + 8 <= total) {
       const uint32_t binLength = readU32(&bytes[at]);
       if (at + 8 + binLength > total)
-        return fail("truncated GLB: BIN chunk of " + std::to_string(binLength) + " bytes runs past the end");
+        return loadError("truncated GLB: BIN chunk of " + std::to_string(binLength) + " bytes runs past the end");
     }
     out.json.assign(reinterpret_cast<const char*>(&bytes[20]), jsonLength);
     while (!out.json.empty() && (out.json.back() == ' ' || out.json.back() == '\0')) out.json.pop_back();
@@ -132,7 +132,7 @@ Result<GlbChunks> splitContainer(const std::vector<uint8_t>& bytes) {
     size_t first = 0;
     while (first < bytes.size() && std::isspace(bytes[first])) ++first;
     if (first == bytes.size() || bytes[first] != '{')
-      return fail("not a glTF file: neither a GLB container (no 'glTF' magic) nor glTF JSON text");
+      return loadError("not a glTF file: neither a GLB container (no 'glTF' magic) nor glTF JSON text");
     out.json.assign(bytes.begin(), bytes.end());
   }
   return out;
@@ -220,14 +220,14 @@ class AccessorReader {
                                    const std::string& what) const {
     const std::string where = what + " (accessor " + std::to_string(index) + ")";
     if (index < 0 || static_cast<size_t>(index) >= model_.accessors.size())
-      return fail(what + ": accessor index " + std::to_string(index) + " out of range");
+      return loadError(what + ": accessor index " + std::to_string(index) + " out of range");
     const tinygltf::Accessor& a = model_.accessors[index];
     if (componentCount(a.type) != components)
-      return fail(where + ": expected " + std::to_string(components) + " components per element");
+      return loadError(where + ": expected " + std::to_string(components) + " components per element");
     if (std::find(allowed.begin(), allowed.end(), a.componentType) == allowed.end())
-      return fail(where + ": component type " + std::to_string(a.componentType) + " not allowed here");
+      return loadError(where + ": component type " + std::to_string(a.componentType) + " not allowed here");
     if (a.count > limits_.maxAccessorCount)
-      return fail(where + ": count " + std::to_string(a.count) + " exceeds the limit of " +
+      return loadError(where + ": count " + std::to_string(a.count) + " exceeds the limit of " +
                   std::to_string(limits_.maxAccessorCount));
     const size_t elemSize = static_cast<size_t>(componentSize(a.componentType)) * components;
     size_t stride = elemSize;
@@ -244,7 +244,7 @@ class AccessorReader {
     if (a.sparse.isSparse)
       if (auto s = applySparse(a, components, elemSize, where, out); !s.ok()) return Error{s.error()};
     for (double v : out)
-      if (!std::isfinite(v)) return fail(where + ": contains a non-finite value");
+      if (!std::isfinite(v)) return loadError(where + ": contains a non-finite value");
     return out;
   }
 
@@ -262,22 +262,22 @@ class AccessorReader {
       const tinygltf::BufferView& bv = model_.bufferViews[a.bufferView];
       stride = bv.byteStride ? bv.byteStride : elemSize;
       if (stride < elemSize)
-        return fail(where + ": byteStride " + std::to_string(stride) + " < element size");
+        return loadError(where + ": byteStride " + std::to_string(stride) + " < element size");
       // Each term is bounded first, so the sum below cannot wrap around.
       if (a.byteOffset > bv.byteLength || (a.count > 1 && stride > bv.byteLength))
-        return fail(where + ": byteOffset or byteStride past the end of its " + std::to_string(bv.byteLength) +
+        return loadError(where + ": byteOffset or byteStride past the end of its " + std::to_string(bv.byteLength) +
                     "-byte bufferView");
       if (a.count > 0) {
         const uint64_t need = static_cast<uint64_t>(a.byteOffset) + (a.count - 1) * stride + elemSize;
         if (need > bv.byteLength)
-          return fail(where + ": reads " + std::to_string(need) + " bytes of a " +
+          return loadError(where + ": reads " + std::to_string(need) + " bytes of a " +
                       std::to_string(bv.byteLength) + "-byte bufferView");
       }
       return view.value() + a.byteOffset;
     }
     if (a.count > std::max<uint64_t>(4096, totalBufferBytes())) {
       // All zeros (plus sparse entries): never longer than the file's binary data could back.
-      return fail(where + ": " + std::to_string(a.count) + " elements without a bufferView exceed the file's " +
+      return loadError(where + ": " + std::to_string(a.count) + " elements without a bufferView exceed the file's " +
                   std::to_string(totalBufferBytes()) + " bytes of buffers");
     }
     return static_cast<const uint8_t*>(nullptr);
@@ -288,32 +288,32 @@ class AccessorReader {
                      std::vector<double>& out) const {
     const auto& sp = a.sparse;
     if (sp.count < 0 || static_cast<size_t>(sp.count) > a.count)
-      return fail(where + ": sparse count " + std::to_string(sp.count) + " out of range");
+      return loadError(where + ": sparse count " + std::to_string(sp.count) + " out of range");
     const int ics = componentSize(sp.indices.componentType);
     if (ics == 0 || sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_BYTE ||
         sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_SHORT ||
         sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT)
-      return fail(where + ": bad sparse index component type");
+      return loadError(where + ": bad sparse index component type");
     auto iv = bufferView(sp.indices.bufferView, where + " sparse indices");
     if (!iv.ok()) return Error{iv.error()};
     auto vv = bufferView(sp.values.bufferView, where + " sparse values");
     if (!vv.ok()) return Error{vv.error()};
     if (sp.indices.byteOffset < 0 || sp.values.byteOffset < 0)
-      return fail(where + ": negative sparse offset");
+      return loadError(where + ": negative sparse offset");
     const uint64_t ineed =
         static_cast<uint64_t>(sp.indices.byteOffset) + static_cast<uint64_t>(sp.count) * ics;
     const uint64_t vneed =
         static_cast<uint64_t>(sp.values.byteOffset) + static_cast<uint64_t>(sp.count) * elemSize;
     if (ineed > model_.bufferViews[sp.indices.bufferView].byteLength ||
         vneed > model_.bufferViews[sp.values.bufferView].byteLength)
-      return fail(where + ": sparse data runs past its bufferView");
+      return loadError(where + ": sparse data runs past its bufferView");
     const int cs = componentSize(a.componentType);
     for (int s = 0; s < sp.count; ++s) {
       const auto target = static_cast<uint64_t>(
           readComponent(iv.value() + sp.indices.byteOffset + static_cast<size_t>(s) * ics,
                         sp.indices.componentType, false));
       if (target >= a.count)
-        return fail(where + ": sparse index " + std::to_string(target) + " out of range");
+        return loadError(where + ": sparse index " + std::to_string(target) + " out of range");
       for (int c = 0; c < components; ++c)
         out[target * components + c] = readComponent(
             vv.value() + sp.values.byteOffset + s * elemSize + c * cs, a.componentType, a.normalized);
@@ -329,13 +329,13 @@ class AccessorReader {
 
   Result<const uint8_t*> bufferView(int index, const std::string& where) const {
     if (index < 0 || static_cast<size_t>(index) >= model_.bufferViews.size())
-      return fail(where + ": bufferView " + std::to_string(index) + " out of range");
+      return loadError(where + ": bufferView " + std::to_string(index) + " out of range");
     const tinygltf::BufferView& bv = model_.bufferViews[index];
     if (bv.buffer < 0 || static_cast<size_t>(bv.buffer) >= model_.buffers.size())
-      return fail(where + ": buffer " + std::to_string(bv.buffer) + " out of range");
+      return loadError(where + ": buffer " + std::to_string(bv.buffer) + " out of range");
     const auto& data = model_.buffers[bv.buffer].data;
     if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset)
-      return fail(where + ": bufferView " + std::to_string(index) + " runs past the end of its " +
+      return loadError(where + ": bufferView " + std::to_string(index) + " runs past the end of its " +
                   std::to_string(data.size()) + "-byte buffer");
     return data.data() + bv.byteOffset;
   }
@@ -353,12 +353,12 @@ Result<Transform> nodeTransform(const tinygltf::Node& n, int index) {
     return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
   };
   if (!finite(n.matrix) || !finite(n.translation) || !finite(n.rotation) || !finite(n.scale))
-    return fail(where + ": non-finite transform");
+    return loadError(where + ": non-finite transform");
   if (n.matrix.size() == 16) {
     glm::dmat4 m = glm::make_mat4(n.matrix.data());
     t.translation = glm::vec3(m[3]);
     glm::dvec3 s(glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2])));
-    if (s.x <= 0 || s.y <= 0 || s.z <= 0) return fail(where + ": matrix has a zero scale axis");
+    if (s.x <= 0 || s.y <= 0 || s.z <= 0) return loadError(where + ": matrix has a zero scale axis");
     const glm::dvec3 c0{m[0]}, c1{m[1]}, c2{m[2]};
     glm::dmat3 r{c0 / s.x, c1 / s.y, c2 / s.z};
     if (glm::determinant(r) < 0) {  // a mirror: put it in the scale
@@ -368,7 +368,7 @@ Result<Transform> nodeTransform(const tinygltf::Node& n, int index) {
     t.rotation = glm::normalize(glm::quat(glm::quat_cast(r)));
     t.scale = glm::vec3(s);
   } else if (!n.matrix.empty()) {
-    return fail(where + ": matrix must have 16 numbers");
+    return loadError(where + ": matrix must have 16 numbers");
   } else {
     if (n.translation.size() == 3)
       t.translation = glm::vec3(n.translation[0], n.translation[1], n.translation[2]);
@@ -376,7 +376,7 @@ Result<Transform> nodeTransform(const tinygltf::Node& n, int index) {
       glm::quat q(static_cast<float>(n.rotation[3]), static_cast<float>(n.rotation[0]),
                   static_cast<float>(n.rotation[1]), static_cast<float>(n.rotation[2]));
       const float len = glm::length(q);
-      if (!(len > 1e-6f)) return fail(where + ": zero rotation quaternion");
+      if (!(len > 1e-6f)) return loadError(where + ": zero rotation quaternion");
       t.rotation = q / len;
     }
     if (n.scale.size() == 3) t.scale = glm::vec3(n.scale[0], n.scale[1], n.scale[2]);
@@ -540,7 +540,7 @@ struct MeshBuilder {
     auto r = AccessorReader(m, limits).read(acc, comps, types, where + " " + name);
     if (!r.ok()) return r;
     if (r->size() / comps != vcount)
-      return fail(where + " " + name + ": " + std::to_string(r->size() / comps) + " elements for " +
+      return loadError(where + " " + name + ": " + std::to_string(r->size() / comps) + " elements for " +
                   std::to_string(vcount) + " vertices");
     return r;
   }
@@ -604,7 +604,7 @@ struct MeshBuilder {
       local.reserve(ir->size());
       for (double v : ir.value()) {
         if (v >= static_cast<double>(vcount))
-          return fail(where + ": index " + std::to_string(static_cast<uint64_t>(v)) + " out of range (" +
+          return loadError(where + ": index " + std::to_string(static_cast<uint64_t>(v)) + " out of range (" +
                       std::to_string(vcount) + " vertices)");
         local.push_back(static_cast<uint32_t>(v));
       }
@@ -616,7 +616,7 @@ struct MeshBuilder {
       warnings.push_back(where + ": index count not a multiple of 3; the last partial triangle is dropped");
     std::vector<uint32_t> tris = triangulate(p.mode, local);
     if (asset.mesh.indices.size() + tris.size() > limits.maxTotalIndices)
-      return fail(where + ": more than " + std::to_string(limits.maxTotalIndices) + " indices in total");
+      return loadError(where + ": more than " + std::to_string(limits.maxTotalIndices) + " indices in total");
     return tris;
   }
 
@@ -928,9 +928,9 @@ Result<AvatarAsset> loadGltfFromMemory(const std::vector<uint8_t>& bytes, const 
                                        GltfLoadReport* report, const GltfLimits& limits) {
   GltfLoadReport localReport;
   std::vector<std::string>& warnings = report ? report->warnings : localReport.warnings;
-  if (bytes.empty()) return fail("empty file");
+  if (bytes.empty()) return loadError("empty file");
   if (bytes.size() > limits.maxFileBytes)
-    return fail("file larger than " + std::to_string(limits.maxFileBytes) + " bytes");
+    return loadError("file larger than " + std::to_string(limits.maxFileBytes) + " bytes");
   auto container = splitContainer(bytes);
   if (!container.ok()) return Error{container.error()};
 
@@ -952,11 +952,11 @@ Result<AvatarAsset> loadGltfFromMemory(const std::vector<uint8_t>& bytes, const 
       ok = parser.LoadASCIIFromString(&model, &err, &warn, container->json.data(),
                                       static_cast<unsigned int>(container->json.size()), baseDir);
   } catch (const std::exception& e) {
-    return fail(std::string("glTF parse error: ") + e.what());
+    return loadError(std::string("glTF parse error: ") + e.what());
   }
   if (!ok) {
     while (!err.empty() && err.back() == '\n') err.pop_back();
-    return fail("glTF parse error: " + (err.empty() ? std::string("unknown") : err));
+    return loadError("glTF parse error: " + (err.empty() ? std::string("unknown") : err));
   }
   if (!warn.empty()) warnings.push_back(warn);
 
@@ -977,18 +977,18 @@ Result<AvatarAsset> loadGltfFromMemory(const std::vector<uint8_t>& bytes, const 
 Result<AvatarAsset> loadGltfFile(const std::string& path, GltfLoadReport* report, const GltfLimits& limits) {
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
-  if (ec) return fail("cannot open '" + path + "': " + ec.message());
+  if (ec) return loadError("cannot open '" + path + "': " + ec.message());
   if (size > limits.maxFileBytes)
-    return fail("'" + path + "' is larger than " + std::to_string(limits.maxFileBytes) + " bytes");
+    return loadError("'" + path + "' is larger than " + std::to_string(limits.maxFileBytes) + " bytes");
   std::ifstream in(path, std::ios::binary);
-  if (!in) return fail("cannot open '" + path + "'");
+  if (!in) return loadError("cannot open '" + path + "'");
   std::vector<uint8_t> bytes(size);
   if (size > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size)))
-    return fail("cannot read '" + path + "'");
+    return loadError("cannot read '" + path + "'");
   std::string baseDir = std::filesystem::path(path).parent_path().string();
   if (baseDir.empty()) baseDir = ".";
   auto r = loadGltfFromMemory(bytes, baseDir, report, limits);
-  if (!r.ok()) return fail("'" + path + "': " + r.error());
+  if (!r.ok()) return loadError("'" + path + "': " + r.error());
   r->sourcePath = path;
   return r;
 }

@@ -18,34 +18,34 @@ namespace {
 using nlohmann::json;
 using embody::kDeg;
 
-Error fail(const std::string& message) { return Error{"spine description: " + message}; }
+Error descriptionError(const std::string& message) { return Error{"spine description: " + message}; }
 
 // Small typed readers: each returns an error naming the field and what was expected.
 Status readNumber(const json& object, const char* key, const std::string& who, double& out, bool required = true) {
-  if (!object.contains(key)) return required ? Status(fail(who + ": missing \"" + key + "\"")) : Status::success();
+  if (!object.contains(key)) return required ? Status(descriptionError(who + ": missing \"" + key + "\"")) : Status::success();
   const json& v = object.at(key);
-  if (!v.is_number()) return fail(who + ": \"" + key + "\" must be a number");
+  if (!v.is_number()) return descriptionError(who + ": \"" + key + "\" must be a number");
   out = v.get<double>();
-  if (!std::isfinite(out)) return fail(who + ": \"" + key + "\" is not finite");
+  if (!std::isfinite(out)) return descriptionError(who + ": \"" + key + "\" is not finite");
   return Status::success();
 }
 
 Status readString(const json& object, const char* key, const std::string& who, std::string& out, bool required = true) {
-  if (!object.contains(key)) return required ? Status(fail(who + ": missing \"" + key + "\"")) : Status::success();
+  if (!object.contains(key)) return required ? Status(descriptionError(who + ": missing \"" + key + "\"")) : Status::success();
   const json& v = object.at(key);
-  if (!v.is_string()) return fail(who + ": \"" + key + "\" must be a string");
+  if (!v.is_string()) return descriptionError(who + ": \"" + key + "\" must be a string");
   out = v.get<std::string>();
   return Status::success();
 }
 
 Status readVector3(const json& object, const char* key, const std::string& who, Eigen::Vector3d& out) {
-  if (!object.contains(key)) return fail(who + ": missing \"" + key + "\"");
+  if (!object.contains(key)) return descriptionError(who + ": missing \"" + key + "\"");
   const json& v = object.at(key);
-  if (!v.is_array() || v.size() != 3) return fail(who + ": \"" + key + "\" must be an array of 3 numbers");
+  if (!v.is_array() || v.size() != 3) return descriptionError(who + ": \"" + key + "\" must be an array of 3 numbers");
   for (int i = 0; i < 3; ++i) {
-    if (!v[i].is_number()) return fail(who + ": \"" + key + "\" must be an array of 3 numbers");
+    if (!v[i].is_number()) return descriptionError(who + ": \"" + key + "\" must be an array of 3 numbers");
     out[i] = v[i].get<double>();
-    if (!std::isfinite(out[i])) return fail(who + ": \"" + key + "\" has a non-finite entry");
+    if (!std::isfinite(out[i])) return descriptionError(who + ": \"" + key + "\" has a non-finite entry");
   }
   return Status::success();
 }
@@ -56,7 +56,7 @@ constexpr EnumName<Region> kRegionNames[] = {
 Result<Region> parseRegion(const std::string& s, const std::string& who) {
   Region region{};
   if (parseEnumName(kRegionNames, s, region)) return region;
-  return fail(who + ": region \"" + s + "\" is not one of lumbar, thoracic, cervical");
+  return descriptionError(who + ": region \"" + s + "\" is not one of lumbar, thoracic, cervical");
 }
 
 #define EMBODY_SPINE_TRY(expr)                    \
@@ -67,69 +67,69 @@ Result<Region> parseRegion(const std::string& s, const std::string& who) {
 // Checks everything that parse and withSites share: sites cover the vertebrae once, in order,
 // each within one region, and each region keeps all three components.
 Status validate(SpineDescription& d) {
-  if (d.vertebrae.empty()) return fail("no vertebrae");
+  if (d.vertebrae.empty()) return descriptionError("no vertebrae");
   std::set<std::string> names;
   for (size_t i = 0; i < d.vertebrae.size(); ++i) {
     const Vertebra& v = d.vertebrae[i];
     const std::string who = "vertebrae[" + std::to_string(i) + "] (" + v.name + ")";
-    if (v.name.empty()) return fail(who + ": empty name");
-    if (!names.insert(v.name).second) return fail(who + ": duplicate name");
+    if (v.name.empty()) return descriptionError(who + ": empty name");
+    if (!names.insert(v.name).second) return descriptionError(who + ": duplicate name");
     if (i > 0 && v.region < d.vertebrae[i - 1].region)
-      return fail(who + ": regions must go caudal to cranial (lumbar, thoracic, cervical)");
+      return descriptionError(who + ": regions must go caudal to cranial (lumbar, thoracic, cervical)");
     for (int c = 0; c < 3; ++c)
-      if (!(v.range[c] > 0)) return fail(who + ": every range must be > 0 degrees");
-    if (!(v.length > 0)) return fail(who + ": length_m must be > 0");
+      if (!(v.range[c] > 0)) return descriptionError(who + ": every range must be > 0 degrees");
+    if (!(v.length > 0)) return descriptionError(who + ": length_m must be > 0");
   }
   for (int r = 0; r < kRegionCount; ++r) {
     bool any = false;
     for (const Vertebra& v : d.vertebrae) any = any || v.region == Region(r);
-    if (!any) return fail(std::string("no ") + toString(Region(r)) + " vertebra");
+    if (!any) return descriptionError(std::string("no ") + toString(Region(r)) + " vertebra");
   }
-  if (!(d.reference_height > 0)) return fail("reference_height_m must be > 0");
-  if (!(d.flexion_share > 0 && d.flexion_share < 1)) return fail("flexion_share must be in (0, 1)");
-  if (!(d.band_slack >= 0)) return fail("band_slack_deg must be >= 0");
-  if (d.sites.empty()) return fail("no sites");
+  if (!(d.reference_height > 0)) return descriptionError("reference_height_m must be > 0");
+  if (!(d.flexion_share > 0 && d.flexion_share < 1)) return descriptionError("flexion_share must be in (0, 1)");
+  if (!(d.band_slack >= 0)) return descriptionError("band_slack_deg must be >= 0");
+  if (d.sites.empty()) return descriptionError("no sites");
   int next = 0;
   std::set<std::string> siteNames;
   for (size_t i = 0; i < d.sites.size(); ++i) {
     Site& s = d.sites[i];
     const std::string who = "sites[" + std::to_string(i) + "] (" + s.name + ")";
-    if (!siteNames.insert(s.name).second) return fail(who + ": duplicate site name");
+    if (!siteNames.insert(s.name).second) return descriptionError(who + ": duplicate site name");
     if (s.first != next)
-      return fail(who + ": sites must cover the vertebrae in order, each exactly once; expected it to start at " +
+      return descriptionError(who + ": sites must cover the vertebrae in order, each exactly once; expected it to start at " +
                   (next < static_cast<int>(d.vertebrae.size()) ? d.vertebrae[next].name : std::string("(none left)")));
     if (s.count < 1 || s.first + s.count > static_cast<int>(d.vertebrae.size()))
-      return fail(who + ": its last vertebra comes before its first or does not exist");
+      return descriptionError(who + ": its last vertebra comes before its first or does not exist");
     s.region = d.vertebrae[s.first].region;
     for (int k = s.first; k < s.first + s.count; ++k)
-      if (d.vertebrae[k].region != s.region) return fail(who + ": a site must not span two regions");
-    if (!s.swing && !s.revolute) return fail(who + ": a site needs a swing or a revolute joint");
+      if (d.vertebrae[k].region != s.region) return descriptionError(who + ": a site must not span two regions");
+    if (!s.swing && !s.revolute) return descriptionError(who + ": a site needs a swing or a revolute joint");
     next = s.first + s.count;
   }
   if (next != static_cast<int>(d.vertebrae.size()))
-    return fail("sites leave vertebrae from " + d.vertebrae[next].name + " on without a joint");
+    return descriptionError("sites leave vertebrae from " + d.vertebrae[next].name + " on without a joint");
   for (int r = 0; r < kRegionCount; ++r) {
     bool swing = false, revolute = false;
     for (const Site& s : d.sites) {
       swing = swing || (s.region == Region(r) && s.swing);
       revolute = revolute || (s.region == Region(r) && s.revolute);
     }
-    if (!swing) return fail(std::string("the ") + toString(Region(r)) + " region has no swing joint");
+    if (!swing) return descriptionError(std::string("the ") + toString(Region(r)) + " region has no swing joint");
     if (!revolute)
-      return fail(std::string("the ") + toString(Region(r)) + " region has no revolute joint (its torsion would be lost)");
+      return descriptionError(std::string("the ") + toString(Region(r)) + " region has no revolute joint (its torsion would be lost)");
   }
   std::set<Region> coupled;
   for (const AxisCoupling& a : d.axis_couplings) {
-    if (!(a.torsion_per_bending > 0)) return fail("axis_coupling: torsion_per_bending must be > 0");
+    if (!(a.torsion_per_bending > 0)) return descriptionError("axis_coupling: torsion_per_bending must be > 0");
     if (!coupled.insert(a.region).second)
-      return fail(std::string("axis_coupling: the ") + toString(a.region) + " region is listed twice");
+      return descriptionError(std::string("axis_coupling: the ") + toString(a.region) + " region is listed twice");
   }
   return Status::success();
 }
 
 Result<Site> parseSite(const json& js, size_t i, const SpineDescription& d) {
   const std::string who = "sites[" + std::to_string(i) + "]";
-  if (!js.is_object()) return fail(who + " must be an object");
+  if (!js.is_object()) return descriptionError(who + " must be an object");
   Site s;
   std::string first, last, joints;
   EMBODY_SPINE_TRY(readString(js, "first", who, first));
@@ -140,13 +140,13 @@ Result<Site> parseSite(const json& js, size_t i, const SpineDescription& d) {
   EMBODY_SPINE_TRY(readString(js, "joints", who, joints));
   s.first = d.findVertebra(first);
   const int l = d.findVertebra(last);
-  if (s.first < 0) return fail(who + ": unknown vertebra \"" + first + "\"");
-  if (l < 0) return fail(who + ": unknown vertebra \"" + last + "\"");
+  if (s.first < 0) return descriptionError(who + ": unknown vertebra \"" + first + "\"");
+  if (l < 0) return descriptionError(who + ": unknown vertebra \"" + last + "\"");
   s.count = l - s.first + 1;
   if (joints == "swing") s.swing = true;
   else if (joints == "revolute") s.revolute = true;
   else if (joints == "swing+revolute") s.swing = s.revolute = true;
-  else return fail(who + ": joints \"" + joints + "\" is not one of swing, revolute, swing+revolute");
+  else return descriptionError(who + ": joints \"" + joints + "\" is not one of swing, revolute, swing+revolute");
   return s;
 }
 
@@ -182,13 +182,13 @@ int SpineDescription::findVertebra(std::string_view n) const {
 }
 
 Result<SpineDescription> parseSpineDescription(const json& j) {
-  if (!j.is_object()) return fail("the document must be a JSON object");
+  if (!j.is_object()) return descriptionError("the document must be a JSON object");
   std::string format;
   EMBODY_SPINE_TRY(readString(j, "format", "document", format));
-  if (format != "embody-spine") return fail("format must be \"embody-spine\", not \"" + format + "\"");
+  if (format != "embody-spine") return descriptionError("format must be \"embody-spine\", not \"" + format + "\"");
   double version = 0;
   EMBODY_SPINE_TRY(readNumber(j, "version", "document", version));
-  if (version != 1) return fail("version " + std::to_string(version) + " is not supported (expected 1)");
+  if (version != 1) return descriptionError("version " + std::to_string(version) + " is not supported (expected 1)");
   SpineDescription d;
   EMBODY_SPINE_TRY(readString(j, "name", "document", d.name));
   EMBODY_SPINE_TRY(readNumber(j, "reference_height_m", "document", d.reference_height));
@@ -197,11 +197,11 @@ Result<SpineDescription> parseSpineDescription(const json& j) {
   double slackDeg = 2.0;
   EMBODY_SPINE_TRY(readNumber(j, "band_slack_deg", "document", slackDeg, false));
   d.band_slack = slackDeg * kDeg;
-  if (!j.contains("vertebrae") || !j["vertebrae"].is_array()) return fail("\"vertebrae\" must be an array");
+  if (!j.contains("vertebrae") || !j["vertebrae"].is_array()) return descriptionError("\"vertebrae\" must be an array");
   for (size_t i = 0; i < j["vertebrae"].size(); ++i) {
     const json& jv = j["vertebrae"][i];
     std::string who = "vertebrae[" + std::to_string(i) + "]";
-    if (!jv.is_object()) return fail(who + " must be an object");
+    if (!jv.is_object()) return descriptionError(who + " must be an object");
     Vertebra v;
     EMBODY_SPINE_TRY(readString(jv, "name", who, v.name));
     who += " (" + v.name + ")";
@@ -220,18 +220,18 @@ Result<SpineDescription> parseSpineDescription(const json& j) {
     EMBODY_SPINE_TRY(readNumber(jv, "length_m", who, v.length));
     d.vertebrae.push_back(std::move(v));
   }
-  if (!j.contains("sites") || !j["sites"].is_array()) return fail("\"sites\" must be an array");
+  if (!j.contains("sites") || !j["sites"].is_array()) return descriptionError("\"sites\" must be an array");
   for (size_t i = 0; i < j["sites"].size(); ++i) {
     auto s = parseSite(j["sites"][i], i, d);
     if (!s) return Error{s.error()};
     d.sites.push_back(std::move(*s));
   }
   if (j.contains("axis_coupling")) {
-    if (!j["axis_coupling"].is_array()) return fail("\"axis_coupling\" must be an array");
+    if (!j["axis_coupling"].is_array()) return descriptionError("\"axis_coupling\" must be an array");
     for (size_t i = 0; i < j["axis_coupling"].size(); ++i) {
       const json& ja = j["axis_coupling"][i];
       const std::string who = "axis_coupling[" + std::to_string(i) + "]";
-      if (!ja.is_object()) return fail(who + " must be an object");
+      if (!ja.is_object()) return descriptionError(who + " must be an object");
       AxisCoupling a;
       std::string region, side;
       EMBODY_SPINE_TRY(readString(ja, "region", who, region));
@@ -240,7 +240,7 @@ Result<SpineDescription> parseSpineDescription(const json& j) {
       a.region = *r;
       EMBODY_SPINE_TRY(readNumber(ja, "torsion_per_bending", who, a.torsion_per_bending));
       EMBODY_SPINE_TRY(readString(ja, "side", who, side));
-      if (side != "same" && side != "opposite") return fail(who + ": side must be \"same\" or \"opposite\"");
+      if (side != "same" && side != "opposite") return descriptionError(who + ": side must be \"same\" or \"opposite\"");
       a.same_side = side == "same";
       d.axis_couplings.push_back(a);
     }
@@ -251,13 +251,13 @@ Result<SpineDescription> parseSpineDescription(const json& j) {
 
 Result<SpineDescription> parseSpineDescriptionText(std::string_view text) {
   json j = json::parse(text.begin(), text.end(), nullptr, /*allow_exceptions=*/false);
-  if (j.is_discarded()) return fail("not valid JSON");
+  if (j.is_discarded()) return descriptionError("not valid JSON");
   return parseSpineDescription(j);
 }
 
 Result<SpineDescription> loadSpineDescription(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) return fail("cannot open '" + path + "'");
+  if (!in) return descriptionError("cannot open '" + path + "'");
   std::stringstream buffer;
   buffer << in.rdbuf();
   auto r = parseSpineDescriptionText(buffer.str());
@@ -351,8 +351,8 @@ Result<SpineDescription> withSites(const SpineDescription& base, const std::vect
     s.name = spec.name;
     s.first = d.findVertebra(spec.first);
     const int last = d.findVertebra(spec.last);
-    if (s.first < 0) return fail(who + ": unknown vertebra \"" + spec.first + "\"");
-    if (last < 0) return fail(who + ": unknown vertebra \"" + spec.last + "\"");
+    if (s.first < 0) return descriptionError(who + ": unknown vertebra \"" + spec.first + "\"");
+    if (last < 0) return descriptionError(who + ": unknown vertebra \"" + spec.last + "\"");
     s.count = last - s.first + 1;
     s.swing = spec.swing;
     s.revolute = spec.revolute;
