@@ -4,7 +4,6 @@
 #include <cstdio>
 #include <stdexcept>
 #include <nlohmann/json.hpp>
-#include <numbers>
 #include <string>
 
 #include "core/angles.h"
@@ -15,7 +14,6 @@
 namespace {
 
 using namespace embody;
-using embody::kDeg;
 
 const char* jointsOf(const ik::spine::Site& s, bool coupled) {
   if (!coupled) return "ball";

@@ -9,7 +9,6 @@
 // and the torsion sign changes inside a region vs between regions.
 #include <chrono>
 #include <cstdio>
-#include <numbers>
 
 #include "core/angles.h"
 #include "app/experiments.h"
@@ -17,8 +16,6 @@
 
 namespace embody::app::experiment {
 namespace {
-
-using embody::kDeg;
 
 struct BalanceTasks {
   ik::TaskId com = -1, leftHeel = -1, leftToes = -1, rightToes = -1, leftHand = -1, rightHand = -1, head = -1;

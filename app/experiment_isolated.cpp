@@ -1,7 +1,6 @@
 // `embody experiment isolated-spine` (Raunhardt & Boulic 2008, §5.1): the spine alone, coupled vs
 // uncoupled, plus the inter-region band-slack sweep (ik/spine/isolated_experiment.h).
 #include <cstdio>
-#include <numbers>
 
 #include "core/angles.h"
 #include "app/experiments.h"
@@ -9,8 +8,6 @@
 
 namespace embody::app::experiment {
 namespace {
-
-using embody::kDeg;
 
 // Figure 7 of the paper: task errors and joint variation per iteration (log scale).
 std::string convergencePlots() {

@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <numbers>
 
 #include "core/angles.h"
 #include "app/experiments.h"
@@ -22,7 +21,6 @@
 namespace embody::app::experiment {
 namespace {
 
-using embody::kDeg;
 using avatar::HumanBone;
 
 size_t at(int index) {

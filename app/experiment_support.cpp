@@ -4,7 +4,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <numbers>
 
 #include "core/angles.h"
 #include "app/render_job.h"
@@ -16,8 +15,6 @@
 
 namespace embody::app::experiment {
 namespace {
-
-using embody::kDeg;
 
 std::string shellQuote(const std::string& s) {
   std::string out = "'";

@@ -51,9 +51,10 @@ endif()
 # machine 15 min 49 s -> 10 min 11 s (2026-11-27). Files in one batch share one scope: names
 # in a file's anonymous namespace must not repeat in another file of the same target (the same
 # signature is a redefinition error; the same name with other parameters can silently become an
-# overload of the other file's: name helpers for what they do, keep one of each). -DEMBODY_UNITY=OFF compiles file by file (quicker
-# incremental rebuilds of one file; the check that each file stands alone). The libFuzzer build
-# (`make fuzz`, its own folder, a target per reader) stays file by file.
+# overload of the other file's: name helpers for what they do, keep one of each).
+# -DEMBODY_UNITY=OFF compiles file by file (quicker incremental rebuilds of one file; the check
+# that each file stands alone). The libFuzzer build (`make fuzz`, its own folder, a target per
+# reader) stays file by file.
 if(EMBODY_UNITY AND NOT EMBODY_FUZZ)
   set(CMAKE_UNITY_BUILD ON)
   set(CMAKE_UNITY_BUILD_BATCH_SIZE 8)

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <numbers>
 
 #include "core/angles.h"
 #include "avatar/body/neutral_pose.h"
@@ -14,8 +13,6 @@
 
 namespace embody::avatar {
 namespace {
-
-using embody::kDeg;
 
 // Per intervertebral joint, bottom (vl5 = L5-S1) to top (skullbase = Occ-C1): flexion+extension,
 // lateral bending to one side, axial rotation to one side, degrees. White & Panjabi (1990) as

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
-#include <numbers>
 
 #include "core/angles.h"
 #include "ik/solver.h"
@@ -12,8 +11,6 @@
 
 namespace embody::ik::spine {
 namespace {
-
-using embody::kDeg;
 
 Result<ExperimentRun> runOne(const SpineDescription& d, bool coupled, const ExperimentOptions& o,
                              ExperimentResult& result) {

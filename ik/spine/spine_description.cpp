@@ -3,7 +3,6 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <numbers>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -16,7 +15,6 @@ namespace embody::ik::spine {
 namespace {
 
 using nlohmann::json;
-using embody::kDeg;
 
 Error descriptionError(const std::string& message) { return Error{"spine description: " + message}; }
 

@@ -4,7 +4,6 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "avatar/procedural/default_avatar.h"
 #include "runtime/avatar_body_solver.h"
 #include "runtime/ik_stage.h"
 #include "test_paths.h"

@@ -9,7 +9,6 @@
 #include <nlohmann/json.hpp>
 
 #include "avatar/gltf/gltf_loader.h"
-#include "avatar/procedural/default_avatar.h"
 #include "runtime/avatar_body_solver.h"
 #include "runtime/ik_stage.h"
 #include "test_paths.h"
@@ -88,7 +87,6 @@ Run drive(const avatar::AvatarAsset& avatar, tracking::PoseSource& source, const
   run.steps = s.feet().steps();
   return run;
 }
-
 
 void checkFullBodyWalk(const avatar::AvatarAsset& avatar, double headLimit = 0.01) {
   EMBODY_REQUIRE_SHARED_ASSET(bvh, "cmu_12_01_walk.bvh");

@@ -7,7 +7,6 @@
 #include <limits>
 
 #include "avatar/body/anthropometry.h"
-#include "avatar/procedural/default_avatar.h"
 #include "runtime/body_calibration.h"
 #include "runtime/body_rig.h"
 #include "runtime/budgeted_solve_job.h"

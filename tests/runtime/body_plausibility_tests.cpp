@@ -7,7 +7,6 @@
 #include <functional>
 #include <numbers>
 
-#include "avatar/procedural/default_avatar.h"
 #include "runtime/avatar_body_solver.h"
 #include "runtime/ik_stage.h"
 #include "test_paths.h"
@@ -83,7 +82,6 @@ Measures run(tracking::PoseSource& source, const AvatarBodyOptions& options, int
   m.lastReason = s.collapseGuard().lastReason();
   return m;
 }
-
 
 AvatarBodyOptions optionsFor(tracking::TrackerMask mask) {
   AvatarBodyOptions o;

@@ -11,7 +11,6 @@
 #include <vector>
 
 #include "avatar/avatar_asset.h"
-#include "avatar/procedural/default_avatar.h"
 #include "core/percentile.h"
 #include "runtime/frame_stats.h"
 #include "runtime/ik_stage.h"

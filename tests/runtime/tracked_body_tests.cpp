@@ -4,7 +4,6 @@
 #include <catch2/catch.hpp>
 #include <glm/glm.hpp>
 
-#include "avatar/procedural/default_avatar.h"
 #include "runtime/tracked_avatar_body.h"
 #include "runtime/runtime_test_support.h"
 

@@ -1,7 +1,6 @@
 // The paper's §5.1 layout (`--model paper`) and the spine measures the full-body experiments
 // report: torsion sign changes between regions and the largest swing over its limit.
 #include <catch2/catch.hpp>
-#include <numbers>
 
 #include "core/angles.h"
 #include "ik/spine/spine_analysis.h"
@@ -13,8 +12,6 @@ using namespace embody;
 using namespace embody::ik::spine;
 
 namespace {
-
-using embody::kDeg;
 
 using embody::test::buildSpineOrFail;
 

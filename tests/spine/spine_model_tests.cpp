@@ -19,8 +19,6 @@ using namespace embody::ik::spine;
 
 namespace {
 
-using embody::kDeg;
-
 using embody::test::buildSpineOrFail;
 
 int rank(const Eigen::MatrixXd& m) {

@@ -1,7 +1,6 @@
 #include "tests/support/sample_models.h"
 
 #include <cmath>
-#include <numbers>
 #include <string>
 
 #include "core/angles.h"
@@ -9,8 +8,6 @@
 namespace embody::test {
 using namespace embody::ik;  // a fixture of the IK library: its vocabulary throughout
 namespace {
-
-using embody::kDeg;
 
 Eigen::Isometry3d at(double x, double y, double z) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
