@@ -15,20 +15,20 @@ double rowValue(const Workspace& w, size_t i, const Eigen::VectorXd& x) {
 
 // Loads inequality row i into w.tmp_n and pins it at its bound (c^T (q + Δq) = rhs). Returns
 // false when it depends on the active set (nothing changes then).
-bool pinRow(const Model& model, Workspace& w, size_t i, Path path) {
+bool pinRow(Workspace& w, size_t i, Path path) {
   const double current = rowValue(w, i, w.q);
   w.tmp_n.setZero();
   for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) w.tmp_n(w.ineq_dof[k]) += w.ineq_coef[k];
   const int single = w.ineq_begin[i + 1] - w.ineq_begin[i] == 1 ? w.ineq_dof[w.ineq_begin[i]] : -1;
-  return addActiveRow(w, model.inequalities[i].rhs - current, single, path, 1e-9);
+  return addActiveRow(w, w.ineq_rhs[i] - current, single, path, 1e-9);
 }
 
 // The active set again from the equality rows: the pinned rows (report.active_clamps, in the
 // order they were added) except `skip`.
-void rebuildActiveSet(const Model& model, Workspace& w, Path path, int skip) {
+void rebuildActiveSet(Workspace& w, Path path, int skip) {
   resetActiveSet(w, path);
   for (int r : w.report.active_clamps)
-    if (r != skip && pinRow(model, w, static_cast<size_t>(r), path)) w.ineq_active[r] = 1;
+    if (r != skip && pinRow(w, static_cast<size_t>(r), path)) w.ineq_active[r] = 1;
 }
 
 double nextRowValue(const Workspace& w, size_t i) {
@@ -48,18 +48,18 @@ bool exchangePinnedRow(const Model& model, Workspace& w, const SolveOptions& o, 
   std::vector<int>& pinned = w.report.active_clamps;
   for (size_t k = pinned.size(); k-- > 0;) {
     const int released = pinned[k];
-    rebuildActiveSet(model, w, o.path, released);
-    if (!pinRow(model, w, i, o.path)) continue;
+    rebuildActiveSet(w, o.path, released);
+    if (!pinRow(w, i, o.path)) continue;
     computeDq0(w);
     runPass(model, w, o);
-    if (nextRowValue(w, static_cast<size_t>(released)) > model.inequalities[released].rhs + o.inequality_tolerance)
+    if (nextRowValue(w, static_cast<size_t>(released)) > w.ineq_rhs[released] + o.inequality_tolerance)
       continue;
     pinned.erase(pinned.begin() + static_cast<std::ptrdiff_t>(k));  // capacity reserved: no allocation
     pinned.push_back(static_cast<int>(i));
     w.ineq_active[i] = 1;
     return true;
   }
-  rebuildActiveSet(model, w, o.path, -1);
+  rebuildActiveSet(w, o.path, -1);
   computeDq0(w);
   runPass(model, w, o);
   return false;
@@ -71,11 +71,11 @@ bool pinViolations(const Model& model, Workspace& w, const SolveOptions& o) {
   bool added = false;
   for (size_t i = 0; i < model.inequalities.size(); ++i) {
     if (w.ineq_active[i]) continue;
-    if (!(nextRowValue(w, i) > model.inequalities[i].rhs + o.inequality_tolerance)) continue;
+    if (!(nextRowValue(w, i) > w.ineq_rhs[i] + o.inequality_tolerance)) continue;
     // A row dependent on the active set is first offered in exchange for a pinned row; if none
     // can give way it is skipped (first added wins), and reported only if it is still violated
     // once the loop settles (pinning its partner often satisfies it).
-    if (pinRow(model, w, i, o.path)) {
+    if (pinRow(w, i, o.path)) {
       w.ineq_active[i] = 1;
       w.report.active_clamps.push_back(static_cast<int>(i));
       added = true;
@@ -89,7 +89,7 @@ bool pinViolations(const Model& model, Workspace& w, const SolveOptions& o) {
 void reportRemainingViolations(const Model& model, Workspace& w, const SolveOptions& o) {
   for (size_t i = 0; i < model.inequalities.size(); ++i) {
     if (w.ineq_active[i] || w.ineq_reported[i]) continue;
-    if (nextRowValue(w, i) > model.inequalities[i].rhs + o.inequality_tolerance) {
+    if (nextRowValue(w, i) > w.ineq_rhs[i] + o.inequality_tolerance) {
       w.ineq_reported[i] = 1;
       w.report.unsatisfiable.push_back(static_cast<int>(i));
     }

@@ -231,6 +231,7 @@ void Workspace::sizeInequalities(const Model& model) {
       ineq_coef.push_back(t.coefficient);
     }
     ineq_begin.push_back(static_cast<int>(ineq_dof.size()));
+    ineq_rhs.push_back(row.rhs);
   }
   ineq_active.assign(model.inequalities.size(), 0);
   ineq_reported.assign(model.inequalities.size(), 0);
@@ -329,6 +330,16 @@ Status Data::setWeight(TaskId task, double weight) {
   ws_->weight[task] = weight;
   return Status::success();
 }
+
+Status Data::setInequalityBound(int row, double rhs) {
+  if (row < 0 || static_cast<size_t>(row) >= ws_->ineq_rhs.size())
+    return fail("inequality row " + std::to_string(row) + " out of range (" + std::to_string(ws_->ineq_rhs.size()) + " rows)");
+  if (!std::isfinite(rhs)) return fail("bound of inequality row " + std::to_string(row) + " is not finite");
+  ws_->ineq_rhs[static_cast<size_t>(row)] = rhs;
+  return Status::success();
+}
+
+double Data::inequalityBound(int row) const { return ws_->ineq_rhs.at(static_cast<size_t>(row)); }
 
 Status Data::setEnabled(TaskId task, bool enabled) {
   if (Status s = checkTask(*ws_, task); !s) return s;

@@ -45,7 +45,7 @@ void levelContribution(const Workspace& w, size_t k, Eigen::VectorXd& out) {
 double fractionKeepingRows(const Model& model, const Workspace& w, const SolveOptions& o) {
   double fraction = 1.0;
   for (size_t i = 0; i < model.inequalities.size(); ++i) {
-    const double bound = model.inequalities[i].rhs + o.inequality_tolerance;
+    const double bound = w.ineq_rhs[i] + o.inequality_tolerance;
     double full = rowValue(w, i, w.q), shortened = full;
     for (int k = w.ineq_begin[i]; k < w.ineq_begin[i + 1]; ++k) {
       full += w.ineq_coef[k] * w.guard_full(w.ineq_dof[k]);
@@ -163,7 +163,7 @@ void runPass(const Model& model, Workspace& w, const SolveOptions& o) {
 bool step(const Model& model, Workspace& w, const SolveOptions& o) {
   w.report.active_clamps.clear();
   w.report.unsatisfiable.clear();
-  startActiveSet(model, w, o);  // the equality rows, plus the rows carried from the last iteration
+  startActiveSet(w, o);  // the equality rows, plus the rows carried from the last iteration
   computeDq0(w);
   runPass(model, w, o);
   int passes = 1;

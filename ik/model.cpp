@@ -74,6 +74,12 @@ TaskId Model::findTask(const std::string& name) const {
   return -1;
 }
 
+int Model::findInequality(const std::string& name) const {
+  for (size_t i = 0; i < inequalities.size(); ++i)
+    if (inequalities[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
 std::string Model::dofName(int dof) const {
   for (const Joint& j : joints)
     if (dof >= j.first_dof && dof < j.first_dof + j.dof_count)

@@ -180,6 +180,7 @@ struct Model {
   int dofIndex(DofRef ref) const { return joints[ref.joint].first_dof + ref.component; }
   JointId findJoint(const std::string& name) const;  // -1 when absent
   TaskId findTask(const std::string& name) const;    // -1 when absent
+  int findInequality(const std::string& name) const; // index into inequalities, -1 when absent
   std::string dofName(int dof) const;                // "spine3[1]"
 };
 

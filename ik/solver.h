@@ -129,6 +129,12 @@ class Data {
   Status setTarget(TaskId task, const Eigen::Isometry3d& pose);         // Pose (any type: parts)
   Status setWeight(TaskId task, double weight);                         // > 0, finite
   Status setEnabled(TaskId task, bool enabled);
+  // Per-frame bound of an inequality row (model.inequalities index): Σ coefficient q <= rhs from
+  // the next iteration on, e.g. a band between spine regions that widens with a posture. Starts
+  // at the model's rhs. A pinned row whose bound moves is re-pinned or released by the clamping
+  // loop like any other (its carried value is re-read each iteration).
+  Status setInequalityBound(int row, double rhs);
+  double inequalityBound(int row) const;
   bool enabled(TaskId task) const;
   const Eigen::Vector3d& targetPosition(TaskId task) const;
   const Eigen::Quaterniond& targetOrientation(TaskId task) const;

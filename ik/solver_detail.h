@@ -158,6 +158,7 @@ struct Workspace {
   std::vector<int> ineq_begin;  // into ineq_dof / ineq_coef, size rows + 1
   std::vector<int> ineq_dof;
   std::vector<double> ineq_coef;
+  std::vector<double> ineq_rhs;  // per row: the model's rhs until Data::setInequalityBound
   std::vector<char> ineq_active;
   std::vector<char> ineq_reported;
 

@@ -60,8 +60,8 @@ void runPass(const Model& model, Workspace& w, const SolveOptions& o);
 // clamping.cpp
 double rowValue(const Workspace& w, size_t i, const Eigen::VectorXd& x);  // inequality row i at x
 double nextRowValue(const Workspace& w, size_t i);                       // ... at q + Δq
-bool pinRow(const Model& model, Workspace& w, size_t i, Path path);
-void rebuildActiveSet(const Model& model, Workspace& w, Path path, int skip);
+bool pinRow(Workspace& w, size_t i, Path path);
+void rebuildActiveSet(Workspace& w, Path path, int skip);
 bool exchangePinnedRow(const Model& model, Workspace& w, const SolveOptions& o, size_t i);
 bool pinViolations(const Model& model, Workspace& w, const SolveOptions& o);
 void reportRemainingViolations(const Model& model, Workspace& w, const SolveOptions& o);
@@ -70,7 +70,7 @@ void reportRemainingViolations(const Model& model, Workspace& w, const SolveOpti
 // The iteration's first active set: the equality rows, plus (warm) the rows pinned in the last
 // iteration that still hold at their bounds, their factorisation reused when all do. Returns how
 // many rows were carried (they come first among the pinned rows: w.carried_count).
-int startActiveSet(const Model& model, Workspace& w, const SolveOptions& o);
+int startActiveSet(Workspace& w, const SolveOptions& o);
 // After the first pass: releases the carried rows whose multiplier says the tasks pull them
 // inside their bounds and rebuilds the active set without them. True when any was released.
 bool releaseCarriedRows(const Model& model, Workspace& w, const SolveOptions& o);

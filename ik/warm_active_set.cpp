@@ -15,8 +15,8 @@ namespace {
 // A carried row still holds at its bound when q moved only by the solver's own steps (the step
 // keeps every pinned row exactly, up to round-off); a configuration set from outside, or a row
 // the solver no longer held, leaves it inside or past its bound and it is not carried.
-bool atBound(const Model& model, const Workspace& w, int row, double tolerance) {
-  return std::abs(model.inequalities[static_cast<size_t>(row)].rhs - rowValue(w, static_cast<size_t>(row), w.q)) <=
+bool atBound(const Workspace& w, int row, double tolerance) {
+  return std::abs(w.ineq_rhs[static_cast<size_t>(row)] - rowValue(w, static_cast<size_t>(row), w.q)) <=
          tolerance;
 }
 
@@ -32,14 +32,14 @@ void refreshEqualityRhs(Workspace& w) {
 // The active set rebuilt from the equality rows and the carried rows that `keep` accepts, in
 // their carried order (the same order gives the same basis, so both paths stay comparable).
 template <typename Keep>
-void rebuildFromCarried(const Model& model, Workspace& w, Path path, Keep&& keep) {
+void rebuildFromCarried(Workspace& w, Path path, Keep&& keep) {
   resetActiveSet(w, path);
   std::vector<int>& pinned = w.report.active_clamps;
   pinned.clear();
   for (size_t j = 0; j < w.carried.size(); ++j) {
     const int row = w.carried[j];
     if (!keep(j, row)) continue;
-    if (pinRow(model, w, static_cast<size_t>(row), path)) {
+    if (pinRow(w, static_cast<size_t>(row), path)) {
       w.ineq_active[static_cast<size_t>(row)] = 1;
       pinned.push_back(row);  // capacity reserved: no allocation
     }
@@ -70,7 +70,7 @@ void clearCarriedActiveSet(Workspace& w) {
   w.carried_count = 0;
 }
 
-int startActiveSet(const Model& model, Workspace& w, const SolveOptions& o) {
+int startActiveSet(Workspace& w, const SolveOptions& o) {
   w.carried_count = 0;
   if (!o.warm_active_set || !o.clamping || w.carried.empty()) {
     resetActiveSet(w, o.path);
@@ -78,7 +78,7 @@ int startActiveSet(const Model& model, Workspace& w, const SolveOptions& o) {
   }
   const double tolerance = std::max(o.inequality_tolerance, 1e-12);
   bool allAtBound = true;
-  for (int row : w.carried) allAtBound = allAtBound && atBound(model, w, row, tolerance);
+  for (int row : w.carried) allAtBound = allAtBound && atBound(w, row, tolerance);
   const bool reuse = allAtBound && w.carried_structure && w.carried_path == o.path &&
                      w.rank == w.eq_rank + static_cast<int>(w.carried.size());
   if (reuse) {
@@ -87,14 +87,14 @@ int startActiveSet(const Model& model, Workspace& w, const SolveOptions& o) {
     refreshEqualityRhs(w);
     for (size_t j = 0; j < w.carried.size(); ++j) {
       const size_t row = static_cast<size_t>(w.carried[j]);
-      w.active_rhs(w.eq_rank + static_cast<Eigen::Index>(j)) = model.inequalities[row].rhs - rowValue(w, row, w.q);
+      w.active_rhs(w.eq_rank + static_cast<Eigen::Index>(j)) = w.ineq_rhs[row] - rowValue(w, row, w.q);
     }
     w.report.active_clamps = w.carried;  // capacity reserved: no allocation
     std::fill(w.ineq_active.begin(), w.ineq_active.end(), 0);
     std::fill(w.ineq_reported.begin(), w.ineq_reported.end(), 0);
     for (int row : w.carried) w.ineq_active[static_cast<size_t>(row)] = 1;
   } else {
-    rebuildFromCarried(model, w, o.path, [&](size_t, int row) { return atBound(model, w, row, tolerance); });
+    rebuildFromCarried(w, o.path, [&](size_t, int row) { return atBound(w, row, tolerance); });
   }
   w.carried_count = static_cast<int>(w.report.active_clamps.size());
   return w.carried_count;
@@ -170,7 +170,7 @@ bool releaseCarriedRows(const Model& model, Workspace& w, const SolveOptions& o)
       w.warm_released_rows.push_back(carried[static_cast<size_t>(p)]);
       w.warm_deciding[w.warm_released_rows.size() - 1] = w.warm_deciding[static_cast<size_t>(p)];  // p >= index
     }
-  rebuildFromCarried(model, w, o.path, [&](size_t p, int) { return decision[p] != 2; });
+  rebuildFromCarried(w, o.path, [&](size_t p, int) { return decision[p] != 2; });
   w.carried_count = static_cast<int>(w.report.active_clamps.size());
   return true;
 }
@@ -185,7 +185,7 @@ bool releaseCarriedRows(const Model& model, Workspace& w, const SolveOptions& o)
 // nothing about each alone: they are not held, and the next release takes one row at a time.
 bool confirmRelease(const Model& model, Workspace& w, const SolveOptions& o) {
   const auto violatedAt = [&](size_t row) {
-    return nextRowValue(w, row) > model.inequalities[row].rhs + o.inequality_tolerance;
+    return nextRowValue(w, row) > w.ineq_rhs[row] + o.inequality_tolerance;
   };
   size_t releasedViolated = 0, othersViolated = 0;
   for (size_t row = 0; row < model.inequalities.size(); ++row)
@@ -206,7 +206,7 @@ bool confirmRelease(const Model& model, Workspace& w, const SolveOptions& o) {
       w.warm_one_at_a_time = true;
     }
     for (int row : w.warm_released_rows)
-      if (pinRow(model, w, static_cast<size_t>(row), o.path)) {
+      if (pinRow(w, static_cast<size_t>(row), o.path)) {
         w.ineq_active[static_cast<size_t>(row)] = 1;
         w.report.active_clamps.push_back(row);
       }

@@ -161,6 +161,8 @@ class BodyModelBuilder {
     if (!model.ok()) return Error{"body model: " + model.error()};
     body_.model = std::move(model.value());
     body_.restConfiguration = body_.model.neutral;
+    for (const std::string& name : neckBandNames_)
+      if (const int row = body_.model.findInequality(name); row >= 0) body_.neckBandRows.push_back(row);
     return std::move(body_);
   }
 
@@ -180,6 +182,7 @@ class BodyModelBuilder {
   std::vector<int> siteIndexOf_;
   ik::ModelBuilder b_;
   std::vector<Eigen::Isometry3d> world_;  // per IK joint at rest
+  std::vector<std::string> neckBandNames_;  // the coupled spine's thoracic-cervical band rows
 
   size_t at(int joint) const { return static_cast<size_t>(joint); }
 
@@ -470,6 +473,9 @@ class BodyModelBuilder {
     auto added = ik::spine::appendSpine(b_, *desc, body_.hips, rests, ik::spine::SpineOptions{});
     if (!added.ok()) return Error{"spine: " + added.error()};
     recordSpineJoints(*desc, *added, before, siteJoint, siteWorld, headSite);
+    for (const auto& band : added->bands)
+      if (band.below == ik::spine::Region::Thoracic) neckBandNames_.insert(neckBandNames_.end(), {band.upper, band.lower});
+    body_.bandSlack = desc->band_slack;
     addHead(headSite.joint, added->top);
     return {};
   }

@@ -77,6 +77,12 @@ struct BodyModel {
   std::vector<SpineBone> spineSites;
   double scale = 1.0;       // BodyModelOptions::scale
   int spineEqualities = 0;  // coupling rows the spine added (0 for the uncoupled spine)
+  // The coupled spine's band between the thoracic and cervical regions: its inequality rows (both
+  // sides of each component; empty for the uncoupled spine or a spine without a cervical site)
+  // and their slack in the model (radians). The runtime widens it per frame (ik::Data::
+  // setInequalityBound) when the head looks down.
+  std::vector<int> neckBandRows;
+  double bandSlack = 0.0;
   std::string spineModel;  // "full" (every vertebra a site), "bones" (the avatar's spine bones), "simplified"
   ik::JointId hips = -1, head = -1, leftHand = -1, rightHand = -1, leftFoot = -1, rightFoot = -1;
   // Task names follow runtime::PikBinding::byTaskNames: "head", "left_hand", "right_hand",

@@ -125,8 +125,10 @@ void appendRegionBands(ik::ModelBuilder& b, const SpineDescription& d, SpineJoin
       const double ratio = out.ranges[j][c] / out.ranges[i][c];
       const ik::DofRef qi = carrier(out.sites[i], c), qj = carrier(out.sites[j], c);
       const std::string name = "band " + rowName(d, c, i, j);
-      b.addInequality({name + " (upper)", {{qj, 1.0}, {qi, -ratio}}, d.band_slack, ik::InequalityKind::UserCoupling});
-      b.addInequality({name + " (lower)", {{qj, -1.0}, {qi, ratio}}, d.band_slack, ik::InequalityKind::UserCoupling});
+      SpineJoints::Band band{Region(region), Component(c), name + " (upper)", name + " (lower)"};
+      b.addInequality({band.upper, {{qj, 1.0}, {qi, -ratio}}, d.band_slack, ik::InequalityKind::UserCoupling});
+      b.addInequality({band.lower, {{qj, -1.0}, {qi, ratio}}, d.band_slack, ik::InequalityKind::UserCoupling});
+      out.bands.push_back(std::move(band));
       out.band_inequalities += 2;
     }
 }

@@ -48,6 +48,14 @@ struct SpineJoints {
   int equalities = 0;          // chain rows + axis-coupling rows
   int axis_equalities = 0;     // of which cross-axis rows
   int band_inequalities = 0;   // inter-region band rows (two per band)
+  // The bands' rows by name (ik::Model::findInequality), so a caller can move a band's slack per
+  // frame (ik::Data::setInequalityBound): both rows have rhs = the description's band_slack.
+  struct Band {
+    Region below = Region::Lumbar;  // the band joins this region to the next one up
+    Component component = Component::Flexion;
+    std::string upper, lower;       // q_j - r q_i <= s and -(q_j - r q_i) <= s
+  };
+  std::vector<Band> bands;
   int limit_inequalities = 0;  // joint-limit rows the builder will generate (one per finite bound)
 };
 

@@ -121,6 +121,18 @@ TEST_CASE("body model: the default avatar gets one spine site per vertebra and r
   // The coupled spine: 24 vertebral sites (swing or torsion joints) with chain rows, plus the head.
   CHECK(body->spineEqualities == 33);
   CHECK(body->model.equalities.size() == 33);
+  // The thoracic-cervical band (three components, both sides) the runtime widens when looking down.
+  REQUIRE(body->neckBandRows.size() == 6);
+  for (int row : body->neckBandRows) {
+    const std::string& name = body->model.inequalities[size_t(row)].name;  // "band <component> vc.. = r * vt.."
+    CHECK(name.find(" vc") != std::string::npos);
+    CHECK(name.find("r * vt") != std::string::npos);
+    CHECK(body->model.inequalities[size_t(row)].rhs == body->bandSlack);
+  }
+  CHECK(body->bandSlack > 0.0);
+  BodyModelOptions uncoupled;
+  uncoupled.coupledSpine = false;
+  CHECK(buildBodyModel(a, uncoupled)->neckBandRows.empty());
   for (int level = 0; level < kVertebralJointCount; ++level)
     CHECK(a.skeleton.joints[static_cast<size_t>(body->spineSites[static_cast<size_t>(level)].joint)].name ==
           vertebralJointName(level));
@@ -226,6 +238,7 @@ TEST_CASE("body model: VRM 1.0 with non-identity rest rotations retargets within
   // spine | chest + upperChest (thoracic: coupled to each other) | neck | head.
   REQUIRE(body->spineSites.size() == 5);
   CHECK(body->spineEqualities > 0);
+  CHECK(body->neckBandRows.size() == 6);  // the neck bone is the cervical region
   checkRetargeting(a);
 }
 

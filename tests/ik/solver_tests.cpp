@@ -2,6 +2,7 @@
 // robustness against bad input, deadlines.
 #include <catch2/catch.hpp>
 
+#include <limits>
 #include <numbers>
 
 #include "tests/support/sample_models.h"
@@ -142,6 +143,45 @@ TEST_CASE("a user coupling inequality is honoured and reported as an active clam
   CHECK(r.active_clamps == std::vector<int>{0});
   CHECK(r.unsatisfiable.empty());
   CHECK(r.tasks[0].position > 0.01);  // the constraint wins over the task
+}
+
+TEST_CASE("an inequality's bound set per frame moves where the row pins, on both paths and a warm active set") {
+  const Model model = twoJointModel({{"a+b <= 0.6", {{{0, 0}, 1.0}, {{1, 0}, 1.0}}, 0.6, InequalityKind::UserCoupling}});
+  REQUIRE(model.findInequality("a+b <= 0.6") == 0);
+  CHECK(model.findInequality("absent") == -1);
+  for (Path path : {Path::Fast, Path::Reference})
+    for (bool warm : {false, true}) {
+      INFO("path " << int(path) << ", warm active set " << warm);
+      Data data(model);
+      CHECK(data.inequalityBound(0) == 0.6);
+      REQUIRE(data.setTarget(0, Eigen::Vector3d(0.0, 1.0, 0.0)));  // needs a + b = pi/2
+      SolveOptions o;
+      o.path = path;
+      o.warm_active_set = warm;
+      o.max_iterations = 100;
+      solve(model, data, o);
+      CHECK(data.q()(0) + data.q()(1) == Approx(0.6).margin(1e-9));
+      // Widened while pinned: the row lets go up to its new bound (the task still wants more).
+      REQUIRE(data.setInequalityBound(0, 1.0));
+      const SolveReport& wide = solve(model, data, o);
+      CHECK(data.q()(0) + data.q()(1) == Approx(1.0).margin(1e-9));
+      CHECK(wide.active_clamps == std::vector<int>{0});
+      // Narrowed below the current value: the next iteration pins it back inside.
+      REQUIRE(data.setInequalityBound(0, 0.3));
+      solve(model, data, o);
+      CHECK(data.q()(0) + data.q()(1) == Approx(0.3).margin(1e-9));
+      // Loose enough for the task: nothing pinned, the target met.
+      REQUIRE(data.setInequalityBound(0, 3.0));
+      const SolveReport& free = solve(model, data, o);
+      CHECK(free.active_clamps.empty());
+      CHECK(free.tasks[0].position < 1e-3);
+      // A copy carries the bound; bad rows and values are refused, the bound unchanged.
+      CHECK(Data(data).inequalityBound(0) == 3.0);
+      CHECK_FALSE(data.setInequalityBound(1, 0.5));
+      CHECK_FALSE(data.setInequalityBound(-1, 0.5));
+      CHECK_FALSE(data.setInequalityBound(0, std::numeric_limits<double>::quiet_NaN()));
+      CHECK(data.inequalityBound(0) == 3.0);
+    }
 }
 
 TEST_CASE("a violated row dependent on the active set is skipped, reported only when it stays violated") {

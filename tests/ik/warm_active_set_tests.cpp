@@ -89,7 +89,7 @@ TEST_CASE("warm active set: the carried rows' multipliers hold the levels above 
         if (it % 20 == 0) test::randomTargets(*model, data, rng, 1.0, 0.05);
         kinematics(*model, data);
         Workspace& w = data.workspace();
-        detail::startActiveSet(*model, w, o);
+        detail::startActiveSet(w, o);
         detail::computeDq0(w);
         detail::runPass(*model, w, o);
         for (size_t k = 0; k < model->levels.size() && w.carried_count > 0; ++k) {

@@ -527,3 +527,47 @@ TEST_CASE("clavicles: drawn back to rest while the hands are within reach, let g
   CHECK(std::abs(beyond - beyondFree) < 1.0 * deg);
 
 }
+
+TEST_CASE("three points looking down while standing: the neck bends, the chest stays up") {
+  // People look at the floor with the neck. The coupled spine's thoracic-cervical band (2 degrees)
+  // ties the neck's bend to the chest's: held at 2 degrees, the HMD turned 60 degrees down about
+  // the base of the neck curled the chest chord (T12 to C7) 17 degrees forward (75: 21), and in the
+  // eval the chest followed the neck (cmu_131_02, docs/eval.md "Session 20"). The band widens while
+  // the head looks down and has not sunk (task_targets_job.cpp): 10 degrees (75: 18; the skull's
+  // own flexion and the cervical limits bind there). Bent over, it stays tight.
+  constexpr double kDeg = std::numbers::pi / 180.0;
+  const auto chestTilt = [](const AvatarBodySolver& s) {
+    const ik::Model& m = s.rig().body.model;
+    const Eigen::Vector3d chord = s.jointPosition(m.findJoint("vc7")) - s.jointPosition(m.findJoint("vt12"));
+    return std::acos(std::clamp(chord.normalized().dot(s.up()), -1.0, 1.0));
+  };
+  for (double pitch : {0.0, 60.0, 75.0}) {
+    double tiltAtRest = 0.0, tilt = 0.0, headRotation = 0.0, band = 0.0;
+    holdStill(
+        tracking::TrackerMask::threePoint(), 270,
+        [&](int i, tracking::PoseSample& sample) {
+          tracking::TrackerPose& head = sample[TrackerId::Head];
+          const float u = float(std::clamp((i - 45) / 45.0, 0.0, 1.0));
+          // About the neck's base, 15 cm below the eyes and 8 cm behind (tracking space: +Z back).
+          const glm::quat turn = glm::angleAxis(float(-pitch * kDeg) * u, glm::vec3(1, 0, 0));
+          const glm::vec3 neck = head.position + glm::vec3(0.0f, -0.15f, 0.08f);
+          head.position = neck + turn * (head.position - neck);
+          head.orientation = turn * head.orientation;
+        },
+        [&](int i, const AvatarBodySolver& s) {
+          if (i == 44) tiltAtRest = chestTilt(s);
+          tilt = chestTilt(s);
+          const ik::TaskId headTurn = s.rig().tasks.orientation[size_t(tracking::index(TrackerId::Head))];
+          REQUIRE(headTurn >= 0);
+          headRotation = s.data().report().tasks[size_t(headTurn)].rotation;
+          band = s.data().inequalityBound(s.rig().body.neckBandRows.front());
+        });
+    INFO("head " << pitch << " degrees down: chest chord tilted " << tiltAtRest / kDeg << " -> " << tilt / kDeg
+                 << " degrees, head rotation error " << headRotation / kDeg << " degrees, neck band " << band / kDeg
+                 << " degrees");
+    CHECK(headRotation < 2.0 * kDeg);
+    CHECK(std::abs(tilt - tiltAtRest) < (pitch == 0.0 ? 1.0 : pitch == 60.0 ? 13.0 : 25.0) * kDeg);
+    if (pitch == 0.0) CHECK(band == Approx(2.0 * kDeg));
+    if (pitch == 75.0) CHECK(band > 30.0 * kDeg);  // 40 looking down from upright; the head sank 3 cm here
+  }
+}

@@ -53,6 +53,19 @@ TEST_CASE("full coupled spine: 24 vertebrae, 18 swing + 6 revolute joints, 42 do
   CHECK(sum.band_inequalities == 12);
   CHECK(sum.limit_inequalities == 18);
   CHECK(sum.inequalities == 30);
+  // The bands by name (what the runtime widens per frame): one per region boundary and component,
+  // each name a row of the model at the description's slack.
+  REQUIRE(s.joints.bands.size() == 6);
+  for (size_t k = 0; k < s.joints.bands.size(); ++k) {
+    const SpineJoints::Band& band = s.joints.bands[k];
+    CHECK(band.below == (k < 3 ? Region::Lumbar : Region::Thoracic));
+    CHECK(band.component == Component(k % 3));
+    for (const std::string& name : {band.upper, band.lower}) {
+      const int row = s.model.findInequality(name);
+      REQUIRE(row >= 0);
+      CHECK(s.model.inequalities[size_t(row)].rhs == d.band_slack);
+    }
+  }
 }
 
 TEST_CASE("every equality row has exactly two entries on the same component of one region") {
