@@ -124,7 +124,11 @@ Camera AvatarRenderer::orbitAround(const avatar::SkeletonPose& pose, float yaw, 
     b = boundsOf(skinnedPositions_);
   }
   if (b.empty()) b.add(glm::vec3(-0.5f, 0.0f, -0.5f)), b.add(glm::vec3(0.5f, 1.8f, 0.5f));
-  return orbitCamera(b.center(), framingDistance(b.radius(), fov), yaw, pitch, fov, 0.05f, 100.0f);
+  // Yaw 0 is the avatar's front, whichever way its file faces (orbitCamera's 0 is from +Z, the
+  // glTF front): a VRM 0.x avatar (facing -Z) or one facing +X was otherwise shown from behind or
+  // in profile.
+  const float front = std::atan2(anchors_.forward.x, anchors_.forward.z);
+  return orbitCamera(b.center(), framingDistance(b.radius(), fov), yaw + front, pitch, fov, 0.05f, 100.0f);
 }
 
 glm::mat4 AvatarRenderer::eyePose(const avatar::SkeletonPose& pose) {

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <numbers>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -92,6 +93,28 @@ TEST_CASE("MToon VRM 1.0 test avatar: Khronos validator, values round-trip throu
     CHECK(x.outlineWidth == Approx(y.outlineWidth));
     CHECK(glm::length(x.outlineColor - y.outlineColor) < 1e-6f);
     CHECK(x.outlineLightingMix == Approx(y.outlineLightingMix));
+  }
+}
+
+TEST_CASE("the orbit camera's yaw is measured from the avatar's front (VRM 0.x faces -Z, some files +X)",
+          "[gpu][render]") {
+  // orbitCamera's yaw 0 is from +Z, the glTF front: a VRM 0.x avatar (humanoid.forward -Z, found
+  // by the loader) was shown from behind at --yaw 0 and one facing +X in profile (the robustness
+  // probe, session 20). The loader's forward detection has its own tests (avatar suite).
+  test::GpuContext ctx;
+  for (const glm::vec3 forward : {glm::vec3(0, 0, 1), glm::vec3(0, 0, -1), glm::vec3(1, 0, 0)}) {
+    avatar::AvatarAsset asset = test::mtoonMannequin();
+    asset.humanoid.forward = forward;
+    auto r = engine::AvatarRenderer::create(*ctx.device, asset);
+    REQUIRE(r);
+    const auto pose = avatar::SkeletonPose::rest(asset.skeleton);
+    const glm::vec3 side = glm::cross(glm::vec3(0, 1, 0), forward);  // the avatar's left
+    const glm::vec3 front = (*r)->orbitAround(pose, 0.0f, 0.0f).position();
+    const glm::vec3 left = (*r)->orbitAround(pose, float(std::numbers::pi / 2), 0.0f).position();
+    INFO("forward " << forward.x << " " << forward.z << "; yaw 0 camera at " << front.x << " " << front.z
+                    << ", yaw 90 degrees at " << left.x << " " << left.z);
+    CHECK(glm::dot(glm::normalize(glm::vec3(front.x, 0, front.z)), forward) > 0.99f);
+    CHECK(glm::dot(glm::normalize(glm::vec3(left.x, 0, left.z)), side) > 0.99f);
   }
 }
 
