@@ -123,10 +123,10 @@ const std::vector<std::pair<HumanBone, std::vector<std::string>>>& genericCenter
   static const std::vector<std::pair<HumanBone, std::vector<std::string>>> t = {
       {HumanBone::hips, {"hips", "hip", "pelvis"}},  // CC_Base_Hip is the root above CC_Base_Pelvis
       {HumanBone::head, {"head"}},
-      {HumanBone::neck, {"neck", "neck01", "necktwist01", "lowerneck"}},
-      {HumanBone::upperChest, {"spine2", "upperchest", "chest2", "spine05", "spine03", "t8"}},
-      {HumanBone::chest, {"spine1", "chest", "spine03", "spine02", "t12", "l3"}},
-      {HumanBone::spine, {"spine", "spine01", "lowerback", "abdomen", "ab", "waist", "l5"}},
+      {HumanBone::neck, {"neck", "neck01", "necktwist01", "lowerneck", "necklower"}},
+      {HumanBone::upperChest, {"spine2", "upperchest", "chest2", "spine05", "spine03", "t8", "chestupper"}},
+      {HumanBone::chest, {"spine1", "chest", "spine03", "spine02", "t12", "l3", "chestlower"}},
+      {HumanBone::spine, {"spine", "spine01", "lowerback", "abdomen", "ab", "waist", "l5", "abdomenlower"}},
       {HumanBone::jaw, {"jaw"}},
   };
   return t;
@@ -138,23 +138,25 @@ const std::vector<SidedAlias>& genericSided() {
         // Joint-named rigs (cgspeed's LeftCollar, LeftShoulder, LeftElbow, LeftWrist) call the
         // clavicle the collar and the upper arm the shoulder: collar first, shoulder as a fallback.
         {HumanBone::leftShoulder, HumanBone::rightShoulder, {"collar", "clavicle", "shoulder"}},
-        {HumanBone::leftUpperArm, HumanBone::rightUpperArm, {"arm", "upperarm", "uparm", "uarm", "shoulder"}},
-        {HumanBone::leftLowerArm, HumanBone::rightLowerArm, {"forearm", "lowerarm", "farm", "elbow"}},
+        // Daz Genesis 3/8 (lShldrBend, lForearmBend, lThighBend; their Twist bones stay unmapped)
+        // and Genesis 1/2 (lShldr, lForeArm, lThigh).
+        {HumanBone::leftUpperArm, HumanBone::rightUpperArm, {"arm", "upperarm", "uparm", "uarm", "shldrbend", "shldr", "shoulder"}},
+        {HumanBone::leftLowerArm, HumanBone::rightLowerArm, {"forearm", "lowerarm", "farm", "forearmbend", "elbow"}},
         {HumanBone::leftHand, HumanBone::rightHand, {"wrist", "hand"}},  // cgspeed: LeftWrist above lhand
-        {HumanBone::leftUpperLeg, HumanBone::rightUpperLeg, {"upleg", "thigh", "upperleg", "hip"}},
+        {HumanBone::leftUpperLeg, HumanBone::rightUpperLeg, {"upleg", "thigh", "upperleg", "thighbend", "hip"}},
         {HumanBone::leftLowerLeg, HumanBone::rightLowerLeg, {"leg", "calf", "shin", "lowerleg", "knee"}},
         {HumanBone::leftFoot, HumanBone::rightFoot, {"foot", "ankle"}},
         {HumanBone::leftToes, HumanBone::rightToes, {"toebase", "toe", "toes", "toe0", "ball"}},
         {HumanBone::leftEye, HumanBone::rightEye, {"eye"}},
     };
-    // Fingers: Mixamo HandThumb1..3, VRoid Thumb1..3, Unreal thumb_01..03.
-    const char* fingers[] = {"thumb", "index", "middle", "ring", "little"};
+    // Fingers: Mixamo HandThumb1..3, VRoid Thumb1..3, Unreal thumb_01..03, Daz lMid1..3.
+    const std::vector<std::vector<std::string>> fingers = {{"thumb"}, {"index"}, {"middle", "mid"}, {"ring"}, {"little", "pinky"}};
     for (int f = 0; f < 5; ++f)
       for (int k = 0; k < 3; ++k) {
         const int l = static_cast<int>(HumanBone::leftThumbMetacarpal) + f * 3 + k;
         const int r = static_cast<int>(HumanBone::rightThumbMetacarpal) + f * 3 + k;
         std::vector<std::string> bases;
-        for (std::string name : {std::string(fingers[f]), std::string(f == 4 ? "pinky" : fingers[f])}) {
+        for (const std::string& name : fingers[size_t(f)]) {
           bases.push_back("hand" + name + std::to_string(k + 1));
           bases.push_back(name + std::to_string(k + 1));
           bases.push_back(name + "0" + std::to_string(k + 1));
@@ -374,6 +376,15 @@ HumanoidMap mapByNames(const Skeleton& skeleton) {
         map.bones[static_cast<int>(upper)] = map.joint(shoulder);
         map.bones[static_cast<int>(shoulder)] = -1;
       }
+    // The spine is required; a rig with one torso bone between hips and neck names it like a
+    // chest (CMU's Hips -> Spine1 -> Neck): the lowest torso bone found is the spine.
+    if (!map.has(HumanBone::spine))
+      for (HumanBone b : {HumanBone::chest, HumanBone::upperChest})
+        if (map.has(b)) {
+          map.bones[static_cast<int>(HumanBone::spine)] = map.joint(b);
+          map.bones[static_cast<int>(b)] = -1;
+          break;
+        }
   }
   map.method = MappingMethod::Names;
   finishHumanoidMap(skeleton, map);
@@ -485,6 +496,58 @@ Status applyBoneMap(const std::string& text, const Skeleton& skeleton, const std
   return {};
 }
 
+namespace {
+
+// Every chain the map names runs the right way down the skeleton: hips above spine above head,
+// each limb's bones in order (a map filled from two methods must not cross them).
+bool chainsInOrder(const Skeleton& skeleton, const HumanoidMap& m) {
+  const std::vector<std::vector<HumanBone>> chains = {
+      {HumanBone::hips, HumanBone::spine, HumanBone::chest, HumanBone::upperChest, HumanBone::neck, HumanBone::head},
+      {HumanBone::hips, HumanBone::leftUpperLeg, HumanBone::leftLowerLeg, HumanBone::leftFoot, HumanBone::leftToes},
+      {HumanBone::hips, HumanBone::rightUpperLeg, HumanBone::rightLowerLeg, HumanBone::rightFoot, HumanBone::rightToes},
+      {HumanBone::spine, HumanBone::leftShoulder, HumanBone::leftUpperArm, HumanBone::leftLowerArm, HumanBone::leftHand},
+      {HumanBone::spine, HumanBone::rightShoulder, HumanBone::rightUpperArm, HumanBone::rightLowerArm, HumanBone::rightHand}};
+  for (const auto& chain : chains) {
+    int above = -1;
+    for (HumanBone b : chain) {
+      const int j = m.joint(b);
+      if (j < 0) continue;
+      if (above >= 0 && (j == above || !skeleton.isAncestor(above, j))) return false;
+      above = j;
+    }
+  }
+  return true;
+}
+
+// The names' map with the bones it left out taken from the topology's, where the topology's joint
+// plays no named bone and every chain stays in order. Names that were found are kept: replacing
+// the whole map by the topology's when one required bone had no name mapped a CMU arm one joint
+// off (its clavicle as the upper arm, the forearm as the hand).
+HumanoidMap namesFilledByTopology(const Skeleton& skeleton, const HumanoidMap& byNames, const HumanoidMap& byTopology) {
+  HumanoidMap merged = byNames;
+  std::vector<std::string> filled;
+  for (int b = 0; b < kHumanBoneCount; ++b) {
+    const int j = byTopology.bones[static_cast<size_t>(b)];
+    if (merged.bones[static_cast<size_t>(b)] >= 0 || j < 0 ||
+        std::find(merged.bones.begin(), merged.bones.end(), j) != merged.bones.end())
+      continue;
+    merged.bones[static_cast<size_t>(b)] = j;
+    if (!chainsInOrder(skeleton, merged)) {
+      merged.bones[static_cast<size_t>(b)] = -1;
+      continue;
+    }
+    filled.emplace_back(humanBoneName(static_cast<HumanBone>(b)));
+  }
+  finishHumanoidMap(skeleton, merged);
+  std::string list;
+  for (const auto& f : filled) list += (list.empty() ? "" : ", ") + f;
+  if (!filled.empty()) addNote(merged, "names left " + std::to_string(byNames.missingRequired.size()) +
+                                           " required bones unmapped; filled by topology: " + list);
+  return merged;
+}
+
+}  // namespace
+
 Result<HumanoidMap> mapHumanoid(const HumanoidInputs& in) {
   const Skeleton& skeleton = *in.skeleton;
   HumanoidMap best;
@@ -503,7 +566,12 @@ Result<HumanoidMap> mapHumanoid(const HumanoidInputs& in) {
       best = std::move(byNames);
     } else {
       HumanoidMap byTopology = mapByTopology(skeleton, in.jointHasWeights);
-      if (byTopology.missingRequired.size() < byNames.missingRequired.size()) {
+      const bool named = std::any_of(byNames.bones.begin(), byNames.bones.end(), [](int j) { return j >= 0; });
+      HumanoidMap merged = named ? namesFilledByTopology(skeleton, byNames, byTopology) : byNames;
+      if (merged.missingRequired.size() < byNames.missingRequired.size() &&
+          merged.missingRequired.size() <= byTopology.missingRequired.size()) {
+        best = std::move(merged);
+      } else if (byTopology.missingRequired.size() < byNames.missingRequired.size()) {
         addNote(byTopology, "names left " + std::to_string(byNames.missingRequired.size()) +
                                 " required bones unmapped; mapped by topology");
         best = std::move(byTopology);

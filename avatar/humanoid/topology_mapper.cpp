@@ -223,7 +223,10 @@ void mapSpineAndHead(const Shape& s, const ShoulderJunction& t, const std::vecto
 void mapArms(const Shape& s, const ShoulderJunction& t, int hips, const glm::vec3& left, HumanoidMap& map) {
   for (int a : t.arms) {
     const auto chain = s.followOut(a, s.pos[t.junction]);
-    const size_t k = static_cast<size_t>(limbStart(s, chain, 0.75f));
+    // A first joint at the junction's own pivot is a clavicle whatever its length (CMU's
+    // LeftShoulder, 0 offset from Spine1, 3.8 units to LeftArm against a 4.9 upper arm).
+    const bool atJunction = chain.size() >= 4 && s.dist(chain[0], t.junction) < 0.01f * s.height;
+    const size_t k = atJunction ? 1 : static_cast<size_t>(limbStart(s, chain, 0.75f));
     if (chain.size() < k + 3) continue;
     const bool l = glm::dot(s.pos[chain[k + 2]] - s.pos[hips], left) > 0.0f;
     if (k == 1) setBone(map, l ? HumanBone::leftShoulder : HumanBone::rightShoulder, chain[0]);

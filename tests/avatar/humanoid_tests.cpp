@@ -1,4 +1,5 @@
 #include <catch2/catch.hpp>
+#include <functional>
 
 #include "avatar/gltf/gltf_loader.h"
 #include "avatar/humanoid/first_person.h"
@@ -275,4 +276,88 @@ TEST_CASE("a humanoid skeleton without any mesh still maps (names and topology)"
     CHECK(a->humanoid.method == (meaningless ? MappingMethod::Topology : MappingMethod::Names));
     CHECK(a->humanoid.missingRequired.empty());
   }
+}
+
+namespace {
+
+// A CMU-shaped skeleton (CMU units, Y up, facing +Z): one torso bone (Hips -> Spine1 -> Neck), the
+// neck and both clavicles at Spine1's own pivot, clavicles 3.8 units long against a 4.9 upper
+// arm. `rename` changes names before the skeleton is built.
+Skeleton cmuShapedSkeleton(const std::function<std::string(const std::string&)>& rename) {
+  Skeleton s;
+  auto add = [&](const std::string& name, int parent, glm::vec3 t) {
+    Joint j;
+    j.name = rename(name);
+    j.parent = parent;
+    j.rest.translation = t;
+    s.joints.push_back(j);
+    return static_cast<int>(s.joints.size() - 1);
+  };
+  const int hips = add("Hips", -1, {0, 17, 0});
+  for (float side : {1.0f, -1.0f}) {
+    const std::string n = side > 0 ? "Left" : "Right";
+    const int up = add(n + "UpLeg", hips, {1.4f * side, -0.8f, 0});
+    const int leg = add(n + "Leg", up, {0, -7.5f, 0});
+    const int foot = add(n + "Foot", leg, {0, -7.4f, 0});
+    add(n + "ToeBase", foot, {0, -0.7f, 2.2f});
+  }
+  const int spine = add("Spine1", hips, {0, 4.5f, 0});
+  const int neck = add("Neck", spine, {0, 0, 0});
+  const int head = add("Neck1", neck, {0, 2.2f, 0});
+  add("Head", head, {0, 1.6f, 0.2f});
+  for (float side : {1.0f, -1.0f}) {
+    const std::string n = side > 0 ? "Left" : "Right";
+    const int clav = add(n + "Shoulder", spine, {0, 0, 0});
+    const int arm = add(n + "Arm", clav, {3.65f * side, 0.8f, -0.4f});
+    const int fore = add(n + "ForeArm", arm, {4.9f * side, 0, 0});
+    const int hand = add(n + "Hand", fore, {2.7f * side, 0, 0});
+    add(n + "HandEnd", hand, {0.8f * side, 0, 0});
+  }
+  return s;
+}
+
+std::string jointName(const Skeleton& s, const HumanoidMap& m, HumanBone b) {
+  return m.has(b) ? s.joints[static_cast<size_t>(m.joint(b))].name : std::string("(none)");
+}
+
+}  // namespace
+
+TEST_CASE("one torso bone, clavicles at the spine's pivot: names, topology and both together map the arms right",
+          "[humanoid]") {
+  // The robustness probe (session 20): with one required bone left unmapped by names, the whole
+  // map was replaced by the topology's, which took the clavicle for the upper arm and the forearm
+  // for the hand (the hand trackers 19 cm off, at the elbows).
+  HumanoidInputs in;
+  // 1. Names: Spine1 is the only torso bone, so it is the spine (required), not a chest.
+  const Skeleton named = cmuShapedSkeleton([](const std::string& n) { return n; });
+  in.skeleton = &named;
+  auto byNames = mapHumanoid(in);
+  REQUIRE(byNames.ok());
+  CHECK(byNames->usable());
+  CHECK(byNames->method == MappingMethod::Names);
+  CHECK(jointName(named, *byNames, HumanBone::spine) == "Spine1");
+  CHECK(jointName(named, *byNames, HumanBone::leftUpperArm) == "LeftArm");
+  CHECK(jointName(named, *byNames, HumanBone::leftHand) == "LeftHand");
+  // 2. Topology alone: a first arm joint at the junction's pivot is a clavicle, whatever its length.
+  const Skeleton unnamed = cmuShapedSkeleton([](const std::string& n) { return "j_" + std::to_string(std::hash<std::string>{}(n) % 100000); });
+  const HumanoidMap byTopology = mapByTopology(unnamed, {});
+  CHECK(byTopology.missingRequired.empty());
+  for (auto [bone, expected] : {std::pair{HumanBone::leftShoulder, "LeftShoulder"}, std::pair{HumanBone::leftUpperArm, "LeftArm"},
+                                std::pair{HumanBone::leftLowerArm, "LeftForeArm"}, std::pair{HumanBone::rightHand, "RightHand"}}) {
+    INFO(humanBoneName(bone));
+    CHECK(byTopology.joint(bone) == byNames->joint(bone));  // the same joint order in both skeletons
+    CHECK(jointName(named, *byNames, bone) == expected);
+  }
+  // 3. Names with a leg no table knows: the named bones stay, topology fills only the gap.
+  const Skeleton partly = cmuShapedSkeleton([](const std::string& n) { return n == "LeftUpLeg" ? std::string("Bone.007") : n; });
+  in.skeleton = &partly;
+  auto filled = mapHumanoid(in);
+  REQUIRE(filled.ok());
+  CHECK(filled->usable());
+  CHECK(filled->method == MappingMethod::Names);
+  CHECK(jointName(partly, *filled, HumanBone::leftUpperLeg) == "Bone.007");
+  CHECK(jointName(partly, *filled, HumanBone::leftHand) == "LeftHand");
+  CHECK(jointName(partly, *filled, HumanBone::leftUpperArm) == "LeftArm");
+  REQUIRE_FALSE(filled->notes.empty());
+  CHECK(filled->notes.back().find("filled by topology: leftUpperLeg") != std::string::npos);
 }

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "avatar/bvh/bvh_body.h"
+#include "avatar/humanoid/humanoid_map.h"
 #include "bvh_convention_writer.h"
 #include "test_paths.h"
 #include "tracking/bvh_source.h"
@@ -60,6 +61,25 @@ TEST_CASE("one clip in every BVH convention gives the same trackers to 1 mm") {
     CHECK(worst < 1e-3f);
     CHECK(worstAngle < glm::radians(0.1f));
     CHECK(map.scale * map.heightUnits == Approx(1.75).epsilon(1e-6));
+    // The clip as an avatar (eval, render --avatar CLIP.bvh) maps every limb bone to the
+    // convention's joint: Daz Genesis 3's in-chain twist bones once sent the whole map to the
+    // topology mapper, which took lCollar for the upper arm and rShldrTwist for the left hand.
+    auto clip = avatar::parseBvh(test::writeConventionClip(conv), "clip.bvh");
+    REQUIRE(clip.ok());
+    const avatar::Skeleton skeleton = avatar::bvhSkeleton(*clip);
+    avatar::HumanoidInputs in;
+    in.skeleton = &skeleton;
+    auto humanoid = avatar::mapHumanoid(in);
+    REQUIRE(humanoid.ok());
+    CHECK(humanoid->usable());
+    using avatar::HumanBone;
+    for (auto [bone, role] : {std::pair{HumanBone::leftUpperArm, test::kLUpperArm}, std::pair{HumanBone::leftLowerArm, test::kLLowerArm},
+                              std::pair{HumanBone::leftHand, test::kLHand}, std::pair{HumanBone::rightHand, test::kRHand},
+                              std::pair{HumanBone::leftUpperLeg, test::kLUpperLeg}, std::pair{HumanBone::rightFoot, test::kRFoot}}) {
+      INFO(avatar::humanBoneName(bone));
+      REQUIRE(humanoid->has(bone));
+      CHECK(skeleton.joints[size_t(humanoid->joint(bone))].name == conv.names[size_t(role)]);
+    }
   }
 }
 

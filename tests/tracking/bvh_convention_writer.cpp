@@ -86,13 +86,15 @@ struct OutJoint {
 
 std::vector<OutJoint> layout(const BvhConvention& c) {
   std::vector<OutJoint> js;
-  std::array<int, kRoleCount> at{};
+  std::array<int, kRoleCount> at{};                // where each role's children hang
+  std::array<glm::dvec3, kRoleCount> inChainOffset{};  // of the in-chain helper they hang below
   for (int r = 0; r < kRoleCount; ++r) {
     OutJoint j;
     j.name = c.names[r];
     j.role = r;
-    j.parent = roles()[r].parent < 0 ? -1 : at[roles()[r].parent];
-    j.offset = roles()[r].offset;
+    const int parentRole = roles()[r].parent;
+    j.parent = parentRole < 0 ? -1 : at[parentRole];
+    j.offset = roles()[r].offset - (parentRole < 0 ? glm::dvec3(0.0) : inChainOffset[parentRole]);
     j.end = roles()[r].end;
     at[r] = static_cast<int>(js.size());
     js.push_back(j);
@@ -103,6 +105,10 @@ std::vector<OutJoint> layout(const BvhConvention& c) {
         hj.parent = at[r];
         hj.offset = h.offset;
         js.push_back(hj);
+        if (h.inChain) {
+          at[r] = static_cast<int>(js.size()) - 1;
+          inChainOffset[r] = h.offset;
+        }
       }
   }
   if (glm::length(c.boneAxis) > 0.0)
@@ -345,6 +351,22 @@ void addSystemConventions(std::vector<BvhConvention>& v) {
                {"ik_hand_root", kHips, {0, 5, 0}}, {"ik_foot_l", kHips, {5, -5, 0}}};
   c.world = glm::angleAxis(kPi / 2, glm::dvec3(0, 0, 1)) * kZUp;
   c.frameTime = 1.0 / 24.0;
+  v.push_back(c);
+
+  c = {};
+  c.name = "daz_genesis3";  // Daz Studio Genesis 3/8: twist bones inside the limbs, lMid/lPinky
+  c.names = sided({"hip", "abdomenLower", "abdomenUpper", "chestUpper", "neckLower", "head"}, "l%", "r%",
+                  {"Collar", "ShldrBend", "ForearmBend", "Hand", "ThighBend", "Shin", "Foot", "Toe"});
+  c.helpers = {{"lShldrTwist", kLUpperArm, {14, 0, 0}, true}, {"lForearmTwist", kLLowerArm, {12, 0, 0}, true},
+               {"rShldrTwist", kRUpperArm, {-14, 0, 0}, true}, {"rForearmTwist", kRLowerArm, {-12, 0, 0}, true},
+               {"lThighTwist", kLUpperLeg, {0, -20, 0}, true}, {"rThighTwist", kRUpperLeg, {0, -20, 0}, true},
+               {"lMid1", kLHand, {9, 0, 0}}, {"rMid1", kRHand, {-9, 0, 0}}, {"neckUpper", kNeck, {0, 4, 0}, true}};
+  v.push_back(c);
+
+  c = {};
+  c.name = "daz_genesis2";  // Genesis 1/2: lShldr, lForeArm, lThigh
+  c.names = sided({"hip", "abdomen", "abdomen2", "chest", "neck", "head"}, "l%", "r%",
+                  {"Collar", "Shldr", "ForeArm", "Hand", "Thigh", "Shin", "Foot", "Toe"});
   v.push_back(c);
 
   c = {};

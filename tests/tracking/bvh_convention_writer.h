@@ -26,12 +26,15 @@ struct HelperBone {
   std::string name;
   Role parent;
   glm::dvec3 offset;  // canonical centimetres, Y up
+  // false: a leaf. true: inside the limb, between `parent` and its role children (Daz Genesis 3's
+  // lShldrTwist between lShldrBend and lForearmBend), never rotated; the children hang below it.
+  bool inChain = false;
 };
 
 struct BvhConvention {
   std::string name;
   std::array<std::string, kRoleCount> names;
-  std::vector<HelperBone> helpers;  // twist, roll, finger, IK bones: leaves that must not be mapped
+  std::vector<HelperBone> helpers;  // twist, roll, finger, IK bones that must not be mapped
   glm::dquat world{1, 0, 0, 0};     // canonical world -> the file's world
   glm::dvec3 boneAxis{0.0};         // non-zero: bones run along this local axis (joint orients)
   double unitsPerCm = 1.0;
