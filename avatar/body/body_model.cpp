@@ -139,6 +139,7 @@ class BodyModelBuilder {
 
   Result<BodyModel> build() {
     if (auto s = checkMapping(); !s) return Error{s.error()};
+    if (auto s = checkNoMirroring(); !s) return Error{s.error()};
     if (!(options_.scale > 0.05 && options_.scale < 20.0)) return Error{"body scale must be between 0.05 and 20"};
     body_.scale = options_.scale;
     restFrames();
@@ -194,6 +195,26 @@ class BodyModelBuilder {
                    (missing.empty() ? std::string("(no mapping)") : missing)};
     }
     if (map_.spine.empty()) return Error{"the avatar has no spine between hips and head"};
+    return {};
+  }
+
+  // A bone whose rest frame is mirrored (a negative scale on it or above it) has no rotation that
+  // retargeting could give it: a file with scale -1 on its root rested right and folded over in
+  // motion, reported upright (the robustness probe, session 20). Refused by name.
+  Status checkNoMirroring() const {
+    std::vector<glm::mat4> globals;
+    computeGlobals(sk_, SkeletonPose::rest(sk_), globals);
+    for (int bone : map_.bones)
+      for (int j = bone; j >= 0; j = sk_.joints[at(j)].parent)
+        if (glm::determinant(glm::mat3(globals[at(j)])) < 0.0f) {
+          int top = j;  // the highest mirrored node: where the negative scale is
+          for (int k = sk_.joints[at(j)].parent; k >= 0 && glm::determinant(glm::mat3(globals[at(k)])) < 0.0f;
+               k = sk_.joints[at(k)].parent)
+            top = k;
+          return Error{"the skeleton is mirrored from node '" + sk_.joints[at(top)].name +
+                       "' down (a negative scale): the body cannot be retargeted onto a mirrored bone; apply the "
+                       "mirror to the mesh and bones in the modelling tool and export without negative scales"};
+        }
     return {};
   }
 

@@ -435,3 +435,14 @@ TEST_CASE("body model: the coupled spine's limits and bands hold on far-apart ra
   }
   CHECK(worst <= 1e-9 + 1e-12);
 }
+
+TEST_CASE("body model: a mirrored skeleton (a negative scale) is refused by the node's name", "[body]") {
+  // Scale -1 on the root is valid glTF: the rest pose drew right and the motion folded the body
+  // over (no rotation turns a mirrored bone), reported upright (robustness probe, session 20).
+  AvatarAsset a = buildDefaultAvatar();
+  REQUIRE(buildBodyModel(a).ok());
+  a.skeleton.joints[0].rest.scale.x = -1.0f;
+  auto body = buildBodyModel(a);
+  REQUIRE_FALSE(body.ok());
+  CHECK(body.error().find("mirrored from node '" + a.skeleton.joints[0].name + "'") != std::string::npos);
+}
