@@ -190,8 +190,6 @@ std::string skinProblem(const AvatarAsset& asset) {
   const size_t n = sk.joints.size();
   if (n == 0) return "cannot write a glTF without joints";
   if (auto why = sk.validate(); !why.empty()) return why;
-  if (std::count_if(sk.joints.begin(), sk.joints.end(), [](const Joint& j) { return j.parent < 0; }) != 1)
-    return "cannot write a skin: the skeleton must have exactly one root joint";
   if (asset.mesh.inverseBind.size() != n) return "inverseBind must have one matrix per joint";
   if (n > 65535) return "too many joints for unsigned-short JOINTS";
   return "";
@@ -403,8 +401,14 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
   const int ibmAccessor = accessor(doc, bin.view(ibm.data(), ibm.size() * 4, 0, doc), 0, kFloat, n, "MAT4");
   json skinJoints = json::array();
   for (size_t i = 0; i < n; ++i) skinJoints.push_back(i);
-  int root = 0;
-  while (sk.joints[static_cast<size_t>(root)].parent >= 0) ++root;
+  // The skin's joints need one common root node. A skeleton with several root joints (a loaded
+  // file whose mesh node stood beside its armature at the scene root: the tool's own
+  // `avatar export-default` output) gets a plain node above them, after the joint and mesh nodes so
+  // that joint i stays node i (the animation's channels target those).
+  std::vector<size_t> roots;
+  for (size_t i = 0; i < n; ++i)
+    if (sk.joints[i].parent < 0) roots.push_back(i);
+  const size_t root = roots.size() > 1 ? n + (primitives->empty() ? 0 : 1) : roots.front();
   if (auto s = addImagesAndMaterials(asset, extensionsJson, bin, doc); !s) return Error{s.error()};
 
   json sceneNodes = json::array({root});
@@ -416,6 +420,7 @@ Result<std::vector<uint8_t>> encodeGlb(const AvatarAsset& asset, const GlbAnimat
     doc["nodes"].push_back({{"name", "body"}, {"mesh", 0}, {"skin", 0}});
     sceneNodes.push_back(n);
   }
+  if (roots.size() > 1) doc["nodes"].push_back({{"name", "skeleton"}, {"children", roots}});
   doc["scenes"] = json::array({{{"nodes", sceneNodes}}});
   if (animation)
     if (auto s = addAnimation(sk, *animation, bin, doc); !s) return Error{s.error()};

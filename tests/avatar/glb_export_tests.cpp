@@ -62,6 +62,40 @@ TEST_CASE("the exported default avatar reloads with the same skeleton, mesh and 
   CHECK(worst < 1e-5f);
 }
 
+TEST_CASE("an exported avatar exports again: its mesh node is a second root, a plain node joins them", "[export]") {
+  // The reloaded file's mesh node stands beside the armature at the scene root, so the skeleton
+  // has two roots; `render --export FILE.glb` refused it ("exactly one root joint"), on the tool's
+  // own `avatar export-default` output (robustness probe, session 20).
+  auto once = loadGltfFromMemory(encodeGlb(buildDefaultAvatar()).value(), "");
+  REQUIRE(once.ok());
+  REQUIRE(prepareAvatar(once.value(), "").ok());
+  int roots = 0;
+  for (const Joint& j : once->skeleton.joints) roots += j.parent < 0 ? 1 : 0;
+  REQUIRE(roots == 2);
+  auto bytes = encodeGlb(once.value());
+  REQUIRE(bytes.ok());
+  auto twice = loadGltfFromMemory(bytes.value(), "");
+  REQUIRE(twice.ok());
+  REQUIRE(prepareAvatar(twice.value(), "").ok());
+  CHECK(twice->skeleton.joints.size() == once->skeleton.joints.size() + 2);  // the joining node, the mesh node
+  CHECK(twice->humanoid.missingRequired.empty());
+  std::vector<glm::mat4> g1, g2, p1, p2;
+  computeGlobals(once->skeleton, SkeletonPose::rest(once->skeleton), g1);
+  computeGlobals(twice->skeleton, SkeletonPose::rest(twice->skeleton), g2);
+  computeSkinningPalette(once.value(), g1, p1);
+  computeSkinningPalette(twice.value(), g2, p2);
+  std::vector<glm::vec3> x1, x2, n1, n2;
+  skinOnCpu(once->mesh, p1, x1, n1);
+  skinOnCpu(twice->mesh, p2, x2, n2);
+  REQUIRE(x1.size() == x2.size());
+  float worst = 0.0f;
+  for (size_t i = 0; i < x1.size(); ++i) worst = std::max(worst, glm::length(x1[i] - x2[i]));
+  CHECK(worst < 1e-5f);
+  const auto file = std::filesystem::temp_directory_path() / ("embody_reexport_" + std::to_string(::getpid()) + ".glb");
+  REQUIRE(writeGlbFile(once.value(), file.string()).ok());
+  embody::test::requireNoGltfErrors(file.string());  // the joining node is the skin's common root
+}
+
 TEST_CASE("the exported default avatar passes the Khronos glTF validator with zero errors",
           "[export][validator]") {
   const bool fingers = GENERATE(false, true);  // also the mannequin with finger bones
