@@ -1,5 +1,6 @@
 // BVH: parsing (channel order, frame time, end sites), broken files, tracker derivation, and the
 // shared CMU walk.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <glm/gtc/quaternion.hpp>
@@ -140,6 +141,68 @@ TEST_CASE("broken BVH files give an error with the line, never a crash") {
   auto limited = avatar::parseBvh(good, "fig.bvh", tiny);
   REQUIRE_FALSE(limited.ok());
   CHECK_THAT(limited.error(), Catch::Contains("more than 4 joints"));
+}
+
+TEST_CASE("BVH text from other tools: a byte order mark, CR-only lines, no space after the header colon") {
+  const std::string good = figure("cmu");
+  auto expectSame = [&](const std::string& text) {
+    auto clip = avatar::parseBvh(text, "fig.bvh");
+    REQUIRE(clip.ok());
+    CHECK(clip->joints.size() == 16);
+    CHECK(clip->frameCount == 3);
+    CHECK(clip->frameTime == Approx(0.0333333));
+    CHECK(clip->values == avatar::parseBvh(good, "fig.bvh")->values);
+  };
+  SECTION("a UTF-8 byte order mark is skipped") { expectSame("\xEF\xBB\xBF" + good); }
+  SECTION("lines ended by CR alone, or by CR LF") {
+    std::string cr = good, crlf;
+    std::replace(cr.begin(), cr.end(), '\n', '\r');
+    expectSame(cr);
+    for (char c : good) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+    expectSame(crlf);
+    // Line numbers count CR-only lines too.
+    std::string bad = cr;
+    bad.replace(bad.find("OFFSET 0 10 0"), 13, "OFFSET 0 ten 0");
+    CHECK_THAT(avatar::parseBvh(bad, "fig.bvh").error(), Catch::Contains("fig.bvh:8: OFFSET value 'ten'"));
+  }
+  SECTION("'Frames:361' and 'Frame Time:0.033' without a space after the colon") {
+    std::string s = good;
+    s.replace(s.find("Frames: 3"), 9, "Frames:3");
+    s.replace(s.find("Frame Time: "), 12, "frame  time:");
+    expectSame(s);
+  }
+}
+
+TEST_CASE("BVH header values over the loader's limits say the limit, and quoted lines are cut short") {
+  const std::string good = figure("cmu");
+  auto replace = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  auto error = [](const std::string& text) {
+    auto clip = avatar::parseBvh(text, "fig.bvh");
+    REQUIRE_FALSE(clip.ok());
+    return clip.error();
+  };
+  // A count that is a non-negative integer, only too large: was "needs a non-negative integer".
+  const std::string frames = error(replace("Frames: 3", "Frames: 99999999999999"));
+  CHECK_THAT(frames, Catch::Contains("'Frames: 99999999999999' is more than this loader accepts: at most"));
+  CHECK_THAT(frames, !Catch::Contains("non-negative integer"));
+  CHECK_THAT(error(replace("Frames: 3", "Frames: -3")), Catch::Contains("'Frames:' needs a non-negative integer, found '-3'"));
+  // A frame time that is positive, only too long: was "needs a positive number of seconds".
+  const std::string time = error(replace("Frame Time: 0.0333333", "Frame Time: 99"));
+  CHECK_THAT(time, Catch::Contains("'Frame Time: 99'"));
+  CHECK_THAT(time, !Catch::Contains("positive number"));
+  // The first frame in place of the missing 'Frame Time:' line: quoted to 80 characters, not whole.
+  std::string longFrame = "0 20 0";
+  for (int c = 3; c < 36; ++c) longFrame += " 0.000000";
+  const std::string missing = error(replace("Frame Time: 0.0333333\n0 20 0", longFrame));
+  CHECK_THAT(missing, Catch::Contains("expected 'Frames: N' and 'Frame Time: SECONDS', found '0 20 0"));
+  CHECK_THAT(missing, Catch::Contains("...' (" + std::to_string(longFrame.size()) + " characters)"));
+  CHECK(missing.size() < 220);
+  const std::string token = error(replace("OFFSET 0 10 0", "OFFSET 0 " + std::string(500, '7') + "x 0"));
+  CHECK(token.size() < 200);
 }
 
 TEST_CASE("BVH trackers in OpenXR conventions from CMU, Mixamo and Bandai-Namco namings") {
