@@ -18,6 +18,7 @@
 #include "app/args.h"
 #include "app/bvh_options.h"
 #include "app/eval_sheet.h"
+#include "core/frame_rate.h"
 #include "eval/clip_eval.h"
 #include "eval/report.h"
 #include "tracking/bvh_avatar.h"
@@ -206,7 +207,7 @@ int runJob(const EvalJob& job) {
 std::vector<double> ratesOf(const app::Args& args) {
   const std::vector<double> rates = args.numbers("fps");
   for (size_t k = 0; k < rates.size(); ++k) {
-    if (!(rates[k] >= 1.0 && rates[k] <= 1000.0)) throw std::invalid_argument("--fps must be 1 .. 1000 Hz (got " + rateName(rates[k]) + ")");
+    if (!(rates[k] >= kMinFps && rates[k] <= kMaxFps)) throw std::invalid_argument("--fps must be 1 .. 1000 Hz (got " + rateName(rates[k]) + ")");
     if (std::find(rates.begin(), rates.begin() + long(k), rates[k]) != rates.begin() + long(k))
       throw std::invalid_argument("--fps names " + rateName(rates[k]) + " Hz twice");
   }

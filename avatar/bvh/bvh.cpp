@@ -8,6 +8,8 @@
 #include <limits>
 #include <fstream>
 
+#include "core/frame_rate.h"
+
 namespace embody::avatar {
 
 namespace {
@@ -89,7 +91,12 @@ bool parseChannel(std::string_view s, BvhChannel& c) {
   return false;
 }
 
-constexpr double kMaxFrameTime = 10.0;  // seconds
+// The frame times a file may state: the rates --fps takes (core/frame_rate.h), 1000 Hz and 1 Hz
+// included, with 1 % for a rounded Frame Time (1/1000 written as 0.00099, a 1 Hz clip as 1.01).
+// "Frame Time: 1e-9" read as 10^9 Hz and squeezed a 3 s walk into 0.4 microseconds.
+constexpr double kFrameTimeSlack = 0.01;
+constexpr double kMinFrameTime = (1.0 - kFrameTimeSlack) / kMaxFps;
+constexpr double kMaxFrameTime = (1.0 + kFrameTimeSlack) / kMinFps;
 
 class Parser {
  public:
@@ -277,9 +284,11 @@ class Parser {
       } else if (header("Frame Time:", value)) {
         if (!parseDouble(value, clip_.frameTime) || clip_.frameTime <= 0.0)
           return fail("'Frame Time:' needs a positive number of seconds, found " + quoted(value));
-        if (clip_.frameTime > kMaxFrameTime)
-          return fail("'Frame Time: " + std::string(value) + "' is more than this loader accepts: at most " +
-                      shortNumber(kMaxFrameTime) + " s");
+        if (clip_.frameTime < kMinFrameTime || clip_.frameTime > kMaxFrameTime)
+          return fail("'Frame Time: " + std::string(value) + "' is " + shortNumber(1.0 / clip_.frameTime) +
+                      " frames per second; this loader accepts " + shortNumber(kMinFps) + " .. " +
+                      shortNumber(kMaxFps) + " Hz (Frame Time " + shortNumber(1.0 / kMaxFps) + " .. " +
+                      shortNumber(1.0 / kMinFps) + " s)");
         haveTime = true;
       } else {
         return fail("expected 'Frames: N' and 'Frame Time: SECONDS', found " + quoted(raw_));

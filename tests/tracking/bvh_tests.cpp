@@ -193,6 +193,7 @@ TEST_CASE("BVH header values over the loader's limits say the limit, and quoted 
   // A frame time that is positive, only too long: was "needs a positive number of seconds".
   const std::string time = error(replace("Frame Time: 0.0333333", "Frame Time: 99"));
   CHECK_THAT(time, Catch::Contains("'Frame Time: 99'"));
+  CHECK_THAT(time, Catch::Contains("1 .. 1000 Hz"));
   CHECK_THAT(time, !Catch::Contains("positive number"));
   // The first frame in place of the missing 'Frame Time:' line: quoted to 80 characters, not whole.
   std::string longFrame = "0 20 0";
@@ -203,6 +204,28 @@ TEST_CASE("BVH header values over the loader's limits say the limit, and quoted 
   CHECK(missing.size() < 220);
   const std::string token = error(replace("OFFSET 0 10 0", "OFFSET 0 " + std::string(500, '7') + "x 0"));
   CHECK(token.size() < 200);
+}
+
+TEST_CASE("a BVH frame time outside the rates --fps takes (1 .. 1000 Hz) is refused, 1000 Hz itself is read") {
+  const std::string good = figure("cmu");
+  auto withTime = [&](const std::string& t) {
+    std::string s = good;
+    s.replace(s.find("Frame Time: 0.0333333"), 21, "Frame Time: " + t);
+    return avatar::parseBvh(s, "fig.bvh");
+  };
+  // "Frame Time: 1e-9" was read as 10^9 Hz (a 3 s walk in microseconds, eval at exit 0).
+  for (const char* t : {"1e-9", "0.0005", "1.5", "10"}) {
+    INFO(t);
+    auto clip = withTime(t);
+    REQUIRE_FALSE(clip.ok());
+    CHECK_THAT(clip.error(), Catch::Contains(std::string("fig.bvh:79: 'Frame Time: ") + t + "' is "));
+    CHECK_THAT(clip.error(), Catch::Contains("this loader accepts 1 .. 1000 Hz (Frame Time 0.001 .. 1 s)"));
+  }
+  // 1000 Hz and 1 Hz are rates --fps takes; a rounded 1/1000 (0.00099) is 1000 Hz too.
+  for (const char* t : {"0.001", "0.00099", "1", "0.0083333", "0.0416667"}) {
+    INFO(t);
+    CHECK(withTime(t).ok());
+  }
 }
 
 TEST_CASE("BVH trackers in OpenXR conventions from CMU, Mixamo and Bandai-Namco namings") {
