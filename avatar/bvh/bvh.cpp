@@ -50,7 +50,7 @@ class Lexer {
 // File text quoted in a message, cut to kMaxQuoted characters: a line with no line breaks (a
 // whole frame, a binary file) is not repeated whole.
 constexpr size_t kMaxQuoted = 80;
-std::string quoted(std::string_view s) {
+std::string quotedText(std::string_view s) {
   if (s.size() <= kMaxQuoted) return "'" + std::string(s) + "'";
   return "'" + std::string(s.substr(0, kMaxQuoted)) + "...' (" + std::to_string(s.size()) + " characters)";
 }
@@ -73,10 +73,6 @@ bool iequals(std::string_view a, std::string_view b) {
     if (std::tolower(static_cast<unsigned char>(a[i])) != std::tolower(static_cast<unsigned char>(b[i])))
       return false;
   return true;
-}
-
-bool istartsWith(std::string_view s, std::string_view prefix) {
-  return s.size() >= prefix.size() && iequals(s.substr(0, prefix.size()), prefix);
 }
 
 bool parseChannel(std::string_view s, BvhChannel& c) {
@@ -124,7 +120,7 @@ class Parser {
   Status hierarchy() {
     if (!next()) return Error{name_ + ": empty file (expected HIERARCHY)"};
     if (!iequals(tokens_[0], "HIERARCHY"))
-      return fail("expected HIERARCHY, found " + quoted(tokens_[0]));
+      return fail("expected HIERARCHY, found " + quotedText(tokens_[0]));
     std::vector<int> stack;  // open joints
     bool expectBrace = false;
     bool anyRoot = false;
@@ -134,7 +130,7 @@ class Parser {
       while (i < tokens_.size()) {
         const std::string_view tok = tokens_[i];
         if (expectBrace) {
-          if (tok != "{") return fail("expected '{' after the joint name, found " + quoted(tok));
+          if (tok != "{") return fail("expected '{' after the joint name, found " + quotedText(tok));
           expectBrace = false;
           ++i;
           continue;
@@ -158,10 +154,10 @@ class Parser {
           expectBrace = true;
           continue;
         }
-        if (stack.empty()) return fail("expected ROOT, found " + quoted(tok));
+        if (stack.empty()) return fail("expected ROOT, found " + quotedText(tok));
         Status st = iequals(tok, "OFFSET")     ? readOffset(i, stack.back())
                     : iequals(tok, "CHANNELS") ? readChannels(i, stack.back())
-                                               : fail("unexpected " + quoted(tok) + " in HIERARCHY");
+                                               : fail("unexpected " + quotedText(tok) + " in HIERARCHY");
         if (!st) return st;
       }
     }
@@ -171,7 +167,7 @@ class Parser {
   Status openJoint(size_t& i, std::vector<int>& stack, bool isRoot, bool isEnd) {
     const std::string_view tok = tokens_[i];
     if (isRoot && !stack.empty()) return fail("ROOT inside another joint");
-    if (!isRoot && stack.empty()) return fail(quoted(tok) + " outside of any joint");
+    if (!isRoot && stack.empty()) return fail(quotedText(tok) + " outside of any joint");
     if (!isRoot && clip_.joints[static_cast<size_t>(stack.back())].endSite) return fail("a joint inside an End Site");
     if (clip_.joints.size() >= limits_.maxJoints)
       return fail("more than " + std::to_string(limits_.maxJoints) + " joints");
@@ -187,7 +183,7 @@ class Parser {
       // The name is the rest of the line (some exporters put spaces in names), minus a '{'.
       size_t last = tokens_.size();
       if (last > i + 1 && tokens_[last - 1] == "{") --last;
-      if (last <= i + 1) return fail(quoted(tok) + " without a name");
+      if (last <= i + 1) return fail(quotedText(tok) + " without a name");
       const char* b = tokens_[i + 1].data();
       const char* e = tokens_[last - 1].data() + tokens_[last - 1].size();
       j.name.assign(b, static_cast<size_t>(e - b));
@@ -204,7 +200,7 @@ class Parser {
     if (tokens_.size() - i < 4) return fail("OFFSET needs 3 numbers");
     for (size_t k = 0; k < 3; ++k)
       if (!parseDouble(tokens_[i + 1 + k], cur.offset[static_cast<int>(k)]))
-        return fail("OFFSET value " + quoted(tokens_[i + 1 + k]) + " is not a finite number");
+        return fail("OFFSET value " + quotedText(tokens_[i + 1 + k]) + " is not a finite number");
     i += 4;
     return {};
   }
@@ -213,10 +209,10 @@ class Parser {
   Status readChannels(size_t& i, int open) {
     BvhJoint& cur = clip_.joints[static_cast<size_t>(open)];
     if (cur.endSite) return fail("CHANNELS inside an End Site");
-    if (!cur.channels.empty()) return fail("second CHANNELS line for joint " + quoted(cur.name));
+    if (!cur.channels.empty()) return fail("second CHANNELS line for joint " + quotedText(cur.name));
     // Channels must come before the children so the frame layout is depth-first order.
     if (open != static_cast<int>(clip_.joints.size()) - 1)
-      return fail("CHANNELS of joint " + quoted(cur.name) + " after its children");
+      return fail("CHANNELS of joint " + quotedText(cur.name) + " after its children");
     double n = 0;
     if (i + 1 >= tokens_.size() || !parseDouble(tokens_[i + 1], n) || n < 0 || n > 6 || n != std::floor(n))
       return fail("CHANNELS needs a count from 0 to 6");
@@ -227,7 +223,7 @@ class Parser {
     for (size_t k = 0; k < count; ++k) {
       BvhChannel c;
       if (!parseChannel(tokens_[i + 2 + k], c))
-        return fail("unknown channel " + quoted(tokens_[i + 2 + k]) + " (expected X/Y/Z position or rotation)");
+        return fail("unknown channel " + quotedText(tokens_[i + 2 + k]) + " (expected X/Y/Z position or rotation)");
       cur.channels.push_back(c);
     }
     cur.firstChannel = clip_.channelCount;
@@ -274,7 +270,7 @@ class Parser {
       if (header("Frames:", value)) {
         double n;
         if (!parseDouble(value, n) || n < 0 || n != std::floor(n))
-          return fail("'Frames:' needs a non-negative integer, found " + quoted(value));
+          return fail("'Frames:' needs a non-negative integer, found " + quotedText(value));
         if (n > static_cast<double>(maxFrames))
           return fail("'Frames: " + std::string(value) + "' is more than this loader accepts: at most " +
                       std::to_string(maxFrames) + " frames of " + std::to_string(perFrame) + " channels (" +
@@ -283,7 +279,7 @@ class Parser {
         haveFrames = true;
       } else if (header("Frame Time:", value)) {
         if (!parseDouble(value, clip_.frameTime) || clip_.frameTime <= 0.0)
-          return fail("'Frame Time:' needs a positive number of seconds, found " + quoted(value));
+          return fail("'Frame Time:' needs a positive number of seconds, found " + quotedText(value));
         if (clip_.frameTime < kMinFrameTime || clip_.frameTime > kMaxFrameTime)
           return fail("'Frame Time: " + std::string(value) + "' is " + shortNumber(1.0 / clip_.frameTime) +
                       " frames per second; this loader accepts " + shortNumber(kMinFps) + " .. " +
@@ -291,7 +287,7 @@ class Parser {
                       shortNumber(1.0 / kMinFps) + " s)");
         haveTime = true;
       } else {
-        return fail("expected 'Frames: N' and 'Frame Time: SECONDS', found " + quoted(raw_));
+        return fail("expected 'Frames: N' and 'Frame Time: SECONDS', found " + quotedText(raw_));
       }
     }
     // The claim is only a hint for the reserve, and the text bounds it: every value takes at least
@@ -311,7 +307,7 @@ class Parser {
         double v;
         // Frames are stored as float: a finite double beyond float's range would become inf.
         if (!parseDouble(t, v) || !(std::abs(v) <= std::numeric_limits<float>::max()))
-          return fail("frame value " + quoted(t) + " is not a finite number within float range");
+          return fail("frame value " + quotedText(t) + " is not a finite number within float range");
         clip_.values.push_back(static_cast<float>(v));
       }
       ++frames;
