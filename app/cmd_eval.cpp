@@ -172,6 +172,11 @@ int runJob(const EvalJob& job) {
     bo.scale = job.bvhScale;
     bo.body = job.bvhBody;
     auto avatar = tracking::loadBvhAvatar(clip.string(), bo);
+    // What the import repaired or doubted (root glitches, missing frames): on the terminal, as
+    // well as in each metrics.json's notes.
+    if (avatar)
+      for (const auto& w : avatar->clip.warnings)  // the parser's name the file already
+        std::fprintf(stderr, "warning: %s\n", (w.rfind(clip.string(), 0) == 0 ? w : clip.string() + ": " + w).c_str());
     for (eval::TrackerSet set : job.sets)
       for (double fps : job.rates) {
         Row row;

@@ -234,6 +234,15 @@ std::array<int, kTrackerCount> bvhTrackerJoints(const avatar::HumanoidMap& human
 
 Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, BvhMapping* mappingOut) {
   if (auto s = checkOptions(clip, options); !s.ok()) return Error{s.error()};
+  // A glitch frame (a root 99999 units up for one frame) ruined every measurement after it: the
+  // trace and whatever is compared with the clip. Repaired on a copy here.
+  auto glitches = findBvhGlitches(clip);
+  if (!glitches) return Error{glitches.error()};
+  if (!glitches->empty()) {
+    BvhClip repaired = clip;
+    if (auto r = repairBvhGlitches(repaired); !r) return Error{r.error()};
+    return bvhToTrace(repaired, options, mappingOut);
+  }
   auto body = avatar::analyseBvhBody(clip, options.body);
   if (!body) return Error{body.error()};
   BvhMapping m;

@@ -9,6 +9,7 @@
 #include "core/percentile.h"
 #include "test_paths.h"
 #include "tracking/body_dimensions.h"
+#include "tracking/bvh_avatar.h"
 #include "tracking/bvh_source.h"
 
 using namespace embody;
@@ -410,3 +411,82 @@ TEST_CASE("--bvh-scale must make the performer a plausible height, and --user-he
   CHECK_THAT(opened.error(), Catch::StartsWith("--user-height 2.7 m"));
 }
 
+namespace {
+
+bool hasNote(const std::vector<std::string>& notes, const std::string& text) {
+  return std::any_of(notes.begin(), notes.end(), [&](const std::string& n) { return n.find(text) != std::string::npos; });
+}
+
+}  // namespace
+
+TEST_CASE("a BVH root that jumps away faster than any body moves and comes back is repaired, with a note", "[tracking][bvh]") {
+  // The figure walks 10 units a frame at 30 Hz; its skeleton reaches 25 units from the root.
+  auto parsed = avatar::parseBvh(figure("cmu", 40), "glitch.bvh");
+  REQUIRE(parsed.ok());
+  const BvhClip clean = *parsed;
+  auto rootY = [](const BvhClip& c, size_t f) { return c.values[f * 36 + 1]; };
+  SECTION("one frame at a lost-marker sentinel (99999) or 1e30: interpolated, noted in the trace and the mapping") {
+    for (float bad : {99999.0f, 1e30f}) {
+      INFO(bad);
+      BvhClip clip = clean;
+      clip.values[20 * 36 + 1] = bad;
+      BvhMapping map;
+      auto trace = bvhToTrace(clip, {}, &map);
+      REQUIRE(trace.ok());
+      auto ref = bvhToTrace(clean, {});
+      REQUIRE(ref.ok());
+      // The glitch frame's hips are where the clean clip's are (the line between frames 19 and 21).
+      CHECK(glm::length(trace->samples[20][TrackerId::Hips].position - ref->samples[20][TrackerId::Hips].position) < 1e-4f);
+      CHECK(trace->samples[0][TrackerId::LeftFoot].position.y == Approx(ref->samples[0][TrackerId::LeftFoot].position.y));
+      CHECK(hasNote(map.notes, "root glitch in frame 20 (1 of 40)"));
+      CHECK(hasNote(trace->notes, "root glitch in frame 20"));
+      CHECK(rootY(clip, 20) == bad);  // the caller's clip is left as it was
+      auto repaired = repairBvhGlitches(clip);
+      REQUIRE(repaired.ok());
+      CHECK(*repaired == 1);
+      CHECK(rootY(clip, 20) == Approx(20.0f));
+      CHECK(findBvhGlitches(clip)->empty());
+    }
+  }
+  SECTION("ten frames with the root zeroed, the last frames, the first frame") {
+    BvhClip clip = clean;
+    for (size_t f = 10; f < 15; ++f) clip.values[f * 36 + 0] = clip.values[f * 36 + 1] = clip.values[f * 36 + 2] = 0.0f;
+    for (size_t f = 37; f < 40; ++f) clip.values[f * 36 + 1] = 99999.0f;
+    clip.values[1] = 1e30f;
+    auto spans = findBvhGlitches(clip);
+    REQUIRE(spans.ok());
+    REQUIRE(spans->size() == 3);
+    CHECK((*spans)[0].first == 0);
+    CHECK((*spans)[0].last == 0);
+    CHECK((*spans)[1].first == 10);
+    CHECK((*spans)[1].last == 14);
+    CHECK((*spans)[2].first == 37);
+    CHECK((*spans)[2].last == 39);
+    REQUIRE(repairBvhGlitches(clip).ok());
+    CHECK(clip.values[12 * 36 + 2] == Approx(120.0f));  // on the line between frames 9 and 15
+    CHECK(rootY(clip, 0) == Approx(20.0f));            // frame 1's
+    CHECK(rootY(clip, 39) == Approx(20.0f));           // held at frame 36
+    CHECK(clip.values[39 * 36 + 2] == Approx(360.0f));
+    CHECK_THAT(clip.warnings.back(), Catch::Contains("root glitch in frames 0, 10-14, 37-39 (9 of 40)"));
+  }
+  SECTION("a cut (the root jumps and stays) is the clip's motion; a jump beyond any capture volume that stays is refused") {
+    BvhClip cut = clean;
+    for (size_t f = 15; f < 40; ++f) cut.values[f * 36 + 0] += 200.0f;
+    CHECK(findBvhGlitches(cut)->empty());
+    auto longer = avatar::parseBvh(figure("cmu", 80), "broken.bvh");
+    REQUIRE(longer.ok());
+    for (size_t f = 10; f < 80; ++f) longer->values[f * 36 + 1] = 1e30f;
+    auto broken = bvhToTrace(*longer, {});
+    REQUIRE_FALSE(broken.ok());
+    CHECK_THAT(broken.error(), Catch::Contains("frame 10: the root jumps 1e+30 units"));
+  }
+  SECTION("the clip as an avatar (embody eval) is repaired too: its joints are what the body is scored against") {
+    BvhClip clip = clean;
+    clip.values[20 * 36 + 1] = 99999.0f;
+    auto avatar = buildBvhAvatar(clip, {});
+    REQUIRE(avatar.ok());
+    CHECK(rootY(avatar->clip, 20) == Approx(20.0f));
+    CHECK(hasNote(avatar->mapping.notes, "root glitch in frame 20"));  // eval's metrics.json notes
+    CHECK(hasNote(avatar->clip.warnings, "root glitch in frame 20"));  // printed by embody eval
+  }
+}
