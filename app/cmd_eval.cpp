@@ -18,6 +18,7 @@
 #include "app/args.h"
 #include "app/bvh_options.h"
 #include "app/eval_sheet.h"
+#include "core/frame_rate.h"
 #include "eval/clip_eval.h"
 #include "eval/report.h"
 #include "tracking/bvh_avatar.h"
@@ -171,6 +172,11 @@ int runJob(const EvalJob& job) {
     bo.scale = job.bvhScale;
     bo.body = job.bvhBody;
     auto avatar = tracking::loadBvhAvatar(clip.string(), bo);
+    // What the import repaired or doubted (root glitches, missing frames): on the terminal, as
+    // well as in each metrics.json's notes.
+    if (avatar)
+      for (const auto& w : avatar->clip.warnings)  // the parser's name the file already
+        std::fprintf(stderr, "warning: %s\n", (w.rfind(clip.string(), 0) == 0 ? w : clip.string() + ": " + w).c_str());
     for (eval::TrackerSet set : job.sets)
       for (double fps : job.rates) {
         Row row;
@@ -206,7 +212,7 @@ int runJob(const EvalJob& job) {
 std::vector<double> ratesOf(const app::Args& args) {
   const std::vector<double> rates = args.numbers("fps");
   for (size_t k = 0; k < rates.size(); ++k) {
-    if (!(rates[k] >= 1.0 && rates[k] <= 1000.0)) throw std::invalid_argument("--fps must be 1 .. 1000 Hz (got " + rateName(rates[k]) + ")");
+    if (!(rates[k] >= kMinFps && rates[k] <= kMaxFps)) throw std::invalid_argument("--fps must be 1 .. 1000 Hz (got " + rateName(rates[k]) + ")");
     if (std::find(rates.begin(), rates.begin() + long(k), rates[k]) != rates.begin() + long(k))
       throw std::invalid_argument("--fps names " + rateName(rates[k]) + " Hz twice");
   }

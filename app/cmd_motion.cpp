@@ -14,6 +14,7 @@
 #include "app/args.h"
 #include "app/bvh_options.h"
 #include "app/job_options.h"
+#include "avatar/body/calibration.h"
 #include "runtime/task_layout.h"
 #include "tracking/one_euro_filter.h"
 #include "tracking/synthetic_source.h"
@@ -25,7 +26,8 @@ using namespace embody;
 using namespace embody::tracking;
 
 void sourceOptions(app::Args& args) {
-  args.option("user-height", "METRES", "the user's height: synthetic motions are built for it, BVH fitted to it", "1.75");
+  args.option("user-height", "METRES", "the user's height, " + avatar::bodyHeightRange() +
+                                           ": synthetic motions are built for it, BVH fitted to it", "1.75");
   args.option("bvh-scale", "M_PER_UNIT", "metres per BVH unit (e.g. 0.0564 for CMU); default: fit the rest skeleton to --user-height");
   app::declareBvhOptions(args);
   args.option("bone-map", "FILE", "the same as --bvh-bone-map (motion commands have no avatar)");
@@ -61,7 +63,8 @@ std::unique_ptr<PoseSource> openSource(const app::Args& args, const std::string&
 SourceOptions readSourceOptions(const app::Args& args) {
   SourceOptions o;
   o.userHeight = static_cast<float>(args.number("user-height"));
-  if (!(o.userHeight >= 0.5f && o.userHeight <= 2.5f)) throw std::invalid_argument("--user-height must be 0.5 .. 2.5 m");
+  if (!avatar::plausibleBodyHeight(o.userHeight))
+    throw std::invalid_argument("--user-height must be " + avatar::bodyHeightRange());
   if (args.has("bvh-scale")) {
     o.bvhScale = args.number("bvh-scale");
     if (!(o.bvhScale > 0.0)) throw std::invalid_argument("--bvh-scale must be positive");

@@ -8,16 +8,6 @@
 
 namespace embody::app {
 
-namespace {
-
-std::string metres(double m) {
-  char text[16];
-  std::snprintf(text, sizeof(text), "%.1f", m);
-  return text;
-}
-
-}  // namespace
-
 void addJobOptions(Args& args, unsigned groups, const JobOptionDefaults& defaults) {
   auto orNone = [](const std::string& v) { return v.empty() ? std::nullopt : std::optional<std::string>(v); };
   if (groups & kAvatarOptions) {
@@ -36,8 +26,7 @@ void addJobOptions(Args& args, unsigned groups, const JobOptionDefaults& default
     args.option("spine", "MODE", "IK spine: auto, full (every vertebra) or simplified", "auto");
     args.flag("uncoupled-spine", "independent spine sites (one ball joint each) instead of the coupled spine "
                                  "(Raunhardt & Boulic 2008, the default)");
-    args.option("user-height", "METRES", "the user's height, " + metres(avatar::kMinBodyHeight) + " .. " +
-                                             metres(avatar::kMaxBodyHeight) +
+    args.option("user-height", "METRES", "the user's height, " + avatar::bodyHeightRange() +
                                              " (default: the profile's, else from the first head sample)");
     args.option("profile", "FILE", "user profile JSON (embody avatar calibrate): the user's height");
   }
@@ -100,8 +89,7 @@ void readJobOptions(const Args& args, unsigned groups, JobOptions& out) {
     if (args.has("user-height")) {
       const double h = args.number("user-height");
       if (!avatar::plausibleBodyHeight(h))
-        throw std::invalid_argument("--user-height must be " + metres(avatar::kMinBodyHeight) + " .. " +
-                                    metres(avatar::kMaxBodyHeight) + " m");
+        throw std::invalid_argument("--user-height must be " + avatar::bodyHeightRange());
       out.userHeight = float(h);
     }
   }

@@ -13,6 +13,7 @@
 #include "app/args.h"
 #include "app/bvh_options.h"
 #include "avatar/body/body_model.h"
+#include "core/frame_rate.h"
 
 namespace embody::app {
 
@@ -47,8 +48,7 @@ struct JobOptions {
   std::string exportPath;          // --export FILE.bvh|.glb: the body shown, every frame ("" none)
 };
 
-// The limits every command applies.
-constexpr double kMinFps = 1.0, kMaxFps = 1000.0;
+// The limits every command applies (the frame rates: core/frame_rate.h, kMinFps .. kMaxFps).
 constexpr int kMinSide = 16, kMaxSide = 8192;
 constexpr double kMaxBudgetMs = 1000.0;
 constexpr int kMaxIkIterations = 1000;

@@ -127,6 +127,8 @@ void turnReferences(const avatar::BvhClip& clip, std::span<const float> frame, B
 
 Result<BvhAvatar> buildBvhAvatar(avatar::BvhClip clip, const BvhTrackerOptions& options) {
   if (clip.joints.empty() || clip.frameCount == 0) return Error{"the BVH clip has no joints or no frames"};
+  // The clip's joints are what the solved body is scored against: repaired as the trace is.
+  if (auto r = repairBvhGlitches(clip); !r) return Error{r.error()};
   BvhAvatar out;
   auto trace = bvhToTrace(clip, options, &out.mapping);
   if (!trace) return Error{trace.error()};

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "avatar/body/calibration.h"
 #include "core/percentile.h"
 #include "tracking/body_dimensions.h"
 
@@ -19,11 +20,35 @@ using avatar::HumanBone;
 constexpr HumanBone kTrackerBone[kTrackerCount] = {HumanBone::head,     HumanBone::leftHand, HumanBone::rightHand,
                                                    HumanBone::hips,     HumanBone::leftFoot, HumanBone::rightFoot};
 
+// The user's height, in the range every CLI option takes (avatar/body/calibration.h).
+Status checkUserHeight(float userHeight) {
+  if (avatar::plausibleBodyHeight(userHeight)) return {};
+  char text[48];
+  std::snprintf(text, sizeof text, "%g", double(userHeight));
+  return Error{std::string("--user-height ") + text + " m is outside " + avatar::bodyHeightRange()};
+}
+
 Status checkOptions(const BvhClip& clip, const BvhTrackerOptions& options) {
   if (clip.joints.empty() || clip.frameCount == 0) return Error{"BVH clip has no joints or no frames"};
-  if (!(options.userHeight >= 0.5f && options.userHeight <= 2.5f)) return Error{"user height outside 0.5 .. 2.5 m"};
-  if (options.scale < 0.0 || !std::isfinite(options.scale)) return Error{"BVH scale must be positive"};
+  if (auto s = checkUserHeight(options.userHeight); !s) return s;
+  if (options.scale < 0.0 || !std::isfinite(options.scale)) return Error{"--bvh-scale must be positive"};
   return {};
+}
+
+// A given --bvh-scale must make the performer a body height the project takes (the range of
+// --user-height): 1e30 or 1e-30 reached the body solver as "a rest frame is not finite", 1e6 an
+// eval of 2.4e9 cm at exit 0. The message gives the scales that would do for this clip.
+Status checkScale(const BvhTrackerOptions& options, double heightUnits) {
+  if (options.scale <= 0.0 || !(heightUnits > 0.0)) return {};  // fitted to the user's height
+  const double performer = heightUnits * options.scale;
+  if (avatar::plausibleBodyHeight(performer)) return {};
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "--bvh-scale %g m/unit makes the performer %.3g m tall (%.4g units standing), not %s; for this clip "
+                "give %.3g .. %.3g m/unit, or leave --bvh-scale out to fit the user's height",
+                options.scale, performer, heightUnits, avatar::bodyHeightRange().c_str(),
+                avatar::kMinBodyHeight / heightUnits, avatar::kMaxBodyHeight / heightUnits);
+  return Error{text};
 }
 
 // A required tracker without a joint stops the run (one line: what is missing, how to map it);
@@ -90,7 +115,8 @@ References references(const BvhClip& clip, const BvhMapping& m) {
   }
   // Eyes at kEyeHeightRatio of the standing height, ahead of the head joint.
   const double performer = m.heightUnits * m.scale;
-  const BodyDimensions body = BodyDimensions::fromHeight(static_cast<float>(std::clamp(performer, 0.5, 2.5)));
+  const BodyDimensions body =
+      BodyDimensions::fromHeight(static_cast<float>(std::clamp(performer, avatar::kMinBodyHeight, avatar::kMaxBodyHeight)));
   const double rise = std::clamp(kEyeHeightRatio * performer - m.body.headJointUnits * m.scale, -0.05 * performer,
                                  0.1 * performer);
   r.eyeOffset = glm::dvec3(0.0, rise, -static_cast<double>(body.eyeForward));
@@ -208,6 +234,15 @@ std::array<int, kTrackerCount> bvhTrackerJoints(const avatar::HumanoidMap& human
 
 Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, BvhMapping* mappingOut) {
   if (auto s = checkOptions(clip, options); !s.ok()) return Error{s.error()};
+  // A glitch frame (a root 99999 units up for one frame) ruined every measurement after it: the
+  // trace and whatever is compared with the clip. Repaired on a copy here.
+  auto glitches = findBvhGlitches(clip);
+  if (!glitches) return Error{glitches.error()};
+  if (!glitches->empty()) {
+    BvhClip repaired = clip;
+    if (auto r = repairBvhGlitches(repaired); !r) return Error{r.error()};
+    return bvhToTrace(repaired, options, mappingOut);
+  }
   auto body = avatar::analyseBvhBody(clip, options.body);
   if (!body) return Error{body.error()};
   BvhMapping m;
@@ -215,6 +250,7 @@ Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, 
   m.joint = bvhTrackerJoints(m.body.humanoid);
   if (auto s = checkTrackers(clip, options, m); !s.ok()) return Error{s.error()};
   m.heightUnits = m.body.heightUnits;
+  if (auto s = checkScale(options, m.heightUnits); !s.ok()) return Error{s.error()};
   m.scale = options.scale > 0.0 ? options.scale : options.userHeight / m.heightUnits;
   m.upAxis = m.body.upAxis;
   m.facingAxis = m.body.forwardAxis;
@@ -238,6 +274,8 @@ Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, 
 
 Result<std::unique_ptr<TraceSource>> openBvhSource(const std::string& path, const BvhTrackerOptions& options,
                                                    BvhMapping* mapping) {
+  // Before the file: a bad --user-height is not the clip's fault.
+  if (auto s = checkUserHeight(options.userHeight); !s.ok()) return Error{s.error()};
   auto clip = avatar::loadBvh(path);
   if (!clip) return Error{clip.error()};
   auto trace = bvhToTrace(*clip, options, mapping);

@@ -56,6 +56,25 @@ std::array<int, kTrackerCount> bvhTrackerJoints(const avatar::HumanoidMap& human
 // Samples every frame of the clip into a trace (time = frame * frameTime).
 Result<Trace> bvhToTrace(const avatar::BvhClip& clip, const BvhTrackerOptions& options, BvhMapping* mapping = nullptr);
 
+// Frames whose root leaves and comes back faster than any body moves (a lost-marker sentinel such
+// as Y = 99999 for a frame, a root zeroed for ten): `first..last`, with the good frames either
+// side (`before`/`after`, SIZE_MAX at the clip's ends) and the jump in file units. Speeds are in
+// the skeleton's size (its rest pose's farthest joint from the root), so any unit reads the same.
+// A root that jumps and stays is a cut, left alone; one that stays beyond any capture volume
+// (100 reaches) is an Error naming the frame.
+struct BvhGlitch {
+  size_t first = 0, last = 0;
+  size_t before = 0, after = 0;
+  double jump = 0.0;
+};
+Result<std::vector<BvhGlitch>> findBvhGlitches(const avatar::BvhClip& clip);
+// Replaces the glitch frames' root positions (every position channel) by the line between the
+// good frames either side, and adds one warning to clip.warnings naming the frames (which
+// bvhToTrace copies into the notes: `motion info`, the trace, eval's metrics.json). Returns how
+// many frames it repaired. bvhToTrace repairs a copy of a clip that has any; code that keeps the
+// clip beside the trace (tracking/bvh_avatar.h) repairs its own first.
+Result<size_t> repairBvhGlitches(avatar::BvhClip& clip);
+
 // Loads a BVH file as a replayable source (linear interpolation between frames).
 Result<std::unique_ptr<TraceSource>> openBvhSource(const std::string& path, const BvhTrackerOptions& options,
                                                    BvhMapping* mapping = nullptr);

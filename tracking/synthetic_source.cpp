@@ -5,6 +5,7 @@
 #include <cmath>
 #include <glm/gtc/constants.hpp>
 
+#include "avatar/body/calibration.h"
 #include "core/smoothstep.h"
 
 namespace embody::tracking {
@@ -262,8 +263,8 @@ SyntheticSource::SyntheticSource(const SyntheticMotionInfo* info, int kind, floa
     : info_(info), kind_(kind), body_(BodyDimensions::fromHeight(userHeight)) {}
 
 Result<std::unique_ptr<SyntheticSource>> SyntheticSource::create(std::string_view motion, float userHeight) {
-  if (!(userHeight >= 0.5f && userHeight <= 2.5f))
-    return Error{"user height " + std::to_string(userHeight) + " m is outside 0.5 .. 2.5 m"};
+  if (!avatar::plausibleBodyHeight(userHeight))
+    return Error{"user height " + std::to_string(userHeight) + " m is outside " + avatar::bodyHeightRange()};
   for (size_t i = 0; i < kMotions.size(); ++i)
     if (kMotions[i].name == motion)
       return std::unique_ptr<SyntheticSource>(new SyntheticSource(&kMotions[i], static_cast<int>(i), userHeight));

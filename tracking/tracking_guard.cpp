@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "avatar/body/calibration.h"
+
 namespace embody::tracking {
 
 namespace {
@@ -48,7 +50,7 @@ bool finitePose(const TrackerPose& p) { return isUsable(p); }
 std::string_view statusName(TrackerStatus s) { return kStatusNames[static_cast<size_t>(s)]; }
 
 TrackingGuard::TrackingGuard(const TrackingGuardConfig& config)
-    : config_(config), body_(BodyDimensions::fromHeight(std::clamp(config.userHeight, 0.5f, 2.5f))) {
+    : config_(config), body_(BodyDimensions::fromHeight(float(std::clamp(double(config.userHeight), avatar::kMinBodyHeight, avatar::kMaxBodyHeight)))) {
   reset();
 }
 

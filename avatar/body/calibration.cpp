@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -12,6 +13,12 @@ bool plausibleArmScale(double ratio) { return std::isfinite(ratio) && ratio >= k
 
 bool plausibleBodyHeight(double metres) {
   return std::isfinite(metres) && metres >= kMinBodyHeight && metres <= kMaxBodyHeight;
+}
+
+std::string bodyHeightRange() {
+  char text[48];
+  std::snprintf(text, sizeof text, "%.1f .. %.1f m", kMinBodyHeight, kMaxBodyHeight);
+  return text;
 }
 
 namespace {

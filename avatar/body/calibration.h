@@ -21,6 +21,7 @@ namespace embody::avatar {
 // The body heights (and arm spans) calibration, profiles and every CLI option accept, in metres.
 constexpr double kMinBodyHeight = 0.5, kMaxBodyHeight = 2.6;
 bool plausibleBodyHeight(double metres);  // finite and within [kMinBodyHeight, kMaxBodyHeight]
+std::string bodyHeightRange();            // "0.5 .. 2.6 m", for help texts and messages
 // The arm-length ratios (BodyProfile::armLengthScale) the runtime applies: the user's arms at
 // least half and at most twice the avatar's, scaled to the user's height.
 constexpr double kMinArmScale = 0.5, kMaxArmScale = 2.0;

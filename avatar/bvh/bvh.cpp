@@ -4,8 +4,11 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <fstream>
+
+#include "core/frame_rate.h"
 
 namespace embody::avatar {
 
@@ -18,10 +21,11 @@ class Lexer {
 
   bool nextLine(std::vector<std::string_view>& tokens, std::string_view& raw) {
     if (pos_ >= text_.size()) return false;
-    size_t end = text_.find('\n', pos_);
+    // A line ends at LF, CR LF or a lone CR (old Mac tools write CR only).
+    size_t end = text_.find_first_of("\r\n", pos_);
     if (end == std::string_view::npos) end = text_.size();
     raw = text_.substr(pos_, end - pos_);
-    pos_ = end + 1;
+    pos_ = end + (end + 1 < text_.size() && text_[end] == '\r' && text_[end + 1] == '\n' ? 2 : 1);
     ++line_;
     tokens.clear();
     size_t i = 0;
@@ -42,6 +46,20 @@ class Lexer {
   size_t pos_ = 0;
   size_t line_ = 0;
 };
+
+// File text quoted in a message, cut to kMaxQuoted characters: a line with no line breaks (a
+// whole frame, a binary file) is not repeated whole.
+constexpr size_t kMaxQuoted = 80;
+std::string quotedText(std::string_view s) {
+  if (s.size() <= kMaxQuoted) return "'" + std::string(s) + "'";
+  return "'" + std::string(s.substr(0, kMaxQuoted)) + "...' (" + std::to_string(s.size()) + " characters)";
+}
+
+std::string shortNumber(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
 
 bool parseDouble(std::string_view s, double& v) {
   if (!s.empty() && s.front() == '+') s.remove_prefix(1);
@@ -69,6 +87,13 @@ bool parseChannel(std::string_view s, BvhChannel& c) {
   return false;
 }
 
+// The frame times a file may state: the rates --fps takes (core/frame_rate.h), 1000 Hz and 1 Hz
+// included, with 1 % for a rounded Frame Time (1/1000 written as 0.00099, a 1 Hz clip as 1.01).
+// "Frame Time: 1e-9" read as 10^9 Hz and squeezed a 3 s walk into 0.4 microseconds.
+constexpr double kFrameTimeSlack = 0.01;
+constexpr double kMinFrameTime = (1.0 - kFrameTimeSlack) / kMaxFps;
+constexpr double kMaxFrameTime = (1.0 + kFrameTimeSlack) / kMinFps;
+
 class Parser {
  public:
   Parser(std::string_view text, const std::string& name, const BvhLimits& limits)
@@ -95,7 +120,7 @@ class Parser {
   Status hierarchy() {
     if (!next()) return Error{name_ + ": empty file (expected HIERARCHY)"};
     if (!iequals(tokens_[0], "HIERARCHY"))
-      return fail("expected HIERARCHY, found '" + std::string(tokens_[0]) + "'");
+      return fail("expected HIERARCHY, found " + quotedText(tokens_[0]));
     std::vector<int> stack;  // open joints
     bool expectBrace = false;
     bool anyRoot = false;
@@ -105,7 +130,7 @@ class Parser {
       while (i < tokens_.size()) {
         const std::string_view tok = tokens_[i];
         if (expectBrace) {
-          if (tok != "{") return fail("expected '{' after the joint name, found '" + std::string(tok) + "'");
+          if (tok != "{") return fail("expected '{' after the joint name, found " + quotedText(tok));
           expectBrace = false;
           ++i;
           continue;
@@ -129,10 +154,10 @@ class Parser {
           expectBrace = true;
           continue;
         }
-        if (stack.empty()) return fail("expected ROOT, found '" + std::string(tok) + "'");
+        if (stack.empty()) return fail("expected ROOT, found " + quotedText(tok));
         Status st = iequals(tok, "OFFSET")     ? readOffset(i, stack.back())
                     : iequals(tok, "CHANNELS") ? readChannels(i, stack.back())
-                                               : fail("unexpected '" + std::string(tok) + "' in HIERARCHY");
+                                               : fail("unexpected " + quotedText(tok) + " in HIERARCHY");
         if (!st) return st;
       }
     }
@@ -142,7 +167,7 @@ class Parser {
   Status openJoint(size_t& i, std::vector<int>& stack, bool isRoot, bool isEnd) {
     const std::string_view tok = tokens_[i];
     if (isRoot && !stack.empty()) return fail("ROOT inside another joint");
-    if (!isRoot && stack.empty()) return fail(std::string(tok) + " outside of any joint");
+    if (!isRoot && stack.empty()) return fail(quotedText(tok) + " outside of any joint");
     if (!isRoot && clip_.joints[static_cast<size_t>(stack.back())].endSite) return fail("a joint inside an End Site");
     if (clip_.joints.size() >= limits_.maxJoints)
       return fail("more than " + std::to_string(limits_.maxJoints) + " joints");
@@ -158,7 +183,7 @@ class Parser {
       // The name is the rest of the line (some exporters put spaces in names), minus a '{'.
       size_t last = tokens_.size();
       if (last > i + 1 && tokens_[last - 1] == "{") --last;
-      if (last <= i + 1) return fail(std::string(tok) + " without a name");
+      if (last <= i + 1) return fail(quotedText(tok) + " without a name");
       const char* b = tokens_[i + 1].data();
       const char* e = tokens_[last - 1].data() + tokens_[last - 1].size();
       j.name.assign(b, static_cast<size_t>(e - b));
@@ -175,7 +200,7 @@ class Parser {
     if (tokens_.size() - i < 4) return fail("OFFSET needs 3 numbers");
     for (size_t k = 0; k < 3; ++k)
       if (!parseDouble(tokens_[i + 1 + k], cur.offset[static_cast<int>(k)]))
-        return fail("OFFSET value '" + std::string(tokens_[i + 1 + k]) + "' is not a finite number");
+        return fail("OFFSET value " + quotedText(tokens_[i + 1 + k]) + " is not a finite number");
     i += 4;
     return {};
   }
@@ -184,10 +209,10 @@ class Parser {
   Status readChannels(size_t& i, int open) {
     BvhJoint& cur = clip_.joints[static_cast<size_t>(open)];
     if (cur.endSite) return fail("CHANNELS inside an End Site");
-    if (!cur.channels.empty()) return fail("second CHANNELS line for joint '" + cur.name + "'");
+    if (!cur.channels.empty()) return fail("second CHANNELS line for joint " + quotedText(cur.name));
     // Channels must come before the children so the frame layout is depth-first order.
     if (open != static_cast<int>(clip_.joints.size()) - 1)
-      return fail("CHANNELS of joint '" + cur.name + "' after its children");
+      return fail("CHANNELS of joint " + quotedText(cur.name) + " after its children");
     double n = 0;
     if (i + 1 >= tokens_.size() || !parseDouble(tokens_[i + 1], n) || n < 0 || n > 6 || n != std::floor(n))
       return fail("CHANNELS needs a count from 0 to 6");
@@ -198,7 +223,7 @@ class Parser {
     for (size_t k = 0; k < count; ++k) {
       BvhChannel c;
       if (!parseChannel(tokens_[i + 2 + k], c))
-        return fail("unknown channel '" + std::string(tokens_[i + 2 + k]) + "' (expected X/Y/Z position or rotation)");
+        return fail("unknown channel " + quotedText(tokens_[i + 2 + k]) + " (expected X/Y/Z position or rotation)");
       cur.channels.push_back(c);
     }
     cur.firstChannel = clip_.channelCount;
@@ -207,31 +232,64 @@ class Parser {
     return {};
   }
 
+  // The value of the MOTION header line `key` ("Frames:", "Frame Time:"; any case, any run of
+  // spaces between its words, none needed after the colon: "Frames:361" as other readers take
+  // it): the rest of the line, trimmed. False when the line is not that header.
+  bool header(std::string_view key, std::string_view& value) const {
+    const std::string_view line = raw_;
+    auto space = [&](size_t k) { return k < line.size() && std::isspace(static_cast<unsigned char>(line[k])); };
+    size_t i = 0;
+    while (space(i)) ++i;
+    for (const char c : key) {
+      if (c == ' ') {
+        if (!space(i)) return false;
+        while (space(i)) ++i;
+      } else if (i < line.size() && std::tolower(static_cast<unsigned char>(line[i])) == std::tolower(c)) {
+        ++i;
+      } else {
+        return false;
+      }
+    }
+    while (space(i)) ++i;
+    size_t e = line.size();
+    while (e > i && space(e - 1)) --e;
+    value = line.substr(i, e - i);
+    return true;
+  }
+
   Status motion() {
     size_t declared = 0;
     bool haveFrames = false, haveTime = false;
+    const size_t perFrame = static_cast<size_t>(clip_.channelCount);
+    // The most frames the value limit allows (a frame of no channels still counts as one value).
+    const size_t maxFrames = limits_.maxValues / std::max<size_t>(perFrame, 1);
     // "MOTION" may share its line with nothing else; the two header lines follow in any order.
     while (!(haveFrames && haveTime)) {
       if (!next()) return fail("unexpected end of file in MOTION (expected 'Frames:' and 'Frame Time:')");
-      if (tokens_.size() == 2 && iequals(tokens_[0], "Frames:")) {
+      std::string_view value;
+      if (header("Frames:", value)) {
         double n;
-        if (!parseDouble(tokens_[1], n) || n < 0 || n != std::floor(n) || n > 1e12)
-          return fail("'Frames:' needs a non-negative integer");
+        if (!parseDouble(value, n) || n < 0 || n != std::floor(n))
+          return fail("'Frames:' needs a non-negative integer, found " + quotedText(value));
+        if (n > static_cast<double>(maxFrames))
+          return fail("'Frames: " + std::string(value) + "' is more than this loader accepts: at most " +
+                      std::to_string(maxFrames) + " frames of " + std::to_string(perFrame) + " channels (" +
+                      std::to_string(limits_.maxValues) + " values)");
         declared = static_cast<size_t>(n);
         haveFrames = true;
-      } else if (tokens_.size() == 3 && iequals(tokens_[0], "Frame") && iequals(tokens_[1], "Time:")) {
-        if (!parseDouble(tokens_[2], clip_.frameTime) || clip_.frameTime <= 0.0 || clip_.frameTime > 10.0)
-          return fail("'Frame Time:' needs a positive number of seconds");
+      } else if (header("Frame Time:", value)) {
+        if (!parseDouble(value, clip_.frameTime) || clip_.frameTime <= 0.0)
+          return fail("'Frame Time:' needs a positive number of seconds, found " + quotedText(value));
+        if (clip_.frameTime < kMinFrameTime || clip_.frameTime > kMaxFrameTime)
+          return fail("'Frame Time: " + std::string(value) + "' is " + shortNumber(1.0 / clip_.frameTime) +
+                      " frames per second; this loader accepts " + shortNumber(kMinFps) + " .. " +
+                      shortNumber(kMaxFps) + " Hz (Frame Time " + shortNumber(1.0 / kMaxFps) + " .. " +
+                      shortNumber(1.0 / kMinFps) + " s)");
         haveTime = true;
       } else {
-        return fail("expected 'Frames: N' and 'Frame Time: SECONDS', found '" + std::string(raw_) + "'");
+        return fail("expected 'Frames: N' and 'Frame Time: SECONDS', found " + quotedText(raw_));
       }
     }
-    const size_t perFrame = static_cast<size_t>(clip_.channelCount);
-    if (perFrame > 0 && declared > limits_.maxValues / perFrame)
-      return fail("'Frames: " + std::to_string(declared) + "' with " + std::to_string(perFrame) +
-                  " channels is more than this loader accepts (" + std::to_string(limits_.maxValues) +
-                  " values)");
     // The claim is only a hint for the reserve, and the text bounds it: every value takes at least
     // two bytes (a digit and a separator), so a 1 KB file that claims 10^8 frames reserves 1 KB.
     clip_.values.reserve(std::min(declared * perFrame, lex_.remaining() / 2 + 1));
@@ -249,7 +307,7 @@ class Parser {
         double v;
         // Frames are stored as float: a finite double beyond float's range would become inf.
         if (!parseDouble(t, v) || !(std::abs(v) <= std::numeric_limits<float>::max()))
-          return fail("frame value '" + std::string(t) + "' is not a finite number within float range");
+          return fail("frame value " + quotedText(t) + " is not a finite number within float range");
         clip_.values.push_back(static_cast<float>(v));
       }
       ++frames;
@@ -288,6 +346,8 @@ int BvhClip::find(std::string_view name) const {
 }
 
 Result<BvhClip> parseBvh(std::string_view text, const std::string& name, const BvhLimits& limits) {
+  // A UTF-8 byte order mark (Windows tools write one) is no part of the first keyword.
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
   return Parser(text, name, limits).run();
 }
 

@@ -76,9 +76,9 @@ Result<HumanoidMap> mapBvhJoints(const BvhClip& clip, const Skeleton& skeleton, 
     }
   }
   if (!boneMapJson.empty()) {
-    std::vector<int> identity(skeleton.joints.size());
-    for (size_t j = 0; j < identity.size(); ++j) identity[j] = static_cast<int>(j);
-    if (auto s = applyBoneMap(boneMapJson, skeleton, identity, map); !s.ok()) return Error{s.error()};
+    // Joint names only: a number is no joint of a BVH file (the probe's {"leftHand": 5} went to
+    // whatever joint had that index).
+    if (auto s = applyBoneMap(boneMapJson, skeleton, {}, map); !s.ok()) return Error{s.error()};
     map.method = MappingMethod::BoneMap;
     finishHumanoidMap(skeleton, map);
   }

@@ -469,6 +469,8 @@ Status applyBoneMap(const std::string& text, const Skeleton& skeleton, const std
   const auto doc = nlohmann::json::parse(text, nullptr, false);
   if (doc.is_discarded() || !doc.is_object())
     return Error{"bone map: not a JSON object of bone name -> node name"};
+  const bool byIndex = !nodeToJoint.empty();  // glTF node indices; a BVH clip has names only
+  std::vector<std::string> boneOfJoint(skeleton.joints.size());  // the user's bone per joint
   for (const auto& [name, value] : doc.items()) {
     HumanBone b;
     if (!parseHumanBone(name, b))
@@ -478,15 +480,24 @@ Status applyBoneMap(const std::string& text, const Skeleton& skeleton, const std
       j = skeleton.find(value.get<std::string>());
       if (j < 0)
         return Error{"bone map: " + name + " -> '" + value.get<std::string>() + "': no node has that name"};
-    } else if (value.is_number_integer()) {
+    } else if (value.is_number_integer() && byIndex) {
       const auto i = value.get<int64_t>();
       if (i < 0 || static_cast<size_t>(i) >= nodeToJoint.size())
         return Error{"bone map: " + name + " -> node " + std::to_string(i) + " out of range"};
       j = nodeToJoint[static_cast<size_t>(i)];
     } else if (value.is_null()) {
       j = -1;  // explicitly unmapped
+    } else if (byIndex) {
+      return Error{"bone map: " + name + ": expected a node name (a string) or a glTF node index"};
     } else {
-      return Error{"bone map: " + name + " must map to a node name (string) or index"};
+      return Error{"bone map: " + name + ": expected a joint name (a string)"};
+    }
+    if (j >= 0) {
+      std::string& other = boneOfJoint[static_cast<size_t>(j)];
+      if (!other.empty())
+        return Error{"bone map: " + other + " and " + name + " both map to '" +
+                     skeleton.joints[static_cast<size_t>(j)].name + "' (one joint plays one bone)"};
+      other = name;
     }
     // A joint plays one bone: the user's choice takes it away from whatever bone had it.
     for (auto& other : map.bones)

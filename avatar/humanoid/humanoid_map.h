@@ -150,7 +150,8 @@ Result<HumanoidMap> mapHumanoid(const HumanoidInputs& in);
 HumanoidMap mapByNames(const Skeleton& skeleton);
 HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& jointHasWeights);
 // Applies a user bone map (JSON object VRM-bone-name -> node name or index into nodeToJoint) on
-// top of `map`: its entries win, null unmaps. Errors name the bad entry.
+// top of `map`: its entries win, null unmaps. An empty nodeToJoint (a BVH clip) takes names only.
+// Errors name the bad entry; two bones on one joint are an error.
 Status applyBoneMap(const std::string& text, const Skeleton& skeleton, const std::vector<int>& nodeToJoint,
                     HumanoidMap& map);
 // Fills missingRequired, spine and forward for a map whose bones are set.

@@ -59,6 +59,12 @@ TEST_CASE("embody motion errors: usage errors exit 2, broken inputs exit 1 with 
   CHECK(runEmbody("motion record --motion synthetic:idle").exitCode == 2);
   CHECK(runEmbody("motion info synthetic:idle --user-height tall").exitCode == 2);
   CHECK(runEmbody("motion info synthetic:idle --lose elbow@1-2").exitCode == 2);
+  // --user-height: the range of every command (0.5 .. 2.6 m, avatar/body/calibration.h); motion
+  // and the BVH/synthetic sources said 2.5 while render's help and check said 2.6.
+  CHECK(runEmbody("motion info synthetic:idle --user-height 2.55").exitCode == 0);
+  auto tall = runEmbody("motion info synthetic:idle --user-height 2.7", true);
+  CHECK(tall.exitCode == 2);
+  CHECK(tall.output.find("--user-height must be 0.5 .. 2.6 m") != std::string::npos);
   auto unknown = runEmbody("motion info synthetic:dance", true);
   CHECK(unknown.exitCode == 1);
   CHECK(unknown.output.find("known: synthetic:idle") != std::string::npos);

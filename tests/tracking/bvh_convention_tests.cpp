@@ -202,6 +202,25 @@ TEST_CASE("BVH overrides: --bvh-up/--bvh-forward turn the clip, a bone map picks
     o.body.boneMapJson = R"({"head": "NoSuchJoint"})";
     CHECK_THAT(traceOf(text, o).error(), Catch::Contains("NoSuchJoint"));
   }
+  SECTION("a bone map value that is not a joint name, or two bones on one joint, is refused by name") {
+    BvhTrackerOptions o;
+    // A number was taken as a joint index: {"leftHand": 5} put the hand tracker on a toe.
+    o.body.boneMapJson = R"({"leftHand": 5})";
+    auto number = traceOf(text, o);
+    REQUIRE_FALSE(number.ok());
+    CHECK_THAT(number.error(), Catch::Contains("bone map: leftHand: expected a joint name (a string)"));
+    o.body.boneMapJson = R"({"leftHand": true})";
+    CHECK_THAT(traceOf(text, o).error(), Catch::Contains("bone map: leftHand: expected a joint name (a string)"));
+    // Two bones on one joint said "no joint for leftHand": the second took the joint from the first.
+    o.body.boneMapJson = R"({"leftHand": "LeftHand", "rightHand": "LeftHand"})";
+    auto dup = traceOf(text, o);
+    REQUIRE_FALSE(dup.ok());
+    CHECK_THAT(dup.error(), Catch::Contains("both map to 'LeftHand'"));
+    CHECK_THAT(dup.error(), !Catch::Contains("no joint for"));
+    // null still unmaps, and a name still maps.
+    o.body.boneMapJson = R"({"leftFoot": null, "head": "Neck"})";
+    CHECK(traceOf(text, o).ok());
+  }
   SECTION("names that say nothing: the topology mapper finds the body") {
     test::BvhConvention c = canonical;
     for (size_t r = 0; r < c.names.size(); ++r) c.names[r] = "j" + std::to_string(r);

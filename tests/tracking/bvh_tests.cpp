@@ -1,5 +1,6 @@
 // BVH: parsing (channel order, frame time, end sites), broken files, tracker derivation, and the
 // shared CMU walk.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <glm/gtc/quaternion.hpp>
@@ -8,6 +9,7 @@
 #include "core/percentile.h"
 #include "test_paths.h"
 #include "tracking/body_dimensions.h"
+#include "tracking/bvh_avatar.h"
 #include "tracking/bvh_source.h"
 
 using namespace embody;
@@ -140,6 +142,92 @@ TEST_CASE("broken BVH files give an error with the line, never a crash") {
   auto limited = avatar::parseBvh(good, "fig.bvh", tiny);
   REQUIRE_FALSE(limited.ok());
   CHECK_THAT(limited.error(), Catch::Contains("more than 4 joints"));
+}
+
+TEST_CASE("BVH text from other tools: a byte order mark, CR-only lines, no space after the header colon") {
+  const std::string good = figure("cmu");
+  auto expectSame = [&](const std::string& text) {
+    auto clip = avatar::parseBvh(text, "fig.bvh");
+    REQUIRE(clip.ok());
+    CHECK(clip->joints.size() == 16);
+    CHECK(clip->frameCount == 3);
+    CHECK(clip->frameTime == Approx(0.0333333));
+    CHECK(clip->values == avatar::parseBvh(good, "fig.bvh")->values);
+  };
+  SECTION("a UTF-8 byte order mark is skipped") { expectSame("\xEF\xBB\xBF" + good); }
+  SECTION("lines ended by CR alone, or by CR LF") {
+    std::string cr = good, crlf;
+    std::replace(cr.begin(), cr.end(), '\n', '\r');
+    expectSame(cr);
+    for (char c : good) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+    expectSame(crlf);
+    // Line numbers count CR-only lines too.
+    std::string bad = cr;
+    bad.replace(bad.find("OFFSET 0 10 0"), 13, "OFFSET 0 ten 0");
+    CHECK_THAT(avatar::parseBvh(bad, "fig.bvh").error(), Catch::Contains("fig.bvh:8: OFFSET value 'ten'"));
+  }
+  SECTION("'Frames:361' and 'Frame Time:0.033' without a space after the colon") {
+    std::string s = good;
+    s.replace(s.find("Frames: 3"), 9, "Frames:3");
+    s.replace(s.find("Frame Time: "), 12, "frame  time:");
+    expectSame(s);
+  }
+}
+
+TEST_CASE("BVH header values over the loader's limits say the limit, and quoted lines are cut short") {
+  const std::string good = figure("cmu");
+  auto replace = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  auto error = [](const std::string& text) {
+    auto clip = avatar::parseBvh(text, "fig.bvh");
+    REQUIRE_FALSE(clip.ok());
+    return clip.error();
+  };
+  // A count that is a non-negative integer, only too large: was "needs a non-negative integer".
+  const std::string frames = error(replace("Frames: 3", "Frames: 99999999999999"));
+  CHECK_THAT(frames, Catch::Contains("'Frames: 99999999999999' is more than this loader accepts: at most"));
+  CHECK_THAT(frames, !Catch::Contains("non-negative integer"));
+  CHECK_THAT(error(replace("Frames: 3", "Frames: -3")), Catch::Contains("'Frames:' needs a non-negative integer, found '-3'"));
+  // A frame time that is positive, only too long: was "needs a positive number of seconds".
+  const std::string time = error(replace("Frame Time: 0.0333333", "Frame Time: 99"));
+  CHECK_THAT(time, Catch::Contains("'Frame Time: 99'"));
+  CHECK_THAT(time, Catch::Contains("1 .. 1000 Hz"));
+  CHECK_THAT(time, !Catch::Contains("positive number"));
+  // The first frame in place of the missing 'Frame Time:' line: quoted to 80 characters, not whole.
+  std::string longFrame = "0 20 0";
+  for (int c = 3; c < 36; ++c) longFrame += " 0.000000";
+  const std::string missing = error(replace("Frame Time: 0.0333333\n0 20 0", longFrame));
+  CHECK_THAT(missing, Catch::Contains("expected 'Frames: N' and 'Frame Time: SECONDS', found '0 20 0"));
+  CHECK_THAT(missing, Catch::Contains("...' ("));
+  CHECK_THAT(missing, Catch::EndsWith(" characters)"));
+  CHECK(missing.size() < 220);
+  const std::string token = error(replace("OFFSET 0 10 0", "OFFSET 0 " + std::string(500, '7') + "x 0"));
+  CHECK(token.size() < 200);
+}
+
+TEST_CASE("a BVH frame time outside the rates --fps takes (1 .. 1000 Hz) is refused, 1000 Hz itself is read") {
+  const std::string good = figure("cmu");
+  auto withTime = [&](const std::string& t) {
+    std::string s = good;
+    s.replace(s.find("Frame Time: 0.0333333"), 21, "Frame Time: " + t);
+    return avatar::parseBvh(s, "fig.bvh");
+  };
+  // "Frame Time: 1e-9" was read as 10^9 Hz (a 3 s walk in microseconds, eval at exit 0).
+  for (const char* t : {"1e-9", "0.0005", "1.5", "10"}) {
+    INFO(t);
+    auto clip = withTime(t);
+    REQUIRE_FALSE(clip.ok());
+    CHECK_THAT(clip.error(), Catch::Contains(std::string("fig.bvh:79: 'Frame Time: ") + t + "' is "));
+    CHECK_THAT(clip.error(), Catch::Contains("this loader accepts 1 .. 1000 Hz (Frame Time 0.001 .. 1 s)"));
+  }
+  // 1000 Hz and 1 Hz are rates --fps takes; a rounded 1/1000 (0.00099) is 1000 Hz too.
+  for (const char* t : {"0.001", "0.00099", "1", "0.0083333", "0.0416667"}) {
+    INFO(t);
+    CHECK(withTime(t).ok());
+  }
 }
 
 TEST_CASE("BVH trackers in OpenXR conventions from CMU, Mixamo and Bandai-Namco namings") {
@@ -290,4 +378,115 @@ TEST_CASE("percentileByRank: the value at rank floor(p n), as the BVH floor read
   CHECK(embody::percentileByRank(three, 0.05) == 1.0);  // floor(0.15) = rank 0: the lowest
   std::vector<double> none;
   CHECK(std::isnan(embody::percentileByRank(none, 0.05)));
+}
+
+TEST_CASE("--bvh-scale must make the performer a plausible height, and --user-height has one range", "[tracking][bvh]") {
+  auto clip = avatar::parseBvh(figure("cmu", 4), "fig.bvh");  // 45 units tall
+  REQUIRE(clip.ok());
+  // 1e30 and 1e-30 reached the body solver ("a rest frame is not finite"), 1e6 scored 2.4e9 cm.
+  for (double scale : {1e30, 1e-30, 1e6, 0.001, 0.1}) {
+    INFO(scale);
+    BvhTrackerOptions o;
+    o.scale = scale;
+    auto t = bvhToTrace(*clip, o);
+    REQUIRE_FALSE(t.ok());
+    CHECK_THAT(t.error(), Catch::StartsWith("--bvh-scale "));
+    CHECK_THAT(t.error(), Catch::Contains("m tall (45 units standing), not 0.5 .. 2.6 m"));
+    CHECK_THAT(t.error(), Catch::Contains("give 0.0111 .. 0.0578 m/unit"));
+  }
+  BvhTrackerOptions plausible;
+  plausible.scale = 0.04;  // 1.8 m
+  CHECK(bvhToTrace(*clip, plausible).ok());
+  // --user-height: the range of every CLI option (0.5 .. 2.6 m), not 2.5 here; the message names
+  // the option, not the clip (openBvhSource checks it before the file).
+  BvhTrackerOptions tall;
+  tall.userHeight = 2.55f;
+  CHECK(bvhToTrace(*clip, tall).ok());
+  tall.userHeight = 2.7f;
+  auto refused = bvhToTrace(*clip, tall);
+  REQUIRE_FALSE(refused.ok());
+  CHECK_THAT(refused.error(), Catch::Contains("--user-height 2.7 m is outside 0.5 .. 2.6 m"));
+  auto opened = openBvhSource("no_such_clip.bvh", tall);
+  REQUIRE_FALSE(opened.ok());
+  CHECK_THAT(opened.error(), Catch::StartsWith("--user-height 2.7 m"));
+}
+
+namespace {
+
+bool hasNote(const std::vector<std::string>& notes, const std::string& text) {
+  return std::any_of(notes.begin(), notes.end(), [&](const std::string& n) { return n.find(text) != std::string::npos; });
+}
+
+}  // namespace
+
+TEST_CASE("a BVH root that jumps away faster than any body moves and comes back is repaired, with a note", "[tracking][bvh]") {
+  // The figure walks 10 units a frame at 30 Hz; its skeleton reaches 25 units from the root.
+  auto parsed = avatar::parseBvh(figure("cmu", 40), "glitch.bvh");
+  REQUIRE(parsed.ok());
+  const BvhClip clean = *parsed;
+  auto rootY = [](const BvhClip& c, size_t f) { return c.values[f * 36 + 1]; };
+  SECTION("one frame at a lost-marker sentinel (99999) or 1e30: interpolated, noted in the trace and the mapping") {
+    for (float bad : {99999.0f, 1e30f}) {
+      INFO(bad);
+      BvhClip clip = clean;
+      clip.values[20 * 36 + 1] = bad;
+      BvhMapping map;
+      auto trace = bvhToTrace(clip, {}, &map);
+      REQUIRE(trace.ok());
+      auto ref = bvhToTrace(clean, {});
+      REQUIRE(ref.ok());
+      // The glitch frame's hips are where the clean clip's are (the line between frames 19 and 21).
+      CHECK(glm::length(trace->samples[20][TrackerId::Hips].position - ref->samples[20][TrackerId::Hips].position) < 1e-4f);
+      CHECK(trace->samples[0][TrackerId::LeftFoot].position.y == Approx(ref->samples[0][TrackerId::LeftFoot].position.y));
+      CHECK(hasNote(map.notes, "root glitch in frame 20 (1 of 40)"));
+      CHECK(hasNote(trace->notes, "root glitch in frame 20"));
+      CHECK(rootY(clip, 20) == bad);  // the caller's clip is left as it was
+      auto repaired = repairBvhGlitches(clip);
+      REQUIRE(repaired.ok());
+      CHECK(*repaired == 1);
+      CHECK(rootY(clip, 20) == Approx(20.0f));
+      CHECK(findBvhGlitches(clip)->empty());
+    }
+  }
+  SECTION("ten frames with the root zeroed, the last frames, the first frame") {
+    BvhClip clip = clean;
+    for (size_t f = 10; f < 15; ++f) clip.values[f * 36 + 0] = clip.values[f * 36 + 1] = clip.values[f * 36 + 2] = 0.0f;
+    for (size_t f = 37; f < 40; ++f) clip.values[f * 36 + 1] = 99999.0f;
+    clip.values[1] = 1e30f;
+    auto spans = findBvhGlitches(clip);
+    REQUIRE(spans.ok());
+    REQUIRE(spans->size() == 3);
+    CHECK((*spans)[0].first == 0);
+    CHECK((*spans)[0].last == 0);
+    CHECK((*spans)[1].first == 10);
+    CHECK((*spans)[1].last == 14);
+    CHECK((*spans)[2].first == 37);
+    CHECK((*spans)[2].last == 39);
+    REQUIRE(repairBvhGlitches(clip).ok());
+    CHECK(clip.values[12 * 36 + 2] == Approx(120.0f));  // on the line between frames 9 and 15
+    CHECK(rootY(clip, 0) == Approx(20.0f));            // frame 1's
+    CHECK(rootY(clip, 39) == Approx(20.0f));           // held at frame 36
+    CHECK(clip.values[39 * 36 + 2] == Approx(360.0f));
+    CHECK_THAT(clip.warnings.back(), Catch::Contains("root glitch in frames 0, 10-14, 37-39 (9 of 40)"));
+  }
+  SECTION("a cut (the root jumps and stays) is the clip's motion; a jump beyond any capture volume that stays is refused") {
+    BvhClip cut = clean;
+    for (size_t f = 15; f < 40; ++f) cut.values[f * 36 + 0] += 200.0f;
+    CHECK(findBvhGlitches(cut)->empty());
+    auto longer = avatar::parseBvh(figure("cmu", 80), "broken.bvh");
+    REQUIRE(longer.ok());
+    for (size_t f = 10; f < 80; ++f) longer->values[f * 36 + 1] = 1e30f;
+    auto broken = bvhToTrace(*longer, {});
+    REQUIRE_FALSE(broken.ok());
+    CHECK_THAT(broken.error(), Catch::Contains("frame 10: the root jumps 1e+30 units"));
+  }
+  SECTION("the clip as an avatar (embody eval) is repaired too: its joints are what the body is scored against") {
+    BvhClip clip = clean;
+    clip.values[20 * 36 + 1] = 99999.0f;
+    auto avatar = buildBvhAvatar(clip, {});
+    REQUIRE(avatar.ok());
+    CHECK(rootY(avatar->clip, 20) == Approx(20.0f));
+    CHECK(hasNote(avatar->mapping.notes, "root glitch in frame 20"));  // eval's metrics.json notes
+    CHECK(hasNote(avatar->clip.warnings, "root glitch in frame 20"));  // printed by embody eval
+  }
 }
