@@ -192,3 +192,40 @@ TEST_CASE("conformance: destroyed handles are XR_ERROR_HANDLE_INVALID, never a c
   CHECK(xrLocateSpace(local, h.stage, h.lastDisplayTime, &loc) == XR_ERROR_HANDLE_INVALID);
   CHECK(xrDestroySpace(local) == XR_ERROR_HANDLE_INVALID);
 }
+
+TEST_CASE("conformance: a swapchain the device cannot create is refused, never passed to Vulkan", "[xr]") {
+  // xrCreateSwapchain returns XR_ERROR_FEATURE_UNSUPPORTED / XR_ERROR_VALIDATION_FAILURE for what
+  // the runtime cannot honour. The OpenXR robustness probe (session 20) asked 64 mip levels of a
+  // 64 x 64 image: the runtime passed them to vkCreateImage, which corrupted lavapipe's heap
+  // (abort), and 100000 layers or storage on an sRGB format came back XR_SUCCESS against
+  // Vulkan's valid usage (the validation layer of this suite's instance reports those).
+  HeadlessSession h;
+  uint32_t n = 0;
+  REQUIRE(xrEnumerateSwapchainFormats(h.session, 0, &n, nullptr) == XR_SUCCESS);
+  std::vector<int64_t> formats(n);
+  REQUIRE(xrEnumerateSwapchainFormats(h.session, n, &n, formats.data()) == XR_SUCCESS);
+  const bool srgb = std::find(formats.begin(), formats.end(), int64_t(VK_FORMAT_R8G8B8A8_SRGB)) != formats.end();
+  REQUIRE(srgb);
+  auto create = [&](auto&& edit) {
+    XrSwapchainCreateInfo ci{XR_TYPE_SWAPCHAIN_CREATE_INFO};
+    ci.usageFlags = XR_SWAPCHAIN_USAGE_COLOR_ATTACHMENT_BIT;
+    ci.format = VK_FORMAT_R8G8B8A8_SRGB;
+    ci.sampleCount = 1;
+    ci.width = ci.height = 64;
+    ci.faceCount = ci.arraySize = ci.mipCount = 1;
+    edit(ci);
+    XrSwapchain sc = XR_NULL_HANDLE;
+    const XrResult r = xrCreateSwapchain(h.session, &ci, &sc);
+    if (XR_SUCCEEDED(r)) CHECK(xrDestroySwapchain(sc) == XR_SUCCESS);
+    else CHECK(sc == XR_NULL_HANDLE);
+    return r;
+  };
+  CHECK(create([](XrSwapchainCreateInfo& ci) { ci.mipCount = 7; }) == XR_SUCCESS);  // the full chain of 64 x 64
+  CHECK(create([](XrSwapchainCreateInfo& ci) { ci.mipCount = 8; }) == XR_ERROR_VALIDATION_FAILURE);
+  CHECK(create([](XrSwapchainCreateInfo& ci) { ci.mipCount = 64; }) == XR_ERROR_VALIDATION_FAILURE);
+  CHECK(create([](XrSwapchainCreateInfo& ci) { ci.arraySize = 100000; }) == XR_ERROR_FEATURE_UNSUPPORTED);
+  CHECK(create([](XrSwapchainCreateInfo& ci) { ci.usageFlags |= XR_SWAPCHAIN_USAGE_UNORDERED_ACCESS_BIT; }) ==
+        XR_ERROR_FEATURE_UNSUPPORTED);
+  CHECK(create([](XrSwapchainCreateInfo& ci) { ci.faceCount = 6, ci.width = 32; }) == XR_ERROR_VALIDATION_FAILURE);
+  CHECK(create([](XrSwapchainCreateInfo& ci) { ci.arraySize = 2; }) == XR_SUCCESS);  // a stereo array stays fine
+}

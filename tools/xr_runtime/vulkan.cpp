@@ -297,6 +297,28 @@ VkImageCreateInfo swapchainImageInfo(const XrSwapchainCreateInfo& ci, bool depth
   return ii;
 }
 
+// Whether the device can create these images: the format's limits for this usage and these flags,
+// and a mip chain no longer than the image's (Vulkan's valid usage, which the runtime must check
+// for the application: a client asking 64 mip levels of a 64 x 64 image had them passed to
+// vkCreateImage, which corrupted lavapipe's heap; 100000 layers and storage on an sRGB format
+// were created "successfully" against the valid usage). A cube needs square faces.
+XrResult imageSupported(const Session& s, const VkImageCreateInfo& ii) {
+  if ((ii.flags & VK_IMAGE_CREATE_CUBE_COMPATIBLE_BIT) && ii.extent.width != ii.extent.height)
+    return XR_ERROR_VALIDATION_FAILURE;
+  const uint32_t longest = std::max(ii.extent.width, ii.extent.height);
+  uint32_t fullChain = 1;
+  while ((longest >> fullChain) > 0) ++fullChain;  // floor(log2(longest)) + 1
+  if (ii.mipLevels > fullChain) return XR_ERROR_VALIDATION_FAILURE;
+  VkImageFormatProperties p{};
+  if (vkGetPhysicalDeviceImageFormatProperties(s.vkPhysicalDevice, ii.format, ii.imageType, ii.tiling, ii.usage,
+                                               ii.flags, &p) != VK_SUCCESS)
+    return XR_ERROR_FEATURE_UNSUPPORTED;
+  if (ii.extent.width > p.maxExtent.width || ii.extent.height > p.maxExtent.height || ii.mipLevels > p.maxMipLevels ||
+      ii.arrayLayers > p.maxArrayLayers)
+    return XR_ERROR_FEATURE_UNSUPPORTED;
+  return XR_SUCCESS;
+}
+
 // kSwapchainLength images with their memory; false (and nothing left) when one fails.
 bool createSwapchainImages(const Session& s, const VkImageCreateInfo& ii, Swapchain& sc) {
   for (uint32_t i = 0; i < kSwapchainLength; ++i) {
@@ -331,13 +353,15 @@ XrResult XRAPI_CALL CreateSwapchain(XrSession session, const XrSwapchainCreateIn
   std::lock_guard lock(inst->mutex);
   if (s->lost) return XR_ERROR_SESSION_LOST;
   if (XrResult r = swapchainSupported(*s, *ci); XR_FAILED(r)) return r;
+  const VkImageCreateInfo imageInfo = swapchainImageInfo(*ci, isDepthFormat(static_cast<VkFormat>(ci->format)));
+  if (XrResult r = imageSupported(*s, imageInfo); XR_FAILED(r)) return r;
   auto sc = std::make_unique<Swapchain>();
   sc->session = s;
   sc->info = *ci;
   sc->info.next = nullptr;
   sc->format = static_cast<VkFormat>(ci->format);
   sc->depth = isDepthFormat(sc->format);
-  if (!createSwapchainImages(*s, swapchainImageInfo(*ci, sc->depth), *sc)) return XR_ERROR_RUNTIME_FAILURE;
+  if (!createSwapchainImages(*s, imageInfo, *sc)) return XR_ERROR_RUNTIME_FAILURE;
   sc->initialized.assign(kSwapchainLength, false);
   Swapchain* raw = sc.release();
   return publishHandle(s->swapchains, raw, out);
