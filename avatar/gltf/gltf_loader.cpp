@@ -15,6 +15,7 @@
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <limits>
+#include <string_view>
 
 #include "avatar/gltf/component_type.h"
 #include "avatar/gltf/mtoon_json.h"
@@ -136,6 +137,33 @@ Result<GlbChunks> splitContainer(const std::vector<uint8_t>& bytes) {
     out.json.assign(bytes.begin(), bytes.end());
   }
   return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The JSON before tinygltf sees it. tinygltf converts the JSON tree to its own values recursively,
+// one stack frame per level, so arrays nested 20 000 deep (40 KB of "[[[[") overflow the stack:
+// the nesting is counted first, a scan of the brackets outside strings.
+Status checkJsonNesting(std::string_view json, int maxDepth) {
+  int depth = 0;
+  bool inString = false;
+  for (size_t i = 0; i < json.size(); ++i) {
+    const char c = json[i];
+    if (inString) {
+      if (c == '\\')
+        ++i;  // the escaped character cannot end the string
+      else if (c == '"')
+        inString = false;
+    } else if (c == '"') {
+      inString = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > maxDepth)
+        return loadError("JSON nested deeper than " + std::to_string(maxDepth) +
+                         " levels (arrays and objects, at byte " + std::to_string(i) + "); refused");
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return {};
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -933,6 +961,7 @@ Result<AvatarAsset> loadGltfFromMemory(const std::vector<uint8_t>& bytes, const 
     return loadError("file larger than " + std::to_string(limits.maxFileBytes) + " bytes");
   auto container = splitContainer(bytes);
   if (!container.ok()) return Error{container.error()};
+  if (auto s = checkJsonNesting(container->json, limits.maxJsonDepth); !s.ok()) return Error{s.error()};
 
   tinygltf::TinyGLTF parser;
   ImageLoaderContext imageContext{limits.maxImageDimension, &warnings};
