@@ -196,6 +196,32 @@ TEST_CASE("JSON nested deeper than 512 levels is refused before tinygltf recurse
   CHECK(loadError(f.glb()) == "(loaded)");
 }
 
+TEST_CASE("extensionsRequired: an extension the loader does not read is refused by name", "[gltf]") {
+  SECTION("compressed or quantized geometry") {
+    TriangleFile f;
+    f.doc["extensionsUsed"] = {"KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_mesh_quantization"};
+    f.doc["extensionsRequired"] = f.doc["extensionsUsed"];
+    const std::string e = loadError(f.glb());
+    CHECK_THAT(e, Catch::Contains("requires KHR_draco_mesh_compression, EXT_meshopt_compression, KHR_mesh_quantization") &&
+                      Catch::Contains("does not support"));
+    f.doc["extensionsRequired"] = {"KHR_texture_transform", "VENDOR_unknown"};
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("requires VENDOR_unknown (extensionsRequired)"));
+  }
+  SECTION("a Draco primitive whose accessors have no bufferView names Draco, not an accessor") {
+    TriangleFile f;
+    f.doc["accessors"][0]["bufferView"] = 7;
+    f.doc["extensionsUsed"] = {"KHR_draco_mesh_compression"};
+    f.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+    CHECK_THAT(loadError(f.glb()), Catch::StartsWith("the file requires KHR_draco_mesh_compression"));
+  }
+  SECTION("extensions the loader reads, and ones only used, still load") {
+    TriangleFile f;
+    f.doc["extensionsUsed"] = {"KHR_texture_transform", "KHR_materials_unlit", "VENDOR_unknown"};
+    f.doc["extensionsRequired"] = {"KHR_texture_transform", "KHR_materials_unlit"};
+    CHECK(loadError(f.glb()) == "(loaded)");
+  }
+}
+
 #include "avatar/avatar_loader.h"
 
 TEST_CASE("a 60000-node chain loads and maps without deep recursion", "[gltf]") {
