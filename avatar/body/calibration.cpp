@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <sstream>
 #include <tuple>
 
@@ -43,11 +45,45 @@ double avatarHeight(const AvatarAsset& avatar) {
   return static_cast<double>(glm::dot(glm::vec3(globals[static_cast<size_t>(head)][3]), up) - lo) / 0.91;
 }
 
+Result<double> measureAvatarHeight(const AvatarAsset& avatar) {
+  const double h = avatarHeight(avatar);
+  if (std::isfinite(h) && h >= kMinAvatarHeight && h <= kMaxAvatarHeight) return h;
+  char text[320];
+  if (!std::isfinite(h) || h < 0.001) {
+    std::snprintf(text, sizeof text,
+                  "cannot measure the avatar's height: it stands %.3g m tall at rest (an avatar is taken to be %g "
+                  "to %g m tall); its mesh has no size, or without a mesh its skeleton has none",
+                  std::isfinite(h) && h >= 1e-6 ? h : 0.0, kMinAvatarHeight, kMaxAvatarHeight);
+    return Error{text};
+  }
+  // The likely mistake: the power of ten (or inch) that brings the avatar nearest 1.7 m.
+  struct Unit {
+    double scale;  // the root node scale that would fix it
+    const char* what;
+  };
+  static constexpr Unit kTooTall[] = {
+      {0.01, "are its units centimetres"}, {0.001, "are its units millimetres"},
+      {0.1, "are its units decimetres"},   {0.0254, "are its units inches"}};
+  static constexpr Unit kTooSmall[] = {{10.0, "is it 10 times too small"},
+                                       {100.0, "is it 100 times too small (scaled to metres twice)"},
+                                       {1000.0, "is it 1000 times too small"}};
+  const auto units = h > kMaxAvatarHeight ? std::span<const Unit>(kTooTall) : std::span<const Unit>(kTooSmall);
+  const Unit* best = &units[0];
+  for (const Unit& u : units)
+    if (std::abs(std::log(h * u.scale / 1.7)) < std::abs(std::log(h * best->scale / 1.7))) best = &u;
+  std::snprintf(text, sizeof text,
+                "the avatar is %.4g m tall (an avatar is taken to be %g to %g m tall): %s? Fix the file (a root "
+                "node scale of %g makes it %.2f m tall) or export it in metres",
+                h, kMinAvatarHeight, kMaxAvatarHeight, best->what, best->scale, h * best->scale);
+  return Error{text};
+}
+
 Result<BodyProfile> calibrate(const AvatarAsset& avatar, const CalibrationInput& in) {
   BodyProfile p;
   p.avatar = avatar.sourcePath.empty() ? "default" : avatar.sourcePath;
-  p.avatarHeight = avatarHeight(avatar);
-  if (!(p.avatarHeight > 0.05)) return Error{"cannot measure the avatar's height"};
+  auto height = measureAvatarHeight(avatar);
+  if (!height) return Error{height.error()};
+  p.avatarHeight = *height;
   if (in.userHeight) {
     if (!plausible(*in.userHeight)) return Error{"user height must be between 0.5 and 2.6 m"};
     p.userHeight = *in.userHeight;

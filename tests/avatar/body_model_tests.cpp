@@ -344,6 +344,46 @@ TEST_CASE("calibration scales the body to the user and round-trips through the p
   }
 }
 
+TEST_CASE("calibration: an avatar in the wrong units is refused with its height and the likely unit",
+          "[body][calibration]") {
+  auto scaled = [](float s) {
+    AvatarAsset a = buildDefaultAvatar();
+    a.skeleton.joints[0].rest.scale *= s;
+    return a;
+  };
+  CalibrationInput in;
+  in.userHeight = 1.75;
+  for (float s : {0.3f, 1.0f, 3.0f}) {  // 0.53 m to 5.3 m: scaled avatars work
+    INFO("scale " << s);
+    auto h = measureAvatarHeight(scaled(s));
+    REQUIRE(h.ok());
+    CHECK(*h == Approx(avatarHeight(buildDefaultAvatar()) * s).epsilon(1e-4));
+    auto p = calibrate(scaled(s), in);
+    REQUIRE(p.ok());
+    CHECK(p->scale == Approx(1.75 / *h));
+  }
+  const std::pair<float, std::vector<const char*>> refused[] = {
+      {100.0f, {"the avatar is 175.5 m tall", "centimetres", "root node scale of 0.01 makes it 1.7"}},
+      {1000.0f, {"1755 m tall", "millimetres", "scale of 0.001"}},
+      {0.1f, {"0.1755 m tall", "10 times too small", "scale of 10 makes it 1.7"}},
+      {0.01f, {"0.01755 m tall", "100 times too small", "scale of 100"}}};
+  for (const auto& [s, says] : refused) {
+    INFO("scale " << s);
+    const auto h = measureAvatarHeight(scaled(s));
+    REQUIRE_FALSE(h.ok());
+    for (const char* text : says) CHECK_THAT(h.error(), Catch::Contains(text));
+    auto p = calibrate(scaled(s), in);
+    REQUIRE_FALSE(p.ok());
+    CHECK(p.error() == h.error());  // the one check
+  }
+  // A mesh with no size (every vertex at the origin) measures 0 m: nothing to scale by.
+  AvatarAsset flat = buildDefaultAvatar();
+  for (auto& v : flat.mesh.vertices) v.position = glm::vec3(0.0f);
+  const auto h = measureAvatarHeight(flat);
+  REQUIRE_FALSE(h.ok());
+  CHECK_THAT(h.error(), Catch::StartsWith("cannot measure the avatar's height: it stands 0 m tall"));
+}
+
 TEST_CASE("body model: the solver reaches a hand target on the default avatar and retargeting follows",
           "[body][solve]") {
   const AvatarAsset a = buildDefaultAvatar();
