@@ -1,5 +1,6 @@
 #include "avatar/skeleton.h"
 
+#include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 
 namespace embody::avatar {
@@ -17,6 +18,13 @@ int Skeleton::find(std::string_view name) const {
   for (size_t i = 0; i < joints.size(); ++i)
     if (joints[i].name == name) return static_cast<int>(i);
   return -1;
+}
+
+glm::quat globalRotationOf(const glm::mat4& global, const glm::quat& ifDegenerate) {
+  const glm::vec3 c0(global[0]), c1(global[1]), c2(global[2]);
+  const glm::vec3 s(glm::length(c0), glm::length(c1), glm::length(c2));
+  if (!(s.x > 1e-12f && s.y > 1e-12f && s.z > 1e-12f) || !std::isfinite(s.x + s.y + s.z)) return ifDegenerate;
+  return glm::normalize(glm::quat_cast(glm::mat3(c0 / s.x, c1 / s.y, c2 / s.z)));
 }
 
 std::vector<int> Skeleton::children(int joint) const {

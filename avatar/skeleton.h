@@ -33,6 +33,11 @@ struct Skeleton {
   std::string validate() const;
 };
 
+// The rotation of a global (model-space) matrix: its columns normalised. A matrix with a zero (or
+// non-finite) column, a bone hidden by a zero scale or one below it, has none: `ifDegenerate` is
+// returned (the parent's global rotation times the joint's local one keeps the chain turning).
+glm::quat globalRotationOf(const glm::mat4& global, const glm::quat& ifDegenerate);
+
 // Local transforms for every joint of a skeleton (same order). Starts at the rest pose.
 struct SkeletonPose {
   std::vector<Transform> local;

@@ -246,6 +246,33 @@ TEST_CASE("body model: a Mixamo rig retargets within 1 mm", "[body]") {
   checkRetargeting(mixamoAvatar());
 }
 
+TEST_CASE("body model: a bone hidden by a zero scale retargets to finite transforms", "[body]") {
+  // glTF allows scale 0 (a common way to hide a part): the forearm and hand collapse onto the
+  // elbow; their global rotations carry on from the parent's, so nothing below them is NaN.
+  embody::test::HumanoidFile f;
+  f.doc["nodes"][static_cast<size_t>(f.nodeOfBone["leftLowerArm"])]["scale"] = {0, 0, 0};
+  const AvatarAsset a = fromFile(f);
+  auto body = buildBodyModel(a);
+  REQUIRE(body.ok());
+  for (const glm::quat& q : body->avatarRestGlobalRotation) REQUIRE(std::isfinite(q.w + q.x + q.y + q.z));
+  ik::Data data(body->model);
+  std::mt19937 rng(11);
+  SkeletonPose pose;
+  std::vector<glm::mat4> g;
+  for (int trial = 0; trial < 10; ++trial) {
+    REQUIRE(data.setConfiguration(trial == 0 ? body->restConfiguration : randomPose(body->model, rng)).ok());
+    ik::kinematics(body->model, data, false);
+    retarget(body.value(), a, data, pose);
+    computeGlobals(a.skeleton, pose, g);
+    for (const auto& m : g)
+      for (int c = 0; c < 4; ++c)
+        for (int k = 0; k < 4; ++k) REQUIRE(std::isfinite(m[c][k]));
+    // The other hand still follows its IK joint.
+    const glm::vec3 av(g[static_cast<size_t>(body->avatarJoint[static_cast<size_t>(body->rightHand)])][3]);
+    CHECK((data.jointFrame(body->rightHand).translation() - Eigen::Vector3d(av.x, av.y, av.z)).norm() < 1e-3);
+  }
+}
+
 TEST_CASE("body model: a VRM 0.x avatar facing -Z retargets within 1 mm", "[body]") {
   std::map<std::string, std::string> names;
   int i = 0;

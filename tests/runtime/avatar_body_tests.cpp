@@ -381,6 +381,9 @@ TEST_CASE("figures: CMU walk, coupled and uncoupled spine, pelvis and balance ro
   }
 }
 
+#include "avatar/avatar_loader.h"
+#include "avatar/humanoid_test_files.h"
+
 namespace {
 
 // Solves `frames` frames of synthetic:reach on `avatar`; every solved pose's globals finite.
@@ -432,4 +435,12 @@ TEST_CASE("the body solver refuses an avatar in the wrong units or of no size an
   auto none = AvatarBodySolver::create(flat);
   REQUIRE_FALSE(none.ok());
   CHECK_THAT(none.error(), Catch::Contains("cannot measure the avatar's height"));
+}
+
+TEST_CASE("the body solver drives a glTF avatar whose left forearm is hidden by a zero scale", "[runtime][gltf]") {
+  test::HumanoidFile f;
+  f.doc["nodes"][size_t(f.nodeOfBone["leftLowerArm"])]["scale"] = {0, 0, 0};
+  auto a = test::loadPrepared(f);
+  REQUIRE(a.ok());
+  solveFinite(*a, 5);
 }
