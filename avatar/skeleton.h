@@ -38,6 +38,11 @@ struct Skeleton {
 // returned (the parent's global rotation times the joint's local one keeps the chain turning).
 glm::quat globalRotationOf(const glm::mat4& global, const glm::quat& ifDegenerate);
 
+// Every joint's name, unique: glTF allows two nodes the same name (or none), the IK model and the
+// spine description do not. A name that two or more joints share gets "_<joint index>" on each
+// (more underscores while that still collides); an empty one becomes "joint_<index>".
+std::vector<std::string> uniqueJointNames(const Skeleton& skeleton);
+
 // Local transforms for every joint of a skeleton (same order). Starts at the rest pose.
 struct SkeletonPose {
   std::vector<Transform> local;

@@ -135,7 +135,11 @@ void setLimits(ik::JointDesc& d, std::vector<double> lo, std::vector<double> hi)
 class BodyModelBuilder {
  public:
   BodyModelBuilder(const AvatarAsset& avatar, const BodyModelOptions& options)
-      : map_(avatar.humanoid), sk_(avatar.skeleton), options_(options), n_(sk_.joints.size()) {}
+      : map_(avatar.humanoid),
+        sk_(avatar.skeleton),
+        options_(options),
+        n_(sk_.joints.size()),
+        names_(uniqueJointNames(sk_)) {}
 
   Result<BodyModel> build() {
     if (auto s = checkMapping(); !s) return Error{s.error()};
@@ -171,6 +175,7 @@ class BodyModelBuilder {
   const Skeleton& sk_;
   const BodyModelOptions& options_;
   const size_t n_;
+  const std::vector<std::string> names_;  // per avatar joint, unique (duplicate glTF node names)
   BodyModel body_;
   std::vector<Eigen::Vector3d> pivot_;  // per avatar joint at the neutral pose, model space at the user's scale
   NeutralPose neutral_;
@@ -355,7 +360,7 @@ class BodyModelBuilder {
     if (kind != Kind::Hips && !sk_.isAncestor(map_.joint(HumanBone::hips), j)) return {};
     const Eigen::Matrix3d rot = boneFrame(direction(j), forward_, up_);
     ik::JointDesc d;
-    d.name = sk_.joints[at(j)].name;
+    d.name = names_[at(j)];
     if (kind == Kind::Hips) {
       d.type = ik::JointType::Free;
       d.mass = kLowerTrunk * massScale_;
@@ -440,7 +445,7 @@ class BodyModelBuilder {
         int to = end;
         for (int e : regionEnd)
           if (from < e && to > e) to = e;
-        std::string name = sk_.joints[at(sb.joint)].name;
+        std::string name = names_[at(sb.joint)];
         if (from != sb.firstLevel) name.append("_").append(vertebralJointName(from));
         specs.push_back({std::move(name), std::string(vertebralJointName(from)), std::string(vertebralJointName(to - 1)),
                          true, true});
@@ -540,7 +545,7 @@ class BodyModelBuilder {
   // The head: a Ball joint for Occ-C1 on top of the spine.
   void addHead(int headJoint, ik::JointId spineTop) {
     ik::JointDesc h;
-    h.name = sk_.joints[at(headJoint)].name;
+    h.name = names_[at(headJoint)];
     h.type = ik::JointType::Ball;
     const auto& r = kLevelRangeDeg[kVertebralJointCount - 1];
     setLimits(h, {-(1.0 - kFlexionShare) * r[0] * kDeg, -r[2] * kDeg, -r[1] * kDeg},

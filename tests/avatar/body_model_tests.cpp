@@ -246,6 +246,24 @@ TEST_CASE("body model: a Mixamo rig retargets within 1 mm", "[body]") {
   checkRetargeting(mixamoAvatar());
 }
 
+TEST_CASE("body model: duplicate node names (legal glTF) get unique IK and spine site names", "[body]") {
+  // Every bone named "Bone": the spine's sites and the IK joints take "Bone_<joint index>".
+  std::map<std::string, std::string> names;
+  for (const auto& s : embody::test::humanoidJointSpecs()) names[s.bone] = "Bone";
+  const AvatarAsset a = fromFile(embody::test::HumanoidFile(names));
+  REQUIRE(a.humanoid.usable());
+  auto body = buildBodyModel(a);
+  REQUIRE(body.ok());
+  const int hips = a.humanoid.joint(HumanBone::hips);
+  CHECK(body->model.joints[static_cast<size_t>(body->hips)].desc.name == "Bone_" + std::to_string(hips));
+  checkRetargeting(a);
+  checkRetargeting(a, SpineMode::Auto, /*coupled=*/false);
+
+  Skeleton sk;
+  for (const char* n : {"hips", "Bone", "Bone", "", "Bone_2"}) sk.joints.push_back({n, -1, {}});
+  CHECK(uniqueJointNames(sk) == std::vector<std::string>{"hips", "Bone_1", "Bone__2", "joint_3", "Bone_2"});
+}
+
 TEST_CASE("body model: a bone hidden by a zero scale retargets to finite transforms", "[body]") {
   // glTF allows scale 0 (a common way to hide a part): the forearm and hand collapse onto the
   // elbow; their global rotations carry on from the parent's, so nothing below them is NaN.

@@ -444,3 +444,13 @@ TEST_CASE("the body solver drives a glTF avatar whose left forearm is hidden by 
   REQUIRE(a.ok());
   solveFinite(*a, 5);
 }
+
+TEST_CASE("the body solver drives a glTF avatar whose bones are all named Bone", "[runtime][gltf]") {
+  // The spine sites, IK joints and marker tasks take the joint index (avatar::uniqueJointNames).
+  std::map<std::string, std::string> names;
+  for (const auto& s : test::humanoidJointSpecs()) names[s.bone] = "Bone";
+  test::HumanoidFile f(names);
+  auto a = test::loadPrepared(f);
+  REQUIRE(a.ok());
+  solveFinite(*a, 5);
+}
