@@ -22,10 +22,29 @@ bool plausible(double metres) { return plausibleBodyHeight(metres); }
 
 }  // namespace
 
-double avatarHeight(const AvatarAsset& avatar) {
+namespace {
+
+// The head rule: the head joint's height above the lowest joint over 0.91.
+double skeletonHeight(const AvatarAsset& avatar, const std::vector<glm::mat4>& globals) {
   const glm::vec3 up = avatar.humanoid.up;
+  const int head = avatar.humanoid.joint(HumanBone::head);
+  if (head < 0 || static_cast<size_t>(head) >= globals.size()) return 0.0;
+  float lo = INFINITY;
+  for (const auto& g : globals) lo = std::min(lo, glm::dot(glm::vec3(g[3]), up));
+  return static_cast<double>(glm::dot(glm::vec3(globals[static_cast<size_t>(head)][3]), up) - lo) / 0.91;
+}
+
+std::vector<glm::mat4> restGlobalsOf(const AvatarAsset& avatar) {
   std::vector<glm::mat4> globals;
   computeGlobals(avatar.skeleton, SkeletonPose::rest(avatar.skeleton), globals);
+  return globals;
+}
+
+}  // namespace
+
+double avatarHeight(const AvatarAsset& avatar) {
+  const glm::vec3 up = avatar.humanoid.up;
+  const std::vector<glm::mat4> globals = restGlobalsOf(avatar);
   if (!avatar.mesh.vertices.empty()) {
     std::vector<glm::mat4> palette;
     computeSkinningPalette(avatar, globals, palette);
@@ -38,16 +57,19 @@ double avatarHeight(const AvatarAsset& avatar) {
     }
     return static_cast<double>(hi - lo);
   }
-  const int head = avatar.humanoid.joint(HumanBone::head);
-  if (head < 0) return 0.0;
-  float lo = INFINITY;
-  for (const auto& g : globals) lo = std::min(lo, glm::dot(glm::vec3(g[3]), up));
-  return static_cast<double>(glm::dot(glm::vec3(globals[static_cast<size_t>(head)][3]), up) - lo) / 0.91;
+  return skeletonHeight(avatar, globals);
 }
 
 Result<double> measureAvatarHeight(const AvatarAsset& avatar) {
+  auto plausibleAvatar = [](double metres) {
+    return std::isfinite(metres) && metres >= kMinAvatarHeight && metres <= kMaxAvatarHeight;
+  };
   const double h = avatarHeight(avatar);
-  if (std::isfinite(h) && h >= kMinAvatarHeight && h <= kMaxAvatarHeight) return h;
+  if (plausibleAvatar(h)) return h;
+  // A mesh on part of the body only (a floating head, a bust) with a skeleton of human size:
+  // the skeleton's height. A mesh of no size (under 5 cm) is not such a part.
+  if (!avatar.mesh.vertices.empty() && h >= 0.05 && h < kMinAvatarHeight)
+    if (const double s = skeletonHeight(avatar, restGlobalsOf(avatar)); plausibleAvatar(s)) return s;
   char text[320];
   if (!std::isfinite(h) || h < 0.001) {
     std::snprintf(text, sizeof text,

@@ -56,8 +56,9 @@ double avatarHeight(const AvatarAsset& avatar);
 // giant of 10 m, so 0.3x to 3x scaled avatars work. Outside, the file is in other units than
 // metres (175 m: centimetres without a root scale; 1.75 cm: the reverse) or has nothing to measure.
 constexpr double kMinAvatarHeight = 0.25, kMaxAvatarHeight = 10.0;
-// avatarHeight(avatar) when it is finite and within [kMinAvatarHeight, kMaxAvatarHeight]; else an
-// error with the measured height and the likely unit mistake. The one check `avatar calibrate` and
+// avatarHeight(avatar) when it is finite and within [kMinAvatarHeight, kMaxAvatarHeight] (a mesh
+// under that on a skeleton that is not, such as a floating head, gives the skeleton's head-joint
+// height); else an error with the measured height and the likely unit mistake. The one check `avatar calibrate` and
 // every body built from an avatar (runtime::AvatarBodySolver::create) make.
 Result<double> measureAvatarHeight(const AvatarAsset& avatar);
 

@@ -421,6 +421,19 @@ TEST_CASE("calibration: an avatar in the wrong units is refused with its height 
     REQUIRE_FALSE(p.ok());
     CHECK(p.error() == h.error());  // the one check
   }
+  // A mesh on the head only (shrunk to a tenth about the head joint) on a 1.75 m skeleton: the
+  // skeleton's height, as without a mesh.
+  AvatarAsset head = buildDefaultAvatar();
+  std::vector<glm::mat4> g;
+  computeGlobals(head.skeleton, SkeletonPose::rest(head.skeleton), g);
+  const glm::vec3 headPivot(g[static_cast<size_t>(head.humanoid.joint(HumanBone::head))][3]);
+  for (auto& v : head.mesh.vertices) v.position = headPivot + 0.1f * (v.position - headPivot);
+  REQUIRE(avatarHeight(head) < kMinAvatarHeight);
+  auto headOnly = measureAvatarHeight(head);
+  REQUIRE(headOnly.ok());
+  AvatarAsset skeletonOnly = buildDefaultAvatar();
+  skeletonOnly.mesh.vertices.clear();
+  CHECK(*headOnly == Approx(avatarHeight(skeletonOnly)));
   // A mesh with no size (every vertex at the origin) measures 0 m: nothing to scale by.
   AvatarAsset flat = buildDefaultAvatar();
   for (auto& v : flat.mesh.vertices) v.position = glm::vec3(0.0f);
