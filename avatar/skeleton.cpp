@@ -1,6 +1,9 @@
 #include "avatar/skeleton.h"
 
+#include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
+#include <unordered_map>
+#include <unordered_set>
 
 namespace embody::avatar {
 
@@ -17,6 +20,34 @@ int Skeleton::find(std::string_view name) const {
   for (size_t i = 0; i < joints.size(); ++i)
     if (joints[i].name == name) return static_cast<int>(i);
   return -1;
+}
+
+glm::quat globalRotationOf(const glm::mat4& global, const glm::quat& ifDegenerate) {
+  const glm::vec3 c0(global[0]), c1(global[1]), c2(global[2]);
+  const glm::vec3 s(glm::length(c0), glm::length(c1), glm::length(c2));
+  if (!(s.x > 1e-12f && s.y > 1e-12f && s.z > 1e-12f) || !std::isfinite(s.x + s.y + s.z)) return ifDegenerate;
+  return glm::normalize(glm::quat_cast(glm::mat3(c0 / s.x, c1 / s.y, c2 / s.z)));
+}
+
+std::vector<std::string> uniqueJointNames(const Skeleton& skeleton) {
+  std::unordered_map<std::string_view, int> uses;
+  for (const Joint& j : skeleton.joints) ++uses[j.name];
+  std::vector<std::string> names;
+  names.reserve(skeleton.joints.size());
+  std::unordered_set<std::string> taken;
+  for (const Joint& j : skeleton.joints)
+    if (!j.name.empty() && uses[j.name] == 1) taken.insert(j.name);
+  for (size_t i = 0; i < skeleton.joints.size(); ++i) {
+    const std::string& name = skeleton.joints[i].name;
+    if (!name.empty() && uses[name] == 1) {
+      names.push_back(name);
+      continue;
+    }
+    std::string unique = (name.empty() ? std::string("joint") : name) + "_" + std::to_string(i);
+    while (!taken.insert(unique).second) unique.insert(unique.rfind('_'), "_");
+    names.push_back(std::move(unique));
+  }
+  return names;
 }
 
 std::vector<int> Skeleton::children(int joint) const {

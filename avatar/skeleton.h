@@ -33,6 +33,16 @@ struct Skeleton {
   std::string validate() const;
 };
 
+// The rotation of a global (model-space) matrix: its columns normalised. A matrix with a zero (or
+// non-finite) column, a bone hidden by a zero scale or one below it, has none: `ifDegenerate` is
+// returned (the parent's global rotation times the joint's local one keeps the chain turning).
+glm::quat globalRotationOf(const glm::mat4& global, const glm::quat& ifDegenerate);
+
+// Every joint's name, unique: glTF allows two nodes the same name (or none), the IK model and the
+// spine description do not. A name that two or more joints share gets "_<joint index>" on each
+// (more underscores while that still collides); an empty one becomes "joint_<index>".
+std::vector<std::string> uniqueJointNames(const Skeleton& skeleton);
+
 // Local transforms for every joint of a skeleton (same order). Starts at the rest pose.
 struct SkeletonPose {
   std::vector<Transform> local;

@@ -30,6 +30,9 @@ Result<std::unique_ptr<AvatarBodySolver>> AvatarBodySolver::create(const avatar:
                                                                    const AvatarBodyOptions& options) {
   if (!avatar::plausibleArmScale(options.armScale))
     return Error{"arm scale " + std::to_string(options.armScale) + " is outside 0.5-2 (user arm span over the avatar's)"};
+  // An avatar in the wrong units (175 m: centimetres) or of no size is refused here, for every
+  // command that drives one, with the height and the likely unit (`avatar calibrate`'s check).
+  if (auto height = avatar::measureAvatarHeight(avatar); !height) return Error{height.error()};
   std::unique_ptr<AvatarBodySolver> s(new AvatarBodySolver(avatar));
   if (auto st = s->build(options); !st) return Error{st.error()};
   return s;
@@ -41,6 +44,10 @@ Status AvatarBodySolver::build(const AvatarBodyOptions& options) {
   auto rig = buildBodyRig(avatar_, options, refusedCalls_);
   if (!rig) return Error{rig.error()};
   rig_ = std::move(rig).value();
+  // The calibration's scale is the eye height over the user's: never zero, negative or NaN.
+  if (!(rig_.avatarEyeHeight > 0.0 && std::isfinite(rig_.avatarEyeHeight) && rig_.avatarHeight > 0.0))
+    return Error{"the avatar's eyes are not above its floor at rest (eye height " + std::to_string(rig_.avatarEyeHeight) +
+                 " m of a " + std::to_string(rig_.avatarHeight) + " m stature)"};
   planner_.configure(options.feet, FootShape{}, rig_.up, rig_.forward, rig_.stance, rig_.avatarHeight / 1.75);
   data_ = std::make_unique<ik::Data>(rig_.body.model);
   require(data_->setConfiguration(rig_.restQ));

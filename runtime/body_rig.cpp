@@ -360,11 +360,12 @@ void RigBuilder::addJointMarkerTasks(std::vector<ik::TaskDesc>& tasks) {
     tasks.push_back(std::move(t));
     return ik::TaskId(tasks.size() - 1);
   };
+  const std::vector<std::string> names = avatar::uniqueJointNames(avatar_.skeleton);  // duplicate node names
   for (size_t a = 0; a < avatar_.skeleton.joints.size(); ++a) {
     const int j = r.body.ikJointOfAvatar[a];
     if (j < 0 || r.body.avatarJoint[size_t(j)] != int(a)) continue;
     ik::TaskDesc t;
-    t.name = "marker_" + avatar_.skeleton.joints[a].name;
+    t.name = "marker_" + names[a];
     t.joint = j;
     t.position_tolerance = 5e-4;
     t.rotation_tolerance = 0.01;

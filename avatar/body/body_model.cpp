@@ -135,7 +135,11 @@ void setLimits(ik::JointDesc& d, std::vector<double> lo, std::vector<double> hi)
 class BodyModelBuilder {
  public:
   BodyModelBuilder(const AvatarAsset& avatar, const BodyModelOptions& options)
-      : map_(avatar.humanoid), sk_(avatar.skeleton), options_(options), n_(sk_.joints.size()) {}
+      : map_(avatar.humanoid),
+        sk_(avatar.skeleton),
+        options_(options),
+        n_(sk_.joints.size()),
+        names_(uniqueJointNames(sk_)) {}
 
   Result<BodyModel> build() {
     if (auto s = checkMapping(); !s) return Error{s.error()};
@@ -172,6 +176,7 @@ class BodyModelBuilder {
   const Skeleton& sk_;
   const BodyModelOptions& options_;
   const size_t n_;
+  const std::vector<std::string> names_;  // per avatar joint, unique (duplicate glTF node names)
   BodyModel body_;
   std::vector<Eigen::Vector3d> pivot_;  // per avatar joint at the neutral pose, model space at the user's scale
   NeutralPose neutral_;
@@ -226,9 +231,10 @@ class BodyModelBuilder {
     body_.avatarRestGlobalScale.resize(n_);
     for (size_t j = 0; j < n_; ++j) {
       const glm::vec3 c0(globals[j][0]), c1(globals[j][1]), c2(globals[j][2]);
-      const glm::vec3 s(glm::length(c0), glm::length(c1), glm::length(c2));
-      body_.avatarRestGlobalScale[j] = s;
-      body_.avatarRestGlobalRotation[j] = glm::normalize(glm::quat_cast(glm::mat3(c0 / s.x, c1 / s.y, c2 / s.z)));
+      body_.avatarRestGlobalScale[j] = glm::vec3(glm::length(c0), glm::length(c1), glm::length(c2));
+      const int parent = sk_.joints[j].parent;
+      const glm::quat parentRotation = parent >= 0 ? body_.avatarRestGlobalRotation[at(parent)] : glm::quat(1, 0, 0, 0);
+      body_.avatarRestGlobalRotation[j] = globalRotationOf(globals[j], parentRotation * sk_.joints[j].rest.rotation);
     }
     up_ = toEigen(map_.up).normalized();
     forward_ = toEigen(map_.forward).normalized();
@@ -375,7 +381,7 @@ class BodyModelBuilder {
     if (kind != Kind::Hips && !sk_.isAncestor(map_.joint(HumanBone::hips), j)) return {};
     const Eigen::Matrix3d rot = boneFrame(direction(j), forward_, up_);
     ik::JointDesc d;
-    d.name = sk_.joints[at(j)].name;
+    d.name = names_[at(j)];
     if (kind == Kind::Hips) {
       d.type = ik::JointType::Free;
       d.mass = kLowerTrunk * massScale_;
@@ -460,7 +466,7 @@ class BodyModelBuilder {
         int to = end;
         for (int e : regionEnd)
           if (from < e && to > e) to = e;
-        std::string name = sk_.joints[at(sb.joint)].name;
+        std::string name = names_[at(sb.joint)];
         if (from != sb.firstLevel) name.append("_").append(vertebralJointName(from));
         specs.push_back({std::move(name), std::string(vertebralJointName(from)), std::string(vertebralJointName(to - 1)),
                          true, true});
@@ -560,7 +566,7 @@ class BodyModelBuilder {
   // The head: a Ball joint for Occ-C1 on top of the spine.
   void addHead(int headJoint, ik::JointId spineTop) {
     ik::JointDesc h;
-    h.name = sk_.joints[at(headJoint)].name;
+    h.name = names_[at(headJoint)];
     h.type = ik::JointType::Ball;
     const auto& r = kLevelRangeDeg[kVertebralJointCount - 1];
     setLimits(h, {-(1.0 - kFlexionShare) * r[0] * kDeg, -r[2] * kDeg, -r[1] * kDeg},
@@ -622,11 +628,15 @@ void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& 
   // Global matrices as we go (parents first); thread-local scratch keeps the call allocation-free
   // after the first one.
   thread_local std::vector<glm::mat4> globals;
+  thread_local std::vector<glm::quat> rotations;  // the globals' rotations (zero-scaled bones too)
   globals.resize(n);
+  rotations.resize(n);
   for (size_t a = 0; a < n; ++a) {
     const Joint& joint = sk.joints[a];
     Transform local = joint.rest;
     const glm::mat4 parent = joint.parent >= 0 ? globals[static_cast<size_t>(joint.parent)] : glm::mat4(1.0f);
+    const glm::quat parentRotation =
+        joint.parent >= 0 ? rotations[static_cast<size_t>(joint.parent)] : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
     const int ikJoint = body.ikJointOfAvatar[a];
     if (ikJoint >= 0) {
       const Eigen::Isometry3d& frame = data.jointFrame(ikJoint);
@@ -634,10 +644,7 @@ void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& 
                                        body.ikRestRotation[static_cast<size_t>(ikJoint)].conjugate();
       const glm::quat d = toGlm(delta);
       const glm::quat wanted = glm::normalize(d * body.avatarRestGlobalRotation[a]);
-      const glm::vec3 c0(parent[0]), c1(parent[1]), c2(parent[2]);
-      const glm::quat parentRot = glm::normalize(
-          glm::quat_cast(glm::mat3(glm::normalize(c0), glm::normalize(c1), glm::normalize(c2))));
-      local.rotation = glm::normalize(glm::inverse(parentRot) * wanted);
+      local.rotation = glm::normalize(glm::inverse(parentRotation) * wanted);
       if (ikJoint == body.hips) {
         const Eigen::Vector3d p = frame.translation() / body.scale;
         local.translation =
@@ -646,6 +653,7 @@ void retarget(const BodyModel& body, const AvatarAsset& avatar, const ik::Data& 
     }
     pose.local[a] = local;
     globals[a] = parent * local.matrix();
+    rotations[a] = globalRotationOf(globals[a], parentRotation * local.rotation);
   }
 }
 

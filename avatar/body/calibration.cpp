@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <span>
 #include <sstream>
 #include <tuple>
 
@@ -27,10 +28,29 @@ bool plausible(double metres) { return plausibleBodyHeight(metres); }
 
 }  // namespace
 
-double avatarHeight(const AvatarAsset& avatar) {
+namespace {
+
+// The head rule: the head joint's height above the lowest joint over 0.91.
+double skeletonHeight(const AvatarAsset& avatar, const std::vector<glm::mat4>& globals) {
   const glm::vec3 up = avatar.humanoid.up;
+  const int head = avatar.humanoid.joint(HumanBone::head);
+  if (head < 0 || static_cast<size_t>(head) >= globals.size()) return 0.0;
+  float lo = INFINITY;
+  for (const auto& g : globals) lo = std::min(lo, glm::dot(glm::vec3(g[3]), up));
+  return static_cast<double>(glm::dot(glm::vec3(globals[static_cast<size_t>(head)][3]), up) - lo) / 0.91;
+}
+
+std::vector<glm::mat4> restGlobalsOf(const AvatarAsset& avatar) {
   std::vector<glm::mat4> globals;
   computeGlobals(avatar.skeleton, SkeletonPose::rest(avatar.skeleton), globals);
+  return globals;
+}
+
+}  // namespace
+
+double avatarHeight(const AvatarAsset& avatar) {
+  const glm::vec3 up = avatar.humanoid.up;
+  const std::vector<glm::mat4> globals = restGlobalsOf(avatar);
   if (!avatar.mesh.vertices.empty()) {
     std::vector<glm::mat4> palette;
     computeSkinningPalette(avatar, globals, palette);
@@ -43,18 +63,55 @@ double avatarHeight(const AvatarAsset& avatar) {
     }
     return static_cast<double>(hi - lo);
   }
-  const int head = avatar.humanoid.joint(HumanBone::head);
-  if (head < 0) return 0.0;
-  float lo = INFINITY;
-  for (const auto& g : globals) lo = std::min(lo, glm::dot(glm::vec3(g[3]), up));
-  return static_cast<double>(glm::dot(glm::vec3(globals[static_cast<size_t>(head)][3]), up) - lo) / 0.91;
+  return skeletonHeight(avatar, globals);
+}
+
+Result<double> measureAvatarHeight(const AvatarAsset& avatar) {
+  auto plausibleAvatar = [](double metres) {
+    return std::isfinite(metres) && metres >= kMinAvatarHeight && metres <= kMaxAvatarHeight;
+  };
+  const double h = avatarHeight(avatar);
+  if (plausibleAvatar(h)) return h;
+  // A mesh on part of the body only (a floating head, a bust) with a skeleton of human size:
+  // the skeleton's height. A mesh of no size (under 5 cm) is not such a part.
+  if (!avatar.mesh.vertices.empty() && h >= 0.05 && h < kMinAvatarHeight)
+    if (const double s = skeletonHeight(avatar, restGlobalsOf(avatar)); plausibleAvatar(s)) return s;
+  char text[320];
+  if (!std::isfinite(h) || h < 0.001) {
+    std::snprintf(text, sizeof text,
+                  "cannot measure the avatar's height: it stands %.3g m tall at rest (an avatar is taken to be %g "
+                  "to %g m tall); its mesh has no size, or without a mesh its skeleton has none",
+                  std::isfinite(h) && h >= 1e-6 ? h : 0.0, kMinAvatarHeight, kMaxAvatarHeight);
+    return Error{text};
+  }
+  // The likely mistake: the power of ten (or inch) that brings the avatar nearest 1.7 m.
+  struct Unit {
+    double scale;  // the root node scale that would fix it
+    const char* what;
+  };
+  static constexpr Unit kTooTall[] = {
+      {0.01, "are its units centimetres"}, {0.001, "are its units millimetres"},
+      {0.1, "are its units decimetres"},   {0.0254, "are its units inches"}};
+  static constexpr Unit kTooSmall[] = {{10.0, "is it 10 times too small"},
+                                       {100.0, "is it 100 times too small (scaled to metres twice)"},
+                                       {1000.0, "is it 1000 times too small"}};
+  const auto units = h > kMaxAvatarHeight ? std::span<const Unit>(kTooTall) : std::span<const Unit>(kTooSmall);
+  const Unit* best = &units[0];
+  for (const Unit& u : units)
+    if (std::abs(std::log(h * u.scale / 1.7)) < std::abs(std::log(h * best->scale / 1.7))) best = &u;
+  std::snprintf(text, sizeof text,
+                "the avatar is %.4g m tall (an avatar is taken to be %g to %g m tall): %s? Fix the file (a root "
+                "node scale of %g makes it %.2f m tall) or export it in metres",
+                h, kMinAvatarHeight, kMaxAvatarHeight, best->what, best->scale, h * best->scale);
+  return Error{text};
 }
 
 Result<BodyProfile> calibrate(const AvatarAsset& avatar, const CalibrationInput& in) {
   BodyProfile p;
   p.avatar = avatar.sourcePath.empty() ? "default" : avatar.sourcePath;
-  p.avatarHeight = avatarHeight(avatar);
-  if (!(p.avatarHeight > 0.05)) return Error{"cannot measure the avatar's height"};
+  auto height = measureAvatarHeight(avatar);
+  if (!height) return Error{height.error()};
+  p.avatarHeight = *height;
   if (in.userHeight) {
     if (!plausible(*in.userHeight)) return Error{"user height must be between 0.5 and 2.6 m"};
     p.userHeight = *in.userHeight;

@@ -53,6 +53,16 @@ struct BodyProfile {
 // head joint (head joint / 0.91).
 double avatarHeight(const AvatarAsset& avatar);
 
+// The standing heights an avatar may have, in metres: a tenth of a default (1.75 m) person to a
+// giant of 10 m, so 0.3x to 3x scaled avatars work. Outside, the file is in other units than
+// metres (175 m: centimetres without a root scale; 1.75 cm: the reverse) or has nothing to measure.
+constexpr double kMinAvatarHeight = 0.25, kMaxAvatarHeight = 10.0;
+// avatarHeight(avatar) when it is finite and within [kMinAvatarHeight, kMaxAvatarHeight] (a mesh
+// under that on a skeleton that is not, such as a floating head, gives the skeleton's head-joint
+// height); else an error with the measured height and the likely unit mistake. The one check `avatar calibrate` and
+// every body built from an avatar (runtime::AvatarBodySolver::create) make.
+Result<double> measureAvatarHeight(const AvatarAsset& avatar);
+
 // Needs a usable humanoid mapping for the arm span; fails on non-positive or absurd inputs
 // (outside 0.5 - 2.6 m) and when neither height is given.
 Result<BodyProfile> calibrate(const AvatarAsset& avatar, const CalibrationInput& input);

@@ -15,6 +15,8 @@
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <limits>
+#include <nlohmann/json.hpp>
+#include <string_view>
 
 #include "avatar/gltf/component_type.h"
 #include "avatar/gltf/mtoon_json.h"
@@ -136,6 +138,74 @@ Result<GlbChunks> splitContainer(const std::vector<uint8_t>& bytes) {
     out.json.assign(bytes.begin(), bytes.end());
   }
   return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The JSON before tinygltf sees it. tinygltf converts the JSON tree to its own values recursively,
+// one stack frame per level, so arrays nested 20 000 deep (40 KB of "[[[[") overflow the stack:
+// the nesting is counted first, a scan of the brackets outside strings.
+Status checkJsonNesting(std::string_view json, int maxDepth) {
+  int depth = 0;
+  bool inString = false;
+  for (size_t i = 0; i < json.size(); ++i) {
+    const char c = json[i];
+    if (inString) {
+      if (c == '\\')
+        ++i;  // the escaped character cannot end the string
+      else if (c == '"')
+        inString = false;
+    } else if (c == '"') {
+      inString = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > maxDepth)
+        return loadError("JSON nested deeper than " + std::to_string(maxDepth) +
+                         " levels (arrays and objects, at byte " + std::to_string(i) + "); refused");
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return {};
+}
+
+// The extensions this loader reads (docs/avatars.md): a file that lists any other one in
+// extensionsRequired cannot be drawn as its author meant (Draco or meshopt compressed geometry,
+// quantized attributes ...), so it is refused naming the extension instead of failing later on
+// an accessor or drawing something else.
+constexpr std::string_view kSupportedExtensions[] = {
+    "KHR_materials_emissive_strength", "KHR_materials_unlit", "KHR_texture_transform",
+    "VRM",                             "VRMC_vrm",            "VRMC_materials_mtoon",
+    "VRMC_springBone"};
+
+Status checkRequiredExtensions(std::string_view text) {
+  // Only the top-level "extensionsRequired" is kept; everything else is parsed and dropped.
+  using Json = nlohmann::json;
+  const Json doc = Json::parse(
+      text.begin(), text.end(),
+      [](int depth, Json::parse_event_t event, Json& parsed) {
+        return depth != 1 || event != Json::parse_event_t::key || parsed == "extensionsRequired";
+      },
+      false);
+  if (!doc.is_object()) return {};  // not JSON: tinygltf's parse error says where
+  const auto it = doc.find("extensionsRequired");
+  if (it == doc.end() || !it->is_array()) return {};
+  auto supported = [](const std::string& n) {
+    return std::find(std::begin(kSupportedExtensions), std::end(kSupportedExtensions), n) !=
+           std::end(kSupportedExtensions);
+  };
+  std::vector<std::string> unsupported;
+  for (const auto& name : *it)
+    if (name.is_string() && !supported(name.get<std::string>()) &&
+        std::find(unsupported.begin(), unsupported.end(), name.get<std::string>()) == unsupported.end())
+      unsupported.push_back(name.get<std::string>());
+  if (unsupported.empty()) return {};
+  auto joined = [](const auto& names) {
+    std::string out;
+    for (const auto& n : names) out += (out.empty() ? "" : ", ") + std::string(n);
+    return out;
+  };
+  return loadError("the file requires " + joined(unsupported) +
+                   " (extensionsRequired), which embody does not support; it reads " +
+                   joined(kSupportedExtensions));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -933,6 +1003,8 @@ Result<AvatarAsset> loadGltfFromMemory(const std::vector<uint8_t>& bytes, const 
     return loadError("file larger than " + std::to_string(limits.maxFileBytes) + " bytes");
   auto container = splitContainer(bytes);
   if (!container.ok()) return Error{container.error()};
+  if (auto s = checkJsonNesting(container->json, limits.maxJsonDepth); !s.ok()) return Error{s.error()};
+  if (auto s = checkRequiredExtensions(container->json); !s.ok()) return Error{s.error()};
 
   tinygltf::TinyGLTF parser;
   ImageLoaderContext imageContext{limits.maxImageDimension, &warnings};

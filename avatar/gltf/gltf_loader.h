@@ -42,6 +42,7 @@ struct GltfLimits {
   uint64_t maxTotalIndices = 3ull << 24;
   int maxNodes = 1 << 16;
   int maxImageDimension = 8192;  // width or height of a decoded image
+  int maxJsonDepth = 512;        // nested arrays and objects (tinygltf recurses once per level)
 };
 
 struct GltfLoadReport {

@@ -246,6 +246,51 @@ TEST_CASE("body model: a Mixamo rig retargets within 1 mm", "[body]") {
   checkRetargeting(mixamoAvatar());
 }
 
+TEST_CASE("body model: duplicate node names (legal glTF) get unique IK and spine site names", "[body]") {
+  // Every bone named "Bone": the spine's sites and the IK joints take "Bone_<joint index>".
+  std::map<std::string, std::string> names;
+  for (const auto& s : embody::test::humanoidJointSpecs()) names[s.bone] = "Bone";
+  const AvatarAsset a = fromFile(embody::test::HumanoidFile(names));
+  REQUIRE(a.humanoid.usable());
+  auto body = buildBodyModel(a);
+  REQUIRE(body.ok());
+  const int hips = a.humanoid.joint(HumanBone::hips);
+  CHECK(body->model.joints[static_cast<size_t>(body->hips)].desc.name == "Bone_" + std::to_string(hips));
+  checkRetargeting(a);
+  checkRetargeting(a, SpineMode::Auto, /*coupled=*/false);
+
+  Skeleton sk;
+  for (const char* n : {"hips", "Bone", "Bone", "", "Bone_2"}) sk.joints.push_back({n, -1, {}});
+  CHECK(uniqueJointNames(sk) == std::vector<std::string>{"hips", "Bone_1", "Bone__2", "joint_3", "Bone_2"});
+}
+
+TEST_CASE("body model: a bone hidden by a zero scale retargets to finite transforms", "[body]") {
+  // glTF allows scale 0 (a common way to hide a part): the forearm and hand collapse onto the
+  // elbow; their global rotations carry on from the parent's, so nothing below them is NaN.
+  embody::test::HumanoidFile f;
+  f.doc["nodes"][static_cast<size_t>(f.nodeOfBone["leftLowerArm"])]["scale"] = {0, 0, 0};
+  const AvatarAsset a = fromFile(f);
+  auto body = buildBodyModel(a);
+  REQUIRE(body.ok());
+  for (const glm::quat& q : body->avatarRestGlobalRotation) REQUIRE(std::isfinite(q.w + q.x + q.y + q.z));
+  ik::Data data(body->model);
+  std::mt19937 rng(11);
+  SkeletonPose pose;
+  std::vector<glm::mat4> g;
+  for (int trial = 0; trial < 10; ++trial) {
+    REQUIRE(data.setConfiguration(trial == 0 ? body->restConfiguration : randomPose(body->model, rng)).ok());
+    ik::kinematics(body->model, data, false);
+    retarget(body.value(), a, data, pose);
+    computeGlobals(a.skeleton, pose, g);
+    for (const auto& m : g)
+      for (int c = 0; c < 4; ++c)
+        for (int k = 0; k < 4; ++k) REQUIRE(std::isfinite(m[c][k]));
+    // The other hand still follows its IK joint.
+    const glm::vec3 av(g[static_cast<size_t>(body->avatarJoint[static_cast<size_t>(body->rightHand)])][3]);
+    CHECK((data.jointFrame(body->rightHand).translation() - Eigen::Vector3d(av.x, av.y, av.z)).norm() < 1e-3);
+  }
+}
+
 TEST_CASE("body model: a VRM 0.x avatar facing -Z retargets within 1 mm", "[body]") {
   std::map<std::string, std::string> names;
   int i = 0;
@@ -342,6 +387,59 @@ TEST_CASE("calibration scales the body to the user and round-trips through the p
                          static_cast<float>(p->scale);
     CHECK((data.jointFrame(j).translation() - Eigen::Vector3d(av.x, av.y, av.z)).norm() < 1e-3);
   }
+}
+
+TEST_CASE("calibration: an avatar in the wrong units is refused with its height and the likely unit",
+          "[body][calibration]") {
+  auto scaled = [](float s) {
+    AvatarAsset a = buildDefaultAvatar();
+    a.skeleton.joints[0].rest.scale *= s;
+    return a;
+  };
+  CalibrationInput in;
+  in.userHeight = 1.75;
+  for (float s : {0.3f, 1.0f, 3.0f}) {  // 0.53 m to 5.3 m: scaled avatars work
+    INFO("scale " << s);
+    auto h = measureAvatarHeight(scaled(s));
+    REQUIRE(h.ok());
+    CHECK(*h == Approx(avatarHeight(buildDefaultAvatar()) * s).epsilon(1e-4));
+    auto p = calibrate(scaled(s), in);
+    REQUIRE(p.ok());
+    CHECK(p->scale == Approx(1.75 / *h));
+  }
+  const std::pair<float, std::vector<const char*>> refused[] = {
+      {100.0f, {"the avatar is 175.5 m tall", "centimetres", "root node scale of 0.01 makes it 1.7"}},
+      {1000.0f, {"1755 m tall", "millimetres", "scale of 0.001"}},
+      {0.1f, {"0.1755 m tall", "10 times too small", "scale of 10 makes it 1.7"}},
+      {0.01f, {"0.01755 m tall", "100 times too small", "scale of 100"}}};
+  for (const auto& [s, says] : refused) {
+    INFO("scale " << s);
+    const auto h = measureAvatarHeight(scaled(s));
+    REQUIRE_FALSE(h.ok());
+    for (const char* text : says) CHECK_THAT(h.error(), Catch::Contains(text));
+    auto p = calibrate(scaled(s), in);
+    REQUIRE_FALSE(p.ok());
+    CHECK(p.error() == h.error());  // the one check
+  }
+  // A mesh on the head only (shrunk to a tenth about the head joint) on a 1.75 m skeleton: the
+  // skeleton's height, as without a mesh.
+  AvatarAsset head = buildDefaultAvatar();
+  std::vector<glm::mat4> g;
+  computeGlobals(head.skeleton, SkeletonPose::rest(head.skeleton), g);
+  const glm::vec3 headPivot(g[static_cast<size_t>(head.humanoid.joint(HumanBone::head))][3]);
+  for (auto& v : head.mesh.vertices) v.position = headPivot + 0.1f * (v.position - headPivot);
+  REQUIRE(avatarHeight(head) < kMinAvatarHeight);
+  auto headOnly = measureAvatarHeight(head);
+  REQUIRE(headOnly.ok());
+  AvatarAsset skeletonOnly = buildDefaultAvatar();
+  skeletonOnly.mesh.vertices.clear();
+  CHECK(*headOnly == Approx(avatarHeight(skeletonOnly)));
+  // A mesh with no size (every vertex at the origin) measures 0 m: nothing to scale by.
+  AvatarAsset flat = buildDefaultAvatar();
+  for (auto& v : flat.mesh.vertices) v.position = glm::vec3(0.0f);
+  const auto h = measureAvatarHeight(flat);
+  REQUIRE_FALSE(h.ok());
+  CHECK_THAT(h.error(), Catch::StartsWith("cannot measure the avatar's height: it stands 0 m tall"));
 }
 
 TEST_CASE("body model: the solver reaches a hand target on the default avatar and retargeting follows",

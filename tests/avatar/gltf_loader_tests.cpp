@@ -171,6 +171,57 @@ TEST_CASE("hostile glTF files give a clear error, never a crash or a huge alloca
   }
 }
 
+TEST_CASE("JSON nested deeper than 512 levels is refused before tinygltf recurses into it", "[gltf]") {
+  // "extras": [[[ ... ]]] on the node, written as text (nlohmann's dump would recurse too).
+  auto nested = [](size_t depth) {
+    TriangleFile f;
+    f.doc["nodes"][0]["extras"] = "EXTRAS";
+    std::string json = f.doc.dump();
+    const size_t at = json.find("\"EXTRAS\"");
+    json.replace(at, 8, std::string(depth, '[') + std::string(depth, ']'));
+    return std::pair{json, f.bin};
+  };
+  for (size_t depth : {size_t{20000}, size_t{513}}) {
+    INFO("depth " << depth);
+    auto [json, bin] = nested(depth);
+    CHECK_THAT(loadError(embody::test::makeGlb(json, bin)), Catch::Contains("JSON nested deeper than 512 levels"));
+    // The same as a .gltf text file (its buffer is never reached).
+    CHECK_THAT(loadError(std::vector<uint8_t>(json.begin(), json.end())), Catch::Contains("nested deeper than 512"));
+  }
+  // 500 levels load, and brackets inside strings (escaped quotes included) do not count.
+  auto [json, bin] = nested(500);
+  CHECK(loadError(embody::test::makeGlb(json, bin)) == "(loaded)");
+  TriangleFile f;
+  f.doc["nodes"][0]["name"] = "\"" + std::string(20000, '[');
+  CHECK(loadError(f.glb()) == "(loaded)");
+}
+
+TEST_CASE("extensionsRequired: an extension the loader does not read is refused by name", "[gltf]") {
+  SECTION("compressed or quantized geometry") {
+    TriangleFile f;
+    f.doc["extensionsUsed"] = {"KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_mesh_quantization"};
+    f.doc["extensionsRequired"] = f.doc["extensionsUsed"];
+    const std::string e = loadError(f.glb());
+    CHECK_THAT(e, Catch::Contains("requires KHR_draco_mesh_compression, EXT_meshopt_compression, KHR_mesh_quantization") &&
+                      Catch::Contains("does not support"));
+    f.doc["extensionsRequired"] = {"KHR_texture_transform", "VENDOR_unknown"};
+    CHECK_THAT(loadError(f.glb()), Catch::Contains("requires VENDOR_unknown (extensionsRequired)"));
+  }
+  SECTION("a Draco primitive whose accessors have no bufferView names Draco, not an accessor") {
+    TriangleFile f;
+    f.doc["accessors"][0]["bufferView"] = 7;
+    f.doc["extensionsUsed"] = {"KHR_draco_mesh_compression"};
+    f.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+    CHECK_THAT(loadError(f.glb()), Catch::StartsWith("the file requires KHR_draco_mesh_compression"));
+  }
+  SECTION("extensions the loader reads, and ones only used, still load") {
+    TriangleFile f;
+    f.doc["extensionsUsed"] = {"KHR_texture_transform", "KHR_materials_unlit", "VENDOR_unknown"};
+    f.doc["extensionsRequired"] = {"KHR_texture_transform", "KHR_materials_unlit"};
+    CHECK(loadError(f.glb()) == "(loaded)");
+  }
+}
+
 #include "avatar/avatar_loader.h"
 
 TEST_CASE("a 60000-node chain loads and maps without deep recursion", "[gltf]") {

@@ -4,6 +4,7 @@
 #include <cstring>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace embody::test {
@@ -12,9 +13,8 @@ inline void appendU32(std::vector<uint8_t>& out, uint32_t v) {
   for (int i = 0; i < 4; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
 }
 
-// A GLB container around a JSON document and a binary chunk (both padded to 4 bytes).
-inline std::vector<uint8_t> makeGlb(const nlohmann::json& doc, std::vector<uint8_t> bin) {
-  std::string json = doc.dump();
+// A GLB container around JSON text and a binary chunk (both padded to 4 bytes).
+inline std::vector<uint8_t> makeGlb(std::string json, std::vector<uint8_t> bin) {
   while (json.size() % 4) json.push_back(' ');
   while (bin.size() % 4) bin.push_back(0);
   std::vector<uint8_t> out;
@@ -33,6 +33,11 @@ inline std::vector<uint8_t> makeGlb(const nlohmann::json& doc, std::vector<uint8
     for (uint8_t b : bin) out.push_back(b);
   }
   return out;
+}
+
+// The same around a JSON document.
+inline std::vector<uint8_t> makeGlb(const nlohmann::json& doc, std::vector<uint8_t> bin) {
+  return makeGlb(doc.dump(), std::move(bin));
 }
 
 template <class T>

@@ -380,3 +380,77 @@ TEST_CASE("figures: CMU walk, coupled and uncoupled spine, pelvis and balance ro
                                                   << r.nonFinitePoses);
   }
 }
+
+#include "avatar/avatar_loader.h"
+#include "avatar/humanoid_test_files.h"
+
+namespace {
+
+// Solves `frames` frames of synthetic:reach on `avatar`; every solved pose's globals finite.
+void solveFinite(const avatar::AvatarAsset& avatar, int frames) {
+  AvatarBodyOptions o;
+  o.userHeight = 1.75f;
+  auto solver = AvatarBodySolver::create(avatar, o);
+  REQUIRE(solver.ok());
+  auto src = openSource("synthetic:reach");
+  tracking::TrackingGuard guard;
+  avatar::SkeletonPose pose = avatar::SkeletonPose::rest(avatar.skeleton);
+  std::vector<glm::mat4> globals;
+  ManualClock clock;
+  for (int i = 0; i < frames; ++i) {
+    SolveRequest req;
+    req.targets = &guard.update(src->sample(i / 10.0));
+    req.clock = &clock;
+    (*solver)->solve(req, pose);
+    REQUIRE(std::isfinite((*solver)->scale()));
+    REQUIRE((*solver)->scale() > 0.0);
+    avatar::computeGlobals(avatar.skeleton, pose, globals);
+    for (const auto& m : globals)
+      for (int c = 0; c < 4; ++c)
+        for (int k = 0; k < 4; ++k) REQUIRE(std::isfinite(m[c][k]));
+  }
+}
+
+}  // namespace
+
+TEST_CASE("the body solver refuses an avatar in the wrong units or of no size and drives 0.3x to 3x ones",
+          "[runtime][avatar-size]") {
+  auto scaled = [](float s) {
+    avatar::AvatarAsset a = defaultAvatar();
+    a.skeleton.joints[0].rest.scale *= s;
+    return a;
+  };
+  for (float s : {0.3f, 3.0f}) {
+    INFO("scale " << s);
+    solveFinite(scaled(s), 5);
+  }
+  auto cm = AvatarBodySolver::create(scaled(100.0f));
+  REQUIRE_FALSE(cm.ok());
+  CHECK_THAT(cm.error(), Catch::Contains("the avatar is 175.5 m tall") && Catch::Contains("centimetres"));
+  auto tiny = AvatarBodySolver::create(scaled(0.01f));
+  REQUIRE_FALSE(tiny.ok());
+  CHECK_THAT(tiny.error(), Catch::Contains("0.01755 m tall") && Catch::Contains("100 times too small"));
+  avatar::AvatarAsset flat = defaultAvatar();  // every vertex at the origin: once a negative scale
+  for (auto& v : flat.mesh.vertices) v.position = glm::vec3(0.0f);
+  auto none = AvatarBodySolver::create(flat);
+  REQUIRE_FALSE(none.ok());
+  CHECK_THAT(none.error(), Catch::Contains("cannot measure the avatar's height"));
+}
+
+TEST_CASE("the body solver drives a glTF avatar whose left forearm is hidden by a zero scale", "[runtime][gltf]") {
+  test::HumanoidFile f;
+  f.doc["nodes"][size_t(f.nodeOfBone["leftLowerArm"])]["scale"] = {0, 0, 0};
+  auto a = test::loadPrepared(f);
+  REQUIRE(a.ok());
+  solveFinite(*a, 5);
+}
+
+TEST_CASE("the body solver drives a glTF avatar whose bones are all named Bone", "[runtime][gltf]") {
+  // The spine sites, IK joints and marker tasks take the joint index (avatar::uniqueJointNames).
+  std::map<std::string, std::string> names;
+  for (const auto& s : test::humanoidJointSpecs()) names[s.bone] = "Bone";
+  test::HumanoidFile f(names);
+  auto a = test::loadPrepared(f);
+  REQUIRE(a.ok());
+  solveFinite(*a, 5);
+}
