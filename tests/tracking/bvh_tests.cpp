@@ -380,7 +380,7 @@ TEST_CASE("percentileByRank: the value at rank floor(p n), as the BVH floor read
   CHECK(std::isnan(embody::percentileByRank(none, 0.05)));
 }
 
-TEST_CASE("--bvh-scale must make the performer a plausible height, and --user-height has one range", "[tracking][bvh]") {
+TEST_CASE("a BVH scale (--bvh-scale) must make the performer a plausible height, and --user-height has one range", "[tracking][bvh]") {
   auto clip = avatar::parseBvh(figure("cmu", 4), "fig.bvh");  // 45 units tall
   REQUIRE(clip.ok());
   // 1e30 and 1e-30 reached the body solver ("a rest frame is not finite"), 1e6 scored 2.4e9 cm.
