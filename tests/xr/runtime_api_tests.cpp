@@ -161,3 +161,30 @@ TEST_CASE("unimplemented and not-enabled functions are XR_ERROR_FUNCTION_UNSUPPO
   XrGraphicsRequirementsVulkan2KHR req{XR_TYPE_GRAPHICS_REQUIREMENTS_VULKAN2_KHR};
   CHECK(requirements(withHands.handle, 12345, &req) == XR_ERROR_SYSTEM_INVALID);
 }
+
+TEST_CASE("a malformed runtime setting fails instance creation instead of reading as its default", "[xr]") {
+  // EMBODY_XR_FRAMES=30x was read as "no frame limit": hello_xr ran until its job's timeout
+  // (OpenXR robustness probe, session 20); a bad view size or IPD quietly became the default.
+  setenv("XR_RUNTIME_JSON", runtimeManifest().c_str(), 1);
+  XrInstanceCreateInfo ci{XR_TYPE_INSTANCE_CREATE_INFO};
+  std::strcpy(ci.applicationInfo.applicationName, "embody-tests");
+  ci.applicationInfo.apiVersion = XR_CURRENT_API_VERSION;
+  struct Case {
+    const char *name, *value;
+    bool ok;
+  };
+  for (const Case& c : {Case{"EMBODY_XR_FRAMES", "30x", false}, Case{"EMBODY_XR_FRAMES", "-3", false},
+                        Case{"EMBODY_XR_FRAMES", "30", true}, Case{"EMBODY_XR_LOSS_FRAMES", "ten", false},
+                        Case{"EMBODY_XR_VIEW_SIZE", "garbage", false}, Case{"EMBODY_XR_VIEW_SIZE", "15x15", false},
+                        Case{"EMBODY_XR_VIEW_SIZE", "64x64", true}, Case{"EMBODY_XR_IPD", "0.5", false},
+                        Case{"EMBODY_XR_IPD", "0.063", true}}) {
+    INFO(c.name << "=" << c.value);
+    setenv(c.name, c.value, 1);
+    XrInstance inst = XR_NULL_HANDLE;
+    const XrResult r = xrCreateInstance(&ci, &inst);
+    unsetenv(c.name);
+    CHECK((r == XR_SUCCESS) == c.ok);
+    if (!c.ok) CHECK(r == XR_ERROR_INITIALIZATION_FAILED);
+    if (r == XR_SUCCESS) CHECK(xrDestroyInstance(inst) == XR_SUCCESS);
+  }
+}

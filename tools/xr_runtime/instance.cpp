@@ -1,5 +1,8 @@
 // Instance, system, view configurations, paths, events and strings.
 #include <cstdio>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
@@ -54,6 +57,40 @@ void viewSize(uint32_t& w, uint32_t& h) {
   }
 }
 
+namespace {
+
+// The runtime's test settings, checked once at xrCreateInstance: a malformed one is refused, not
+// read as its default. EMBODY_XR_FRAMES=30x was read as "no limit" and left hello_xr running until
+// its CI job's timeout; a bad view size or IPD quietly became the default (OpenXR robustness
+// probe, session 20). Returns "" when every set variable is well formed.
+std::string environmentProblem() {
+  for (const char* name : {"EMBODY_XR_FRAMES", "EMBODY_XR_LOSS_FRAMES", "EMBODY_XR_SPACE_CHANGE_FRAMES",
+                           "EMBODY_XR_HEAD_UNTRACKED"}) {
+    const char* e = std::getenv(name);
+    if (!e || !*e) continue;
+    char* end = nullptr;
+    errno = 0;
+    (void)std::strtoull(e, &end, 10);
+    if (!std::isdigit(static_cast<unsigned char>(e[0])) || *end != '\0' || errno == ERANGE)
+      return std::string(name) + "='" + e + "' is not a whole number of frames";
+  }
+  if (const char* e = std::getenv("EMBODY_XR_VIEW_SIZE"); e && *e) {
+    unsigned a = 0, b = 0;
+    char tail = 0;
+    if (std::sscanf(e, "%ux%u%c", &a, &b, &tail) != 2 || a < 16 || b < 16 || a > 4096 || b > 4096)
+      return std::string("EMBODY_XR_VIEW_SIZE='") + e + "' is not WIDTHxHEIGHT with each 16 .. 4096";
+  }
+  if (const char* e = std::getenv("EMBODY_XR_IPD"); e && *e) {
+    char* end = nullptr;
+    const float v = std::strtof(e, &end);
+    if (*end != '\0' || !std::isfinite(v) || v <= 0.04f || v >= 0.09f)
+      return std::string("EMBODY_XR_IPD='") + e + "' is not an interpupillary distance in metres (0.04 .. 0.09)";
+  }
+  return "";
+}
+
+}  // namespace
+
 XrResult XRAPI_CALL EnumerateInstanceExtensionProperties(const char* layerName, uint32_t capacity,
                                                          uint32_t* count, XrExtensionProperties* props) {
   if (layerName && *layerName) return XR_ERROR_API_LAYER_NOT_PRESENT;
@@ -72,6 +109,10 @@ XrResult XRAPI_CALL CreateInstance(const XrInstanceCreateInfo* ci, XrInstance* o
   if (!ci || !out || ci->type != XR_TYPE_INSTANCE_CREATE_INFO) return XR_ERROR_VALIDATION_FAILURE;
   if (ci->applicationInfo.applicationName[0] == '\0') return XR_ERROR_NAME_INVALID;
   if (XR_VERSION_MAJOR(ci->applicationInfo.apiVersion) != 1) return XR_ERROR_API_VERSION_UNSUPPORTED;
+  if (const std::string problem = environmentProblem(); !problem.empty()) {
+    std::fprintf(stderr, "embody headless runtime: %s; fix or unset it\n", problem.c_str());
+    return XR_ERROR_INITIALIZATION_FAILED;
+  }
   auto inst = std::make_unique<Instance>();
   for (uint32_t i = 0; i < ci->enabledExtensionCount; ++i) {
     const char* name = ci->enabledExtensionNames[i];
