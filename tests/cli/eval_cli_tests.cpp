@@ -347,6 +347,11 @@ TEST_CASE("embody render --avatar CLIP.bvh --export: the solved motion on the cl
   REQUIRE(r.exitCode == 0);
   r = runEmbody("render --motion synthetic:figure8 --frames 5 --export " + (out / "x.fbx").string() + " --out " + out.string(), true);
   CHECK(r.exitCode == 2);
+  // A folder that cannot take the file is refused before the run (it is written at the end).
+  r = runEmbody("render --motion synthetic:figure8 --frames 5 --export " + (out / "missing" / "x.bvh").string() + " --out " +
+                    out.string(), true);
+  CHECK(r.exitCode == 2);
+  CHECK(r.output.find("does not exist") != std::string::npos);
 
   int rc = std::system("node --version > /dev/null 2>&1");
   const fs::path src = embody::test::kSourceDir, tools = src / ".tools";
