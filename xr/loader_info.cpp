@@ -1,5 +1,7 @@
 #include "xr/loader_info.h"
 
+#include "xr/xr_common.h"
+
 #include <dlfcn.h>
 #include <openxr/openxr.h>
 
@@ -85,7 +87,7 @@ OpenXRLoaderInfo probeOpenXR() {
   XrInstance instance = XR_NULL_HANDLE;
   XrResult r = xrCreateInstance(&ci, &instance);
   if (XR_FAILED(r)) {
-    info.runtimeError = "xrCreateInstance failed (XrResult " + std::to_string(r) + ")";
+    info.runtimeError = "xrCreateInstance failed (" + resultString(XR_NULL_HANDLE, r) + ")";
     info.runtimeName = "none (manifest " + info.runtimeManifest + " did not load)";
     return info;
   }

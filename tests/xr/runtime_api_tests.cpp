@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "xr/xr_common.h"
 #include "xr_test_support.h"
 
 using namespace embody::test;
@@ -139,6 +140,11 @@ TEST_CASE("result and structure type strings come from the registry", "[xr]") {
   char sbuf[XR_MAX_STRUCTURE_NAME_SIZE];
   REQUIRE(xrStructureTypeToString(inst.handle, XR_TYPE_HAND_JOINT_LOCATIONS_EXT, sbuf) == XR_SUCCESS);
   CHECK(std::string(sbuf) == "XR_TYPE_HAND_JOINT_LOCATIONS_EXT");
+  // Without an instance (xrCreateInstance failed) embody's messages name the code from the SDK's
+  // reflection header: "XrResult -36" said nothing (OpenXR probe, session 20).
+  CHECK(embody::xr::resultString(XR_NULL_HANDLE, XR_ERROR_API_LAYER_NOT_PRESENT) == "XR_ERROR_API_LAYER_NOT_PRESENT");
+  CHECK(embody::xr::resultString(inst.handle, XR_ERROR_SESSION_LOST) == "XR_ERROR_SESSION_LOST");
+  CHECK(embody::xr::resultString(XR_NULL_HANDLE, static_cast<XrResult>(-999999)) == "XrResult -999999");
 }
 
 TEST_CASE("unimplemented and not-enabled functions are XR_ERROR_FUNCTION_UNSUPPORTED, never a crash",
