@@ -14,6 +14,10 @@ namespace {
 constexpr double kSnapUpDegrees = 25.0, kSnapForwardDegrees = 30.0;
 constexpr double kHeadJointRatio = 0.91;        // skull base over the height, without a head-top joint
 constexpr double kReferenceJumpHeightsPerS = 5.7;  // 10 m/s for a 1.75 m performer
+// Leading reference frames (a T-pose held for a few frames, then the take): at most this many,
+// each the same pose to within this share of the body's size.
+constexpr size_t kMaxReferenceFrames = 10;
+constexpr double kStillReferenceShare = 1e-4;
 constexpr size_t kMaxStatFrames = 4096;           // frames read for the statistics (evenly spaced)
 
 std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
@@ -102,19 +106,27 @@ double boneLengthSize(const BvhClip& clip, const BodyJoints& b) {
   return size;
 }
 
+// The first frame of the take: 0, or k + 1 when frames 0..k hold one reference pose (a T-pose)
+// and a body joint jumps from it into frame k + 1 faster than any body moves, then moves at a
+// body's speed. Two held T-pose frames were once played as motion (the hands 65 cm off at t = 0).
 size_t referenceFrame(const BvhClip& clip, const BodyJoints& b, double size) {
   if (clip.frameCount < 3) return 0;
-  std::vector<int> joints{b.hips, b.head, b.feet[0], b.feet[1], b.hands[0], b.hands[1]};
-  std::vector<BvhGlobal> g[3];
-  for (size_t f = 0; f < 3; ++f) bvhGlobals(clip, clip.frame(f), g[f]);
-  auto fastest = [&](size_t a) {
+  const size_t span = std::min(clip.frameCount, kMaxReferenceFrames + 2);  // frames read
+  const std::vector<int> joints{b.hips, b.head, b.feet[0], b.feet[1], b.hands[0], b.hands[1]};
+  std::vector<std::vector<BvhGlobal>> g(span);
+  for (size_t f = 0; f < span; ++f) bvhGlobals(clip, clip.frame(f), g[f]);
+  auto moved = [&](size_t a) {  // the farthest a body joint moves from frame a to a + 1
     double d = 0.0;
     for (int j : joints)
       if (j >= 0) d = std::max(d, glm::length(g[a + 1][static_cast<size_t>(j)].position - g[a][static_cast<size_t>(j)].position));
-    return d / clip.frameTime;
+    return d;
   };
-  const double limit = kReferenceJumpHeightsPerS * size / 0.88;  // the bone size is ~0.88 of the height
-  return fastest(0) > limit && fastest(1) < limit ? 1 : 0;
+  const double jump = kReferenceJumpHeightsPerS * size / 0.88 * clip.frameTime;  // the bone size is ~0.88 of the height
+  for (size_t k = 0; k + 2 < span; ++k) {
+    if (moved(k) > jump) return moved(k + 1) < jump ? k + 1 : 0;
+    if (moved(k) > kStillReferenceShare * size) return 0;  // moving before any jump: frame 0 is the take's
+  }
+  return 0;
 }
 
 struct UpEstimate {
@@ -292,7 +304,10 @@ Result<BvhBody> analyseBvhBody(const BvhClip& clip, const BvhBodyOptions& option
   }
   const BodyJoints b(body.humanoid);
   body.firstFrame = referenceFrame(clip, b, boneLengthSize(clip, b));
-  if (body.firstFrame > 0) body.notes.push_back("frame 0 is a reference pose (a body joint jumps into frame 1); skipped");
+  if (body.firstFrame == 1) body.notes.push_back("frame 0 is a reference pose (a body joint jumps into frame 1); skipped");
+  if (body.firstFrame > 1)
+    body.notes.push_back("frames 0-" + std::to_string(body.firstFrame - 1) + " hold a reference pose (a body joint jumps into frame " +
+                         std::to_string(body.firstFrame) + "); skipped");
   if (auto s = chooseUp(clip, b, options, body); !s.ok()) return Error{s.error()};
   if (auto s = chooseForward(clip, b, options, body); !s.ok()) return Error{s.error()};
   body.upAxis = bvhAxisName(body.up);

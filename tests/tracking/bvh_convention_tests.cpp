@@ -244,3 +244,39 @@ TEST_CASE("write the BVH convention fixtures", "[.write]") {
     std::ofstream(std::string(dir) + "/" + conv.name + ".bvh") << test::writeConventionClip(conv, 4);
   }
 }
+
+TEST_CASE("a T-pose held for several leading frames is skipped like one, a still take is not cut") {
+  // Some exporters hold the reference pose for a few frames; two were played as motion (the
+  // hands 65 cm and 81 degrees off at t = 0; the robustness probe, session 20).
+  test::BvhConvention conv = test::bvhConventions()[0];
+  conv.tposeFirst = true;
+  const std::string once = test::writeConventionClip(conv);
+  BvhMapping onceMap;
+  auto ref = traceOf(once, {}, &onceMap);
+  REQUIRE(ref.ok());
+  REQUIRE(onceMap.body.firstFrame == 1u);
+  // The T-pose line repeated: 1 + k reference frames, then the same take.
+  const size_t header = once.find("Frame Time:");
+  const size_t firstLine = once.find('\n', header) + 1;
+  const std::string tpose = once.substr(firstLine, once.find('\n', firstLine) + 1 - firstLine);
+  for (int extra : {1, 3}) {
+    INFO(1 + extra << " reference frames");
+    std::string text = once;
+    for (int k = 0; k < extra; ++k) text.insert(firstLine, tpose);
+    const std::string frames = "Frames: " + std::to_string(test::kConventionClipFrames + 1);
+    text.replace(text.find(frames), frames.size(), "Frames: " + std::to_string(test::kConventionClipFrames + 1 + extra));
+    BvhMapping map;
+    auto got = traceOf(text, {}, &map);
+    REQUIRE(got.ok());
+    CHECK(map.body.firstFrame == size_t(1 + extra));
+    REQUIRE(got->samples.size() == ref->samples.size());
+    float worst = 0.0f;
+    for (size_t f = 0; f < ref->samples.size(); ++f)
+      for (auto id : kAllTrackers) worst = std::max(worst, glm::length(got->samples[f][id].position - ref->samples[f][id].position));
+    CHECK(worst < 1e-4f);
+  }
+  // A take that starts still (no jump after the still frames) keeps its first frame.
+  BvhMapping stillMap;
+  REQUIRE(traceOf(test::writeConventionClip(test::bvhConventions()[0]), {}, &stillMap).ok());
+  CHECK(stillMap.body.firstFrame == 0u);
+}
