@@ -150,8 +150,9 @@ int Args::integer(const std::string& name) const {
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used != v.size() || v.empty() || n < -2147483647LL || n > 2147483647LL)
-    throw std::invalid_argument("--" + name + " expects an integer, got '" + v + "'");
+  if (used != v.size() || v.empty()) throw std::invalid_argument("--" + name + " expects an integer, got '" + v + "'");
+  if (n < -2147483647LL || n > 2147483647LL)  // (std::stoll's own overflow is caught above as not a number)
+    throw std::invalid_argument("--" + name + " is out of range: '" + v + "'");
   return static_cast<int>(n);
 }
 

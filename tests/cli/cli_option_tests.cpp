@@ -65,6 +65,7 @@ TEST_CASE("each command's own bad values exit 2 with one line naming the option"
       {"demo --no-mirror", {"--frames 0", "--frames"}},
       {"demo --no-mirror", {"--mirror-frames 0", "--mirror-frames"}},
       {"xr", {"--frames -1", "--frames"}},
+      {"xr", {"--frames 2147483648", "--frames is out of range"}},  // was "expects an integer"
       {"xr", {"--body sideways", "--body"}},
       {"xr", {"--height 9", "--height"}},
       {"xr", {"--seat-height 0.5", "--seat-height"}},
