@@ -62,6 +62,15 @@ double headPitchDown(const Eigen::Quaterniond& headTurn, const Eigen::Vector3d& 
   return tilt * std::clamp(faceDown / 0.2, -1.0, 1.0);
 }
 
+// The head target read once per frame for the steps that infer from it (the neck's band, the
+// trunk and feet of three-point mode).
+struct HeadReading {
+  Eigen::Quaterniond turn = Eigen::Quaterniond::Identity();  // off the rest pose
+  Eigen::Vector3d pivot = Eigen::Vector3d::Zero();           // the head joint
+  double pitchDown = 0.0;                                    // headPitchDown
+  double drop = 0.0;  // metres the pivot is below its standing height
+};
+
 // Bent over by this much or more (radians), the head may look this far to either side of the
 // body's heading (upright: not at all, the body turns with the head; smoothly in between).
 constexpr double kBentNeckTurn = std::numbers::pi / 4.0;
@@ -81,6 +90,7 @@ class TaskWriter {
   void setPoleTargets();
   void setClavicleTargets();
   void setNeckBand();
+  HeadReading readHead() const;
   // Enables (weight > 0, times the task's own) or disables a position/orientation/pose task pair.
   void setPose(ik::TaskId position, ik::TaskId orientation, const Eigen::Vector3d& p, const Eigen::Quaterniond& q, double weight);
   Eigen::Vector3d jointPosition(ik::JointId joint) const { return d.jointFrame(joint).translation(); }
@@ -97,7 +107,18 @@ class TaskWriter {
   SeatState& seat;
   ik::Data& d;
   TaskTargetsOutput& out;
+  HeadReading head_;  // setTargets()
 };
+
+HeadReading TaskWriter::readHead() const {
+  const size_t headIndex = size_t(tracking::index(TrackerId::Head));
+  HeadReading h;
+  h.turn = targets.rotation[headIndex] * r.restRotation[headIndex].conjugate();
+  h.pivot = targets.point[headIndex] - targets.rotation[headIndex] * r.eyeInHead;
+  h.pitchDown = headPitchDown(h.turn, r.up, r.forward);
+  h.drop = r.restHeight[headIndex] - (r.up.dot(h.pivot) - r.floor);
+  return h;
+}
 
 void TaskWriter::setTargets() {
   for (auto id : tracking::kAllTrackers) {
@@ -105,6 +126,7 @@ void TaskWriter::setTargets() {
     if (r.tasks.position[i] >= 0 && r.body.model.tasks[size_t(r.tasks.position[i])].desc.type == ik::TaskType::Pose) continue;
     setPose(r.tasks.position[i], r.tasks.orientation[i], targets.point[i], targets.rotation[i], targets.weight[i]);
   }
+  head_ = readHead();
   setNeckBand();
   if (r.layout.seated) {
     setSeatedTargets();
@@ -134,12 +156,8 @@ constexpr double kSunkOnset = 0.1, kSunkFull = 0.3;  // head drop, trunk lengths
 
 void TaskWriter::setNeckBand() {
   if (r.body.neckBandRows.empty()) return;
-  const size_t headIndex = size_t(tracking::index(TrackerId::Head));
-  const Eigen::Quaterniond headTurn = targets.rotation[headIndex] * r.restRotation[headIndex].conjugate();
-  const Eigen::Vector3d headPivot = targets.point[headIndex] - targets.rotation[headIndex] * r.eyeInHead;
-  const double drop = (r.restHeight[headIndex] - (r.up.dot(headPivot) - r.floor)) / r.restHeadToHips.norm();
-  const double lookingDown = smoothstep(kLookDownOnset, kLookDownFull, headPitchDown(headTurn, r.up, r.forward));
-  const double upright = 1.0 - smoothstep(kSunkOnset, kSunkFull, drop);
+  const double lookingDown = smoothstep(kLookDownOnset, kLookDownFull, head_.pitchDown);
+  const double upright = 1.0 - smoothstep(kSunkOnset, kSunkFull, head_.drop / r.restHeadToHips.norm());
   const double slack = r.body.bandSlack + std::max(0.0, kLookingNeckBand - r.body.bandSlack) * lookingDown * upright;
   for (int row : r.body.neckBandRows) require(d.setInequalityBound(row, slack));
 }
@@ -163,12 +181,10 @@ void TaskWriter::scaleStrides() {
 // Three-point mode: the pelvis and the feet are inferred from the head (the foot planner steps).
 void TaskWriter::setInferredLowerBody() {
   const size_t headIndex = size_t(tracking::index(TrackerId::Head));
-  const Eigen::Quaterniond headTurn = targets.rotation[headIndex] * r.restRotation[headIndex].conjugate();
+  const Eigen::Quaterniond& headTurn = head_.turn;
   const double time = sample.pose.time;
-  const Eigen::Vector3d headPivot = targets.point[headIndex] - targets.rotation[headIndex] * r.eyeInHead;
-  const double pitchDown = headPitchDown(headTurn, r.up, r.forward);
-  const double drop = r.restHeight[headIndex] - (r.up.dot(headPivot) - r.floor);
-  const InferredTrunk trunk = inferTrunk(drop, pitchDown, r.restHeadToHips.norm());
+  const Eigen::Vector3d& headPivot = head_.pivot;
+  const InferredTrunk trunk = inferTrunk(head_.drop, head_.pitchDown, r.restHeadToHips.norm());
   const double neckTurn = kBentNeckTurn * smoothstep(trunk.bend / kBentNeckTurn);
   // The previous frame's travel: the planner is updated below, under this heading.
   const double yaw = job_.heading->facingTravel(job_.heading->update(faceHeadingOf(headTurn, r.up, r.forward), neckTurn, time),
@@ -222,9 +238,8 @@ void TaskWriter::setSeatedTargets() {
   const size_t headIndex = size_t(tracking::index(TrackerId::Head));
   if (!seat.placed && sample.status[headIndex] == TrackerStatus::Tracked && sample.pose[TrackerId::Head].valid) {
     // The seat goes under the first tracked head, facing where it looks.
-    const Eigen::Quaterniond headTurn = targets.rotation[headIndex] * r.restRotation[headIndex].conjugate();
     const double seatHeight = job_.seatHeight > 0.0f ? calibration.scale * double(job_.seatHeight) : -1.0;
-    seat.pose = placeSeat(r.legs, targets.point[headIndex], faceHeadingOf(headTurn, r.up, r.forward), seatHeight);
+    seat.pose = placeSeat(r.legs, targets.point[headIndex], faceHeadingOf(head_.turn, r.up, r.forward), seatHeight);
     seat.placed = true;
     if (!job_.solvedOnce) {
       // Start the cold solve with the hips over the seat: the legs then only fold.
