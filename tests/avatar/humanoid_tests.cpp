@@ -316,6 +316,18 @@ Skeleton cmuShapedSkeleton(const std::function<std::string(const std::string&)>&
   return s;
 }
 
+// mapHumanoid on a skeleton without glTF data; the map must drive the body, found by names (kept
+// or filled by topology).
+HumanoidMap usableByNames(const Skeleton& s) {
+  HumanoidInputs in;
+  in.skeleton = &s;
+  auto map = mapHumanoid(in);
+  REQUIRE(map.ok());
+  CHECK(map->usable());
+  CHECK(map->method == MappingMethod::Names);
+  return std::move(map).value();
+}
+
 std::string jointName(const Skeleton& s, const HumanoidMap& m, HumanBone b) {
   return m.has(b) ? s.joints[static_cast<size_t>(m.joint(b))].name : std::string("(none)");
 }
@@ -327,17 +339,12 @@ TEST_CASE("one torso bone, clavicles at the spine's pivot: names, topology and b
   // The robustness probe (session 20): with one required bone left unmapped by names, the whole
   // map was replaced by the topology's, which took the clavicle for the upper arm and the forearm
   // for the hand (the hand trackers 19 cm off, at the elbows).
-  HumanoidInputs in;
   // 1. Names: Spine1 is the only torso bone, so it is the spine (required), not a chest.
   const Skeleton named = cmuShapedSkeleton([](const std::string& n) { return n; });
-  in.skeleton = &named;
-  auto byNames = mapHumanoid(in);
-  REQUIRE(byNames.ok());
-  CHECK(byNames->usable());
-  CHECK(byNames->method == MappingMethod::Names);
-  CHECK(jointName(named, *byNames, HumanBone::spine) == "Spine1");
-  CHECK(jointName(named, *byNames, HumanBone::leftUpperArm) == "LeftArm");
-  CHECK(jointName(named, *byNames, HumanBone::leftHand) == "LeftHand");
+  const HumanoidMap byNames = usableByNames(named);
+  CHECK(jointName(named, byNames, HumanBone::spine) == "Spine1");
+  CHECK(jointName(named, byNames, HumanBone::leftUpperArm) == "LeftArm");
+  CHECK(jointName(named, byNames, HumanBone::leftHand) == "LeftHand");
   // 2. Topology alone: a first arm joint at the junction's pivot is a clavicle, whatever its length.
   int counter = 0;
   const Skeleton unnamed = cmuShapedSkeleton([&counter](const std::string&) { return "j" + std::to_string(counter++); });
@@ -346,19 +353,15 @@ TEST_CASE("one torso bone, clavicles at the spine's pivot: names, topology and b
   for (auto [bone, expected] : {std::pair{HumanBone::leftShoulder, "LeftShoulder"}, std::pair{HumanBone::leftUpperArm, "LeftArm"},
                                 std::pair{HumanBone::leftLowerArm, "LeftForeArm"}, std::pair{HumanBone::rightHand, "RightHand"}}) {
     INFO(humanBoneName(bone));
-    CHECK(byTopology.joint(bone) == byNames->joint(bone));  // the same joint order in both skeletons
-    CHECK(jointName(named, *byNames, bone) == expected);
+    CHECK(byTopology.joint(bone) == byNames.joint(bone));  // the same joint order in both skeletons
+    CHECK(jointName(named, byNames, bone) == expected);
   }
   // 3. Names with a leg no table knows: the named bones stay, topology fills only the gap.
   const Skeleton partly = cmuShapedSkeleton([](const std::string& n) { return n == "LeftUpLeg" ? std::string("Bone.007") : n; });
-  in.skeleton = &partly;
-  auto filled = mapHumanoid(in);
-  REQUIRE(filled.ok());
-  CHECK(filled->usable());
-  CHECK(filled->method == MappingMethod::Names);
-  CHECK(jointName(partly, *filled, HumanBone::leftUpperLeg) == "Bone.007");
-  CHECK(jointName(partly, *filled, HumanBone::leftHand) == "LeftHand");
-  CHECK(jointName(partly, *filled, HumanBone::leftUpperArm) == "LeftArm");
-  REQUIRE_FALSE(filled->notes.empty());
-  CHECK(filled->notes.back().find("filled by topology: leftUpperLeg") != std::string::npos);
+  const HumanoidMap filled = usableByNames(partly);
+  CHECK(jointName(partly, filled, HumanBone::leftUpperLeg) == "Bone.007");
+  CHECK(jointName(partly, filled, HumanBone::leftHand) == "LeftHand");
+  CHECK(jointName(partly, filled, HumanBone::leftUpperArm) == "LeftArm");
+  REQUIRE_FALSE(filled.notes.empty());
+  CHECK(filled.notes.back().find("filled by topology: leftUpperLeg") != std::string::npos);
 }
