@@ -28,13 +28,18 @@ struct BvhAvatar {
   // The skeleton's rest pose is the clip's first frame: its zero-channel pose is not a standing
   // body (CC_Base exports). mapping.reference and eyeOffset are then at that frame too.
   bool restFromFirstFrame = false;
+  // The turn that stood the zero-channel pose upright in tracking space, when neither it nor the
+  // first frame stood (a Y-up skeleton turned into a Z-up world by its root's channels); the
+  // identity otherwise. mapping.reference and eyeOffset are turned with it.
+  glm::dquat restTurn{1.0, 0.0, 0.0, 0.0};
   // Metres the rest pose stands above (negative: below) its lowest joint on the floor, so that its
   // ankles are as high as the clip's standing ankles (bvh_avatar.cpp: restLift).
   double restLift = 0.0;
 };
 
-// Fails (one line) when the clip has no frames, or neither its zero-channel pose nor its first
-// frame is a standing humanoid the mapper can read (head above the hips, feet below them, two arms).
+// Fails (one line) when the clip has no frames, or neither its zero-channel pose, its first frame
+// nor its zero-channel pose turned upright is a standing humanoid the mapper can read (head above
+// the hips and within 30 degrees of straight over the feet, feet below the hips, two arms).
 Result<BvhAvatar> buildBvhAvatar(avatar::BvhClip clip, const BvhTrackerOptions& options);
 Result<BvhAvatar> loadBvhAvatar(const std::string& path, const BvhTrackerOptions& options);
 
