@@ -12,6 +12,12 @@ namespace embody::avatar {
 namespace {
 
 constexpr double kSnapUpDegrees = 25.0, kSnapForwardDegrees = 30.0;
+// A body whose head stands over its feet along no axis of the file, by more than this, is not a
+// person standing in a tilted capture volume (those lean 5-30 degrees) but a quadruped with human
+// names (Truebones' animals: 43 degrees) or a performer lying down for much of the clip (35
+// degrees, 60 % of the frames within 40 degrees of it).
+constexpr double kMaxObliqueUpDegrees = 40.0;
+constexpr double kObliqueUpAgreement = 0.8;  // ... or more than kSnapUpDegrees with fewer frames agreeing
 constexpr double kHeadJointRatio = 0.91;        // skull base over the height, without a head-top joint
 constexpr double kReferenceJumpHeightsPerS = 5.7;  // 10 m/s for a 1.75 m performer
 // Leading reference frames (a T-pose held for a few frames, then the take): at most this many,
@@ -186,6 +192,13 @@ Status chooseUp(const BvhClip& clip, const BodyJoints& b, const BvhBodyOptions& 
                      "give --bvh-up (+Y, +Z, ...) and --bvh-forward",
                      100.0 * e.agreement)};
   body.up = snapAxis(e.up, kSnapUpDegrees);
+  double offAxis = 90.0;
+  for (int a = 0; a < 3; ++a) offAxis = std::min(offAxis, glm::degrees(std::acos(std::min(1.0, std::abs(e.up[a])))));
+  // Off every axis and the frames disagreeing too: the body lies down for a good part of the clip.
+  if (offAxis > kMaxObliqueUpDegrees || (offAxis > kSnapUpDegrees && e.agreement < kObliqueUpAgreement))
+    return Error{fmt("not a standing humanoid: its head stands over its feet %.0f deg from every axis of the file", offAxis) +
+                 " (a quadruped with human joint names, or a performer lying down for most of the clip?); give --bvh-up "
+                 "(+Y, +Z, ...) to read it anyway"};
   body.upFrom = "motion";
   body.upConfidence = e.agreement;
   const double off = glm::degrees(std::acos(std::clamp(glm::dot(body.up, e.up), -1.0, 1.0)));

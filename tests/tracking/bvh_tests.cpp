@@ -315,6 +315,36 @@ TEST_CASE("a Z-up BVH is turned upright") {
   CHECK(s[TrackerId::LeftHand].position.x < -0.3f);
 }
 
+TEST_CASE("a body standing over its feet along no axis of the file is refused unless --bvh-up says how") {
+  // The figure turned 20 degrees about X stands in a tilted capture volume and reads (snapped to
+  // +Y); turned 50 degrees it is what a quadruped with human names or a lying performer measures
+  // (43-55 degrees): refused, and read as told with --bvh-up.
+  for (const double degrees : {20.0, 50.0}) {
+    auto clip = avatar::parseBvh(figure("cmu"), "fig.bvh");
+    REQUIRE(clip.ok());
+    const double a = glm::radians(degrees), c = std::cos(a), s = std::sin(a);
+    auto tilt = [&](glm::dvec3 v) { return glm::dvec3(v.x, c * v.y - s * v.z, s * v.y + c * v.z); };
+    for (auto& j : clip->joints) j.offset = tilt(j.offset);
+    for (size_t f = 0; f < clip->frameCount; ++f) {
+      float* v = clip->values.data() + f * 36;
+      const glm::dvec3 p = tilt(glm::dvec3(v[0], v[1], v[2]));
+      v[0] = float(p.x), v[1] = float(p.y), v[2] = float(p.z);
+    }
+    INFO(degrees << " degrees");
+    auto trace = bvhToTrace(*clip, {}, nullptr);
+    if (degrees < 25.0) {
+      CHECK(trace.ok());
+      continue;
+    }
+    REQUIRE_FALSE(trace.ok());
+    CHECK(trace.error().find("not a standing humanoid") != std::string::npos);
+    CHECK(trace.error().find("--bvh-up") != std::string::npos);
+    BvhTrackerOptions told;
+    told.body.up = "+Y";
+    CHECK(bvhToTrace(*clip, told, nullptr).ok());
+  }
+}
+
 TEST_CASE("the CMU walk: 524 frames at 120 Hz, a plausible head height, about 3.8 m walked") {
   EMBODY_REQUIRE_SHARED_ASSET(path, "cmu_12_01_walk.bvh");
   BvhMapping map;
