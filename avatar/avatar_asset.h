@@ -187,6 +187,21 @@ struct AvatarAsset {
   std::vector<std::string> vrmWarnings;
 };
 
+// Makes the skeleton rigid: every joint's rest global becomes a rotation, a uniform scale and a
+// translation, and whatever non-uniform scale or shear the file gave it is folded into its own
+// inverse bind (inverseBind' = rigid^-1 * global * inverseBind, so the rest draws the same), where
+// it shapes that joint's vertices only. glTF multiplies a node's scale into its children: a
+// non-uniform scale on a bone with children (say (2, 0.5, 1) on a vertebra, the children's offsets
+// compensated) drew right at rest and sheared the children once the bone turned, which no rotation
+// undoes (the arms stretched to several times their length; robustness probe, session 20). Unreal
+// and Unity import, Maya's segment scale compensation and ozz-animation's runtime skeleton do the
+// same. The rigid rotation is the closest one (polar decomposition), the scale the cube root of
+// the determinant. A joint whose global is already a similarity, mirrored ones included (the body
+// model refuses those by name), keeps its rest and bind bit for bit, and its subtree too unless a
+// joint above it changes. A bone hidden by a zero scale keeps its rotation and scale and only moves
+// to its pivot. Needs mesh.inverseBind sized to the skeleton; returns the joints whose rest changed.
+int foldBoneScaleIntoBind(AvatarAsset& asset);
+
 // Palette for a pose: palette[j] = global[j] * inverseBind[j].
 void computeSkinningPalette(const AvatarAsset& asset, const std::vector<glm::mat4>& globals,
                             std::vector<glm::mat4>& palette);

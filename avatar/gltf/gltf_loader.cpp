@@ -1039,6 +1039,8 @@ Result<AvatarAsset> loadGltfFromMemory(const std::vector<uint8_t>& bytes, const 
   MeshBuilder builder{model, limits, asset, warnings, {}};
   if (auto s = builder.addSkins(); !s.ok()) return Error{s.error()};
   if (auto s = builder.addMeshes(); !s.ok()) return Error{s.error()};
+  // After the meshes: rigid vertices were stored against the file's binds, which the fold adjusts.
+  foldBoneScaleIntoBind(asset);
   addMaterialsAndImages(model, asset, warnings);
   readMToonMaterials(asset, warnings);  // VRMC_materials_mtoon, VRM 0.x materialProperties
   asset.mesh.firstPersonIndices = asset.mesh.indices;

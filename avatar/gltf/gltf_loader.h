@@ -4,7 +4,10 @@
 // What the loader produces:
 //   - skeleton: every node of the file as a joint, parents before children (depth-first from
 //     each root in node order). Node matrices are decomposed into TRS. glTF node index i maps to
-//     joint nodeToJoint[i] (kept in AvatarAsset::gltfNodeToJoint).
+//     joint nodeToJoint[i] (kept in AvatarAsset::gltfNodeToJoint). The skeleton is rigid: a
+//     non-uniform scale (or shear) on a node is folded into that joint's inverse bind
+//     (foldBoneScaleIntoBind, avatar_asset.h), so it shapes the node's own vertices as at rest and
+//     never its children's; a file with uniform scales only keeps its rest transforms as written.
 //   - mesh: every primitive of every node that has a mesh, merged into one vertex/index buffer.
 //     Skinned primitives keep their JOINTS_0/1 + WEIGHTS_0/1 (up to 8 influences, normalised to
 //     sum 1), with skin joint indices remapped to skeleton joints and one inverse bind matrix per

@@ -58,6 +58,48 @@ TEST_CASE("a rigid triangle becomes weight 1 on its node with computed normals",
   CHECK(glm::all(glm::epsilonEqual(p[1], glm::vec3(1, 1, 0), 1e-6f)));
 }
 
+TEST_CASE("a mesh on a child of a non-uniformly scaled node turns rigidly with its parent", "[gltf]") {
+  // The arm has scale (1, 1.6, 1) and its child's offset is divided by it: valid glTF with the
+  // same rest as the unscaled arm whose child (the triangle's node, scaled (3, 1, 1) itself) has
+  // scale (3, 1.6, 1). With the arm and the forearm turned, the triangle moves rigidly, as the
+  // unscaled file's, instead of shearing through the arm's scale.
+  auto file = [](bool scaled) {
+    TriangleFile f;
+    f.doc["nodes"] = {{{"name", "arm"},
+                       {"rotation", {0, 0, 0.38268343, 0.92387953}},  // 45 degrees about z
+                       {"children", {1}}},
+                      {{"name", "forearm"}, {"translation", {0, 0.5, 0}}, {"scale", {3, 1.6, 1}}, {"mesh", 0}}};
+    if (scaled) {
+      f.doc["nodes"][1]["scale"] = {3, 1, 1};
+      f.doc["nodes"][0]["scale"] = {1, 1.6, 1};
+      f.doc["nodes"][1]["translation"] = {0, 0.5 / 1.6, 0};
+    }
+    auto a = loadGltfFromMemory(f.glb(), "");
+    REQUIRE(a.ok());
+    return std::move(a.value());
+  };
+  auto skinned = [](const AvatarAsset& a, bool turned) {
+    SkeletonPose pose = SkeletonPose::rest(a.skeleton);
+    if (turned)
+      for (int j : {0, 1})  // the arm 90 degrees about z, the forearm 60 degrees about x
+        pose.local[j].rotation = pose.local[j].rotation * glm::angleAxis(glm::radians(j == 0 ? 90.0f : 60.0f),
+                                                                         glm::vec3(j == 0 ? 0 : 1, 0, j == 0 ? 1 : 0));
+    std::vector<glm::mat4> globals, palette;
+    computeGlobals(a.skeleton, pose, globals);
+    computeSkinningPalette(a, globals, palette);
+    std::vector<glm::vec3> p, n;
+    skinOnCpu(a.mesh, palette, p, n);
+    return p;
+  };
+  const AvatarAsset plain = file(false), scaled = file(true);
+  for (bool turned : {false, true}) {
+    INFO((turned ? "turned" : "at rest"));
+    const auto want = skinned(plain, turned), got = skinned(scaled, turned);
+    REQUIRE(got.size() == 3);
+    for (size_t i = 0; i < 3; ++i) CHECK(glm::length(got[i] - want[i]) < 1e-5f);
+  }
+}
+
 TEST_CASE("hostile glTF files give a clear error, never a crash or a huge allocation", "[gltf]") {
   SECTION("empty and truncated GLB") {
     CHECK(loadError({}) == "empty file");
