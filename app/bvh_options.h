@@ -1,6 +1,6 @@
 #pragma once
 // The BVH import overrides, one set for every command that takes --motion FILE.bvh (render,
-// mirror, motion info/record): --bvh-up, --bvh-forward, --bvh-bone-map (docs/tracking.md).
+// mirror, motion info/record): --bvh-up, --bvh-forward, --bvh-bone-map, --bvh-mirror (docs/tracking.md).
 #include <string>
 
 #include "app/args.h"
@@ -12,6 +12,7 @@ namespace embody::app {
 struct BvhOverrides {
   std::string up, forward;  // "" = measured on the motion
   std::string boneMapFile;  // "" = none
+  bool mirror = false;      // --bvh-mirror: a left-handed file, read mirrored
 };
 
 void declareBvhOptions(Args& args);

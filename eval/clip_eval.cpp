@@ -183,6 +183,11 @@ JointTrack naiveTrack(const tracking::BvhAvatar& avatar, double fps, int frames)
   avatar::computeGlobals(*b.sk, avatar::SkeletonPose::rest(*b.sk), g);
   double lowest = 1e300;
   for (const auto& m : g) lowest = std::min(lowest, double(m[3].y));
+  for (size_t i = 0; i < 2; ++i)  // the sole under a bare ankle (avatar::BvhBody::soleBelowFoot)
+    if (const int foot = avatar.asset.humanoid.joint(i == 0 ? HumanBone::leftFoot : HumanBone::rightFoot);
+        foot >= 0 && foot == avatar.mapping.body.joint(i == 0 ? HumanBone::leftFoot : HumanBone::rightFoot) &&
+        avatar.mapping.body.soleBelowFoot[i] > 0.0)
+      lowest = std::min(lowest, double(g[size_t(foot)][3].y) - avatar.mapping.body.soleBelowFoot[i] * avatar.mapping.scale);
   for (const auto& m : g) b.rest.push_back(glm::dvec3(m[3]) - glm::dvec3(0, lowest, 0));
   const avatar::HumanoidMap& map = avatar.asset.humanoid;
   b.head = map.joint(HumanBone::head);
@@ -266,12 +271,15 @@ ScoredSkeleton scoredSkeleton(const tracking::BvhAvatar& avatar) {
     if (ankle >= 0)
       for (size_t j = size_t(ankle); j < sk.joints.size(); ++j)
         if (sk.isAncestor(ankle, int(j))) s.soles[side].push_back(int(j));  // the ankle first
+    // The sole under a bare ankle, as the clip's floor has it (avatar::BvhBody::soleBelowFoot).
+    if (ankle >= 0 && ankle == avatar.mapping.body.joint(left ? HumanBone::leftFoot : HumanBone::rightFoot))
+      s.soleBelowAnkle[side] = avatar.mapping.body.soleBelowFoot[side] * avatar.mapping.scale;
   }
   // Standing pelvis height: the rest pelvis above the rest soles.
   if (hips >= 0) {
     double sole = 1e300;
-    for (const auto& foot : s.soles)
-      for (int j : foot) sole = std::min(sole, restPos(j).y);
+    for (size_t side = 0; side < 2; ++side)
+      for (int j : s.soles[side]) sole = std::min(sole, restPos(j).y - (j == s.soles[side][0] ? s.soleBelowAnkle[side] : 0.0));
     if (sole < 1e299) s.standingPelvisHeight = restPos(hips).y - sole;
   }
   return s;

@@ -175,7 +175,7 @@ Metrics score(const JointTrack& solved, const JointTrack& clip, const ScoredSkel
     for (size_t s = 0; s < 2; ++s) {
       if (sk.soles[s].empty()) continue;
       const int ankle = sk.soles[s][0];
-      if (soleHeight(clip, f, sk.soles[s]) > kContactHeight || horizontalSpeed(clip, f, ankle, fps) > kContactSpeed) continue;
+      if (soleHeight(clip, f, sk.soles[s]) - sk.soleBelowAnkle[s] > kContactHeight || horizontalSpeed(clip, f, ankle, fps) > kContactSpeed) continue;
       skate += horizontalSpeed(solved, f, ankle, fps);
       clipSkate += horizontalSpeed(clip, f, ankle, fps);
       ++m.contactFrames;

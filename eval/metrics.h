@@ -54,6 +54,9 @@ struct ScoredSkeleton {
   std::array<std::array<int, 3>, 2> legs{{{-1, -1, -1}, {-1, -1, -1}}};  // hip, knee, ankle (0 = left)
   std::array<std::array<int, 3>, 2> arms{{{-1, -1, -1}, {-1, -1, -1}}};  // shoulder, elbow, wrist
   std::array<std::vector<int>, 2> soles;  // per foot: the ankle and every joint below it (toes, end sites)
+  // Per foot: metres the sole lies under the ankle when nothing hangs below it (no toes, no End
+  // Site; avatar::BvhBody::soleBelowFoot), else 0.
+  std::array<double, 2> soleBelowAnkle{0.0, 0.0};
   // Spine regions (trunk: hips up to the neck; neck: neck up to the head), each a chain of joints
   // from the region's base, with per joint k > 0 the rest direction chain[k-1] -> chain[k].
   struct SpineRegion {

@@ -18,7 +18,7 @@ BodyDimensions BodyDimensions::fromHeight(float h) {
   d.hipHalfWidth = 0.05f * h;
   d.thigh = 0.245f * h;
   d.shin = 0.246f * h;
-  d.ankleHeight = 0.039f * h;
+  d.ankleHeight = float(avatar::kAnkleHeightRatio) * h;
   return d;
 }
 

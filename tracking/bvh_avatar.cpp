@@ -155,6 +155,9 @@ Status buildSkeleton(const avatar::BvhClip& clip, const BvhMapping& m, std::span
   const glm::dquat q = glm::quat_cast(m.toXr);
   double lowest = 1e300;
   for (const auto& p : rest.position) lowest = std::min(lowest, p.y);
+  for (size_t i = 0; i < 2; ++i)  // the sole under a bare ankle, as the floor has it (BvhBody::soleBelowFoot)
+    if (const int foot = m.body.joint(i == 0 ? HumanBone::leftFoot : HumanBone::rightFoot); foot >= 0 && m.body.soleBelowFoot[i] > 0.0)
+      lowest = std::min(lowest, rest.position[size_t(foot)].y - m.body.soleBelowFoot[i] * m.scale);
   lift = restLift(rest.position, m, lowest, standingAnkle);
   lowest -= lift;
   for (size_t j = 0; j < clip.joints.size(); ++j) {
@@ -199,9 +202,19 @@ Result<BvhAvatar> buildBvhAvatar(avatar::BvhClip clip, const BvhTrackerOptions& 
   if (clip.joints.empty() || clip.frameCount == 0) return Error{"the BVH clip has no joints or no frames"};
   // The clip's joints are what the solved body is scored against: repaired as the trace is.
   if (auto r = repairBvhGlitches(clip); !r) return Error{r.error()};
+  // --bvh-mirror: the clip itself mirrored, so its joints beside the body are the trace's.
+  BvhTrackerOptions o = options;
+  if (options.body.mirror) {
+    avatar::mirrorBvhClip(clip);
+    o.body = avatar::mirroredBvhOptions(options.body);
+  }
   BvhAvatar out;
-  auto trace = bvhToTrace(clip, options, &out.mapping);
+  auto trace = bvhToTrace(clip, o, &out.mapping);
   if (!trace) return Error{trace.error()};
+  if (options.body.mirror) {
+    out.mapping.notes.push_back("--bvh-mirror: the clip read mirrored across its X axis");
+    trace->notes.push_back(out.mapping.notes.back());
+  }
   const BvhMapping& m = out.mapping;  // (turnReferences may update it below)
 
   // The skeleton's rest pose: the zero-channel pose when it is a standing body (CMU, most tools),

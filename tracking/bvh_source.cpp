@@ -19,6 +19,7 @@ using avatar::HumanBone;
 
 constexpr HumanBone kTrackerBone[kTrackerCount] = {HumanBone::head,     HumanBone::leftHand, HumanBone::rightHand,
                                                    HumanBone::hips,     HumanBone::leftFoot, HumanBone::rightFoot};
+constexpr HumanBone kFeet[2] = {HumanBone::leftFoot, HumanBone::rightFoot};  // BvhBody::soleBelowFoot's order
 
 // The user's height, in the range every CLI option takes (avatar/body/calibration.h).
 Status checkUserHeight(float userHeight) {
@@ -128,7 +129,8 @@ References references(const BvhClip& clip, const BvhMapping& m) {
 // `LeftToe_End` 7.5 cm under where the feet stand in 95 % of `cmu_131_02`), and taking that as the
 // floor stood the performer 7-10 cm above it, out of reach of a body whose feet are on the floor.
 // Robust to outliers in up to 1 frame in 20; a clip standing on the floor in fewer frames (a jump
-// sequence) is still placed on the lowest of the frames it stands in.
+// sequence) is still placed on the lowest of the frames it stands in. A foot without toes or End
+// Site counts with its sole under the ankle (BvhBody::soleBelowFoot), not the ankle itself.
 double floorHeight(std::vector<double>& lowestPerFrame) {
   return lowestPerFrame.empty() ? 0.0 : percentileByRank(lowestPerFrame, kFloorPercentile);
 }
@@ -148,6 +150,9 @@ Trace sampleFrames(const BvhClip& clip, const BvhMapping& m, const References& r
     avatar::bvhGlobals(clip, clip.frame(f), g);
     double low = 1e300;
     for (const auto& x : g) low = std::min(low, (m.body.toXr * x.position).y * m.scale);
+    for (size_t i = 0; i < 2; ++i)  // the sole under a bare ankle (BvhBody::soleBelowFoot)
+      if (const int foot = m.body.joint(kFeet[i]); foot >= 0 && m.body.soleBelowFoot[i] > 0.0)
+        low = std::min(low, ((m.body.toXr * g[static_cast<size_t>(foot)].position).y - m.body.soleBelowFoot[i]) * m.scale);
     lowest.push_back(low);
     PoseSample& s = trace.samples[f - m.body.firstFrame];
     s.time = static_cast<double>(f) * clip.frameTime;
@@ -234,6 +239,16 @@ std::array<int, kTrackerCount> bvhTrackerJoints(const avatar::HumanoidMap& human
 
 Result<Trace> bvhToTrace(const BvhClip& clip, const BvhTrackerOptions& options, BvhMapping* mappingOut) {
   if (auto s = checkOptions(clip, options); !s.ok()) return Error{s.error()};
+  if (options.body.mirror) {  // --bvh-mirror: a left-handed file, read mirrored back (on a copy)
+    BvhClip mirrored = clip;
+    avatar::mirrorBvhClip(mirrored);
+    BvhTrackerOptions o = options;
+    o.body = avatar::mirroredBvhOptions(options.body);
+    auto trace = bvhToTrace(mirrored, o, mappingOut);
+    if (trace && mappingOut) mappingOut->notes.push_back("--bvh-mirror: the clip read mirrored across its X axis");
+    if (trace) trace->notes.push_back("--bvh-mirror: the clip read mirrored across its X axis");
+    return trace;
+  }
   // A glitch frame (a root 99999 units up for one frame) ruined every measurement after it: the
   // trace and whatever is compared with the clip. Repaired on a copy here.
   auto glitches = findBvhGlitches(clip);

@@ -7,5 +7,8 @@ namespace embody::avatar {
 inline constexpr double kEyeHeightRatio = 0.933;
 // Eyes ahead of the head (neck) pivot over body height, head upright.
 inline constexpr double kEyeForwardRatio = 0.045;
+// Ankle joint centre above the sole over body height, standing (Drillis & Contini; Winter's
+// segment table): 6.8 cm at 1.75 m.
+inline constexpr double kAnkleHeightRatio = 0.039;
 
 }  // namespace embody::avatar

@@ -395,4 +395,18 @@ void bvhGlobals(const BvhClip& clip, std::span<const float> frame, std::vector<B
   }
 }
 
+void mirrorBvhClip(BvhClip& clip) {
+  std::vector<size_t> flip;  // value indices within a frame
+  for (auto& j : clip.joints) {
+    j.offset.x = -j.offset.x;
+    for (size_t c = 0; c < j.channels.size(); ++c)
+      if (j.channels[c] == BvhChannel::Xposition || j.channels[c] == BvhChannel::Yrotation ||
+          j.channels[c] == BvhChannel::Zrotation)
+        flip.push_back(static_cast<size_t>(j.firstChannel) + c);
+  }
+  const auto n = static_cast<size_t>(clip.channelCount);
+  for (size_t f = 0; f < clip.frameCount; ++f)
+    for (size_t k : flip) clip.values[f * n + k] = -clip.values[f * n + k];
+}
+
 }  // namespace embody::avatar

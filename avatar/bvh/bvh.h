@@ -62,6 +62,11 @@ struct BvhGlobal {
   glm::dquat rotation{1.0, 0.0, 0.0, 0.0};
 };
 
+// The clip mirrored across its X axis (x -> -x): a left-handed file read as the right-handed
+// performance it records. Exact for any channel order: offsets and X positions change sign, and so
+// do the Y and Z rotation angles (a mirror keeps the turn about X and reverses the others).
+void mirrorBvhClip(BvhClip& clip);
+
 // Global transforms of every joint for one frame's values; an empty span gives the rest pose
 // (every channel zero). `out` is resized to the joint count.
 void bvhGlobals(const BvhClip& clip, std::span<const float> frame, std::vector<BvhGlobal>& out);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "avatar/body/anthropometry.h"
 #include "avatar/bvh/bvh_body_internal.h"
 
 namespace embody::avatar {
@@ -24,6 +25,7 @@ constexpr double kReferenceJumpHeightsPerS = 5.7;  // 10 m/s for a 1.75 m perfor
 // each the same pose to within this share of the body's size.
 constexpr size_t kMaxReferenceFrames = 10;
 constexpr double kStillReferenceShare = 1e-4;
+constexpr double kBareFootShare = 0.02;             // of the bone-length size (~3 cm at 1.75 m)
 constexpr size_t kMaxStatFrames = 4096;           // frames read for the statistics (evenly spaced)
 
 std::string fmt(const char* f, double a, double b = 0.0, double c = 0.0) {
@@ -233,6 +235,59 @@ Status chooseForward(const BvhClip& clip, const BodyJoints& b, const BvhBodyOpti
   return {};
 }
 
+// Left and right against the toes: the facing from the names (left minus right limbs, across up)
+// and the way the feet point (ankle to the farthest toe or End Site, on the ground), frame by
+// frame over the take. A body whose toes point behind its hips and shoulders is no human pose:
+// the file is mirrored (left-handed axes) or its Left/Right names are swapped. Both read as "walks
+// backwards" and played the performer walking backwards, toes behind him (eval 4.2 cm for 0.84).
+// Refused only on strong evidence: the toes behind (more than 60 deg off the back) in at least 80%
+// of at least 10 frames where a foot points within 45 deg of level. Feet without toes or End Sites cannot
+// be checked and pass.
+Status checkSides(const BvhClip& clip, const BodyJoints& b, const BvhBody& body) {
+  if (b.lateralPairs.empty()) return {};
+  std::vector<BvhGlobal> rest;
+  bvhGlobals(clip, {}, rest);
+  const double size = boneLengthSize(clip, b);
+  std::array<int, 2> tip{-1, -1};  // the farthest joint of each foot's subtree at rest
+  std::array<double, 2> reach{0.0, 0.0};
+  for (size_t i = 0; i < 2; ++i) {
+    const int foot = b.feet[i];
+    if (foot < 0) continue;
+    const std::vector<bool> part = subtree(clip, foot);
+    for (size_t j = 0; j < part.size(); ++j) {
+      const double d = part[j] ? glm::length(rest[j].position - rest[static_cast<size_t>(foot)].position) : 0.0;
+      if (d > reach[i]) {
+        reach[i] = d;
+        tip[i] = static_cast<int>(j);
+      }
+    }
+    if (reach[i] < kBareFootShare * size) tip[i] = -1;
+  }
+  if (tip[0] < 0 && tip[1] < 0) return {};
+  size_t counted = 0, behind = 0;
+  forFrames(clip, body.firstFrame, clip.frameCount, [&](size_t, const std::vector<BvhGlobal>& g) {
+    glm::dvec3 left(0.0), toes(0.0);
+    for (auto [l, r] : b.lateralPairs) left += g[static_cast<size_t>(l)].position - g[static_cast<size_t>(r)].position;
+    left -= body.up * glm::dot(left, body.up);
+    for (size_t i = 0; i < 2; ++i) {
+      if (tip[i] < 0) continue;
+      glm::dvec3 t = g[static_cast<size_t>(tip[i])].position - g[static_cast<size_t>(b.feet[i])].position;
+      t -= body.up * glm::dot(t, body.up);
+      if (glm::length(t) > 0.7 * reach[i]) toes += glm::normalize(t);  // within 45 deg of level, not pointing down
+    }
+    if (glm::length(left) < 1e-12 || glm::length(toes) < 1e-12) return;
+    const glm::dvec3 facing = glm::normalize(glm::cross(glm::normalize(left), body.up));
+    ++counted;
+    if (glm::dot(glm::normalize(toes), facing) < -0.5) ++behind;
+  });
+  if (counted < 10 || static_cast<double>(behind) < 0.8 * static_cast<double>(counted)) return {};
+  return Error{fmt("left and right are mirrored: the toes point behind the way the hips and shoulders face in %.0f%% "
+                   "of the frames",
+                   100.0 * static_cast<double>(behind) / static_cast<double>(counted)) +
+               " (a left-handed file, or its Left/Right joint names swapped); give --bvh-mirror to read a left-handed "
+               "file mirrored back, or a --bvh-bone-map that exchanges the sides for swapped names"};
+}
+
 // Where the hips travel over the clip, against the facing (a check, not a decision).
 void describeWalking(const BvhClip& clip, const BodyJoints& b, BvhBody& body) {
   std::vector<BvhGlobal> g;
@@ -251,31 +306,77 @@ void describeWalking(const BvhClip& clip, const BodyJoints& b, BvhBody& body) {
   body.walking = c > 0.5 ? "walks forward" : (c < -0.5 ? "walks backwards" : "moves sideways or turns");
 }
 
+// A foot with nothing to stand on below its joint: no descendant (toe joint, End Site) farther
+// than kBareFootShare of the body's size from it at rest. s_no_toes (the CMU walk without its toes)
+// and s_minimal (no End Sites either) stood on their ankles: the feet trackers 4 cm low and the
+// performer measured 3 % short, so scaled 3 % up.
+bool bareFoot(const BvhClip& clip, int foot, const std::vector<BvhGlobal>& rest, double size) {
+  if (foot < 0) return false;
+  const std::vector<bool> part = subtree(clip, foot);
+  double reach = 0.0;
+  for (size_t j = 0; j < part.size(); ++j)
+    if (part[j]) reach = std::max(reach, glm::length(rest[j].position - rest[static_cast<size_t>(foot)].position));
+  return reach < kBareFootShare * size;
+}
+
 void measureHeight(const BvhClip& clip, const BodyJoints& b, BvhBody& body) {
   const std::vector<bool> headPart = subtree(clip, b.head);
-  std::vector<bool> footPart(clip.joints.size(), false);
-  for (int f : b.feet) {
-    const auto s = subtree(clip, f);
-    for (size_t j = 0; j < s.size(); ++j) footPart[j] = footPart[j] || s[j];
+  std::vector<BvhGlobal> rest;
+  bvhGlobals(clip, {}, rest);
+  const double size = boneLengthSize(clip, b);
+  // Joints of a foot with toes (their lowest is the sole) and of a bare foot (the sole is under them).
+  std::vector<bool> footPart(clip.joints.size(), false), barePart(clip.joints.size(), false);
+  std::array<bool, 2> bare{false, false};
+  for (int i = 0; i < 2; ++i) {
+    bare[static_cast<size_t>(i)] = bareFoot(clip, b.feet[i], rest, size);
+    const auto s = subtree(clip, b.feet[i]);
+    std::vector<bool>& into = bare[static_cast<size_t>(i)] ? barePart : footPart;
+    for (size_t j = 0; j < s.size(); ++j) into[j] = into[j] || s[j];
   }
   const bool anyFoot = b.feet[0] >= 0 || b.feet[1] >= 0;
-  std::vector<double> top, headJoint;
+  // Per frame: the top of the head, the head joint, the lowest toe, the lowest bare ankle.
+  std::vector<double> hi, headJointAt, sole, ankle;
   forFrames(clip, body.firstFrame, clip.frameCount, [&](size_t, const std::vector<BvhGlobal>& g) {
-    double hi = -1e300, sole = 1e300;
+    double top = -1e300, toes = 1e300, bareAnkle = 1e300;
     for (size_t j = 0; j < g.size(); ++j) {
       const double h = glm::dot(g[j].position, body.up);
-      if (headPart[j]) hi = std::max(hi, h);
-      if (!anyFoot || footPart[j]) sole = std::min(sole, h);
+      if (headPart[j]) top = std::max(top, h);
+      if (barePart[j]) bareAnkle = std::min(bareAnkle, h);
+      else if (!anyFoot || footPart[j]) toes = std::min(toes, h);
     }
-    top.push_back(hi - sole);
-    headJoint.push_back(glm::dot(g[static_cast<size_t>(b.head)].position, body.up) - sole);
+    hi.push_back(top);
+    headJointAt.push_back(glm::dot(g[static_cast<size_t>(b.head)].position, body.up));
+    sole.push_back(toes);
+    ankle.push_back(bareAnkle);
   });
-  body.headJointUnits = percentile(headJoint, 0.95);
-  body.heightUnits = percentile(top, 0.95);
-  if (body.heightUnits - body.headJointUnits < 0.05 * body.heightUnits) {
-    body.heightUnits = body.headJointUnits / kHeadJointRatio;
-    body.notes.push_back("no joint at the top of the head: the head joint taken at 0.91 of the height");
+  // The height with the bare soles `drop` under their ankles; the drop is a share of the height,
+  // so the two are solved together (each step shrinks the change 20-fold).
+  bool noHeadTop = false;
+  auto measure = [&](double drop) {
+    std::vector<double> top, headJoint;
+    for (size_t f = 0; f < hi.size(); ++f) {
+      const double s = std::min(sole[f], ankle[f] - drop);
+      top.push_back(hi[f] - s);
+      headJoint.push_back(headJointAt[f] - s);
+    }
+    body.headJointUnits = percentile(headJoint, 0.95);
+    body.heightUnits = percentile(top, 0.95);
+    noHeadTop = body.heightUnits - body.headJointUnits < 0.05 * body.heightUnits;
+    if (noHeadTop) body.heightUnits = body.headJointUnits / kHeadJointRatio;
+  };
+  measure(0.0);
+  if (bare[0] || bare[1]) {
+    double drop = 0.0;
+    for (int k = 0; k < 50 && std::abs(kAnkleHeightRatio * body.heightUnits - drop) > 1e-9 * body.heightUnits; ++k) {
+      drop = kAnkleHeightRatio * body.heightUnits;
+      measure(drop);
+    }
+    for (size_t i = 0; i < 2; ++i) body.soleBelowFoot[i] = bare[i] ? drop : 0.0;
+    const std::string feet = bare[0] && bare[1] ? "feet" : (bare[0] ? "left foot" : "right foot");
+    body.notes.push_back("no toes or End Site below the " + feet +
+                         fmt(": the sole taken %.3g of the height (%.3g units) under the ankle joint", kAnkleHeightRatio, drop));
   }
+  if (noHeadTop) body.notes.push_back("no joint at the top of the head: the head joint taken at 0.91 of the height");
 }
 
 }  // namespace
@@ -296,6 +397,15 @@ Result<glm::dvec3> parseBvhAxis(std::string_view text) {
     }
   }
   return Error{"'" + std::string(text) + "' is not an axis (+X, -X, +Y, -Y, +Z, -Z)"};
+}
+
+BvhBodyOptions mirroredBvhOptions(BvhBodyOptions options) {
+  options.mirror = false;
+  for (std::string* axis : {&options.up, &options.forward}) {
+    const auto a = parseBvhAxis(*axis);
+    if (a && std::abs(a->x) > 0.5) *axis = a->x > 0 ? "-X" : "+X";
+  }
+  return options;
 }
 
 std::string bvhAxisName(const glm::dvec3& v) {
@@ -333,6 +443,7 @@ Result<BvhBody> analyseBvhBody(const BvhClip& clip, const BvhBodyOptions& option
     body.heightUnits = boneLengthSize(clip, b) / 0.88;
     body.notes.push_back("height from the bone lengths (no head or no standing frame)");
   }
+  if (auto s = checkSides(clip, b, body); !s.ok()) return Error{s.error()};
   describeWalking(clip, b, body);
   return body;
 }

@@ -16,11 +16,18 @@
 //   walking direction is reported as a check.
 // - Height: sole to the top of the head, the 95th percentile over the motion frames (people
 //   stand up at some point; a jump lifts the feet with the head). Without a joint above the head
-//   joint, the head joint is taken at 0.91 of the height.
+//   joint, the head joint is taken at 0.91 of the height. A foot with nothing below its joint (no
+//   toe joint, no End Site away from it) has its sole estimated kAnkleHeightRatio (0.039) of the
+//   height under the joint (soleBelowFoot), and everything that stands the clip on a floor uses
+//   that estimate.
 // - Frame 0 is a reference pose (a T-pose before the motion, as in CMU's converted clips) when a
 //   body joint jumps faster than 5.7 heights/s (10 m/s at 1.75 m) into frame 1 and not after.
+// - Left and right must agree with the toes: a body whose toes point behind the way its hips and
+//   shoulders face (from the names) in most frames is a left-handed file or one with its Left/Right
+//   names swapped, and is an Error naming --bvh-mirror and --bvh-bone-map.
 // Axes that stay ambiguous (the head is not above the feet in most frames along any direction,
 // no left/right limbs) are an Error naming --bvh-up / --bvh-forward.
+#include <array>
 #include <glm/glm.hpp>
 #include <string>
 #include <string_view>
@@ -37,7 +44,15 @@ struct BvhBodyOptions {
   std::string up;           // "" = from the motion, else "+Y", "-Z", ... in file axes
   std::string forward;      // "" = from the motion, else the way the performer faces at the start
   std::string boneMapJson;  // {"head": "JointName", ...}; "" for none
+  // --bvh-mirror: the file is left-handed; read it mirrored across its X axis (mirrorBvhClip).
+  // Applied to the clip before anything is measured (tracking::bvhToTrace, buildBvhAvatar); an
+  // `up` or `forward` along X is the file's, and is mirrored with it.
+  bool mirror = false;
 };
+
+// The options for the clip mirrored by mirrorBvhClip: mirror off, a given up or forward along X
+// turned with the clip.
+BvhBodyOptions mirroredBvhOptions(BvhBodyOptions options);
 
 struct BvhBody {
   Skeleton skeleton;     // the clip's joints (same indices as clip.joints) with the rest offsets
@@ -50,6 +65,13 @@ struct BvhBody {
   std::string walking;             // "walks forward", "walks backwards", "sidesteps", "stays in place"
   double heightUnits = 0.0;        // standing height, sole to the top of the head, file units
   double headJointUnits = 0.0;     // the head joint above the sole when standing, file units
+  // Per foot (left, right): the sole below the foot joint, file units, when nothing hangs below
+  // the joint to stand on (no toe joint, no End Site away from it): the ankle joint centre stands
+  // kAnkleHeightRatio of the height above the sole. 0 for a foot with toes or an End Site (the
+  // lowest of them is the sole), or no foot. The one estimate of a bare ankle's sole: the height,
+  // the floor (tracking/bvh_source.cpp), the clip as an avatar (tracking/bvh_avatar.cpp) and the
+  // eval's soles (eval/clip_eval.cpp) all take it from here.
+  std::array<double, 2> soleBelowFoot{0.0, 0.0};
   size_t firstFrame = 0;           // 1 when frame 0 is a reference pose, else 0
   glm::dmat3 toXr{1.0};            // file axes -> +X right, +Y up, +Z back (OpenXR's)
   std::vector<std::string> notes;

@@ -10,6 +10,7 @@
 #include "avatar/humanoid/humanoid_map.h"
 #include "bvh_convention_writer.h"
 #include "test_paths.h"
+#include "tracking/bvh_avatar.h"
 #include "tracking/bvh_source.h"
 
 using namespace embody;
@@ -279,4 +280,96 @@ TEST_CASE("a T-pose held for several leading frames is skipped like one, a still
   BvhMapping stillMap;
   REQUIRE(traceOf(test::writeConventionClip(test::bvhConventions()[0]), {}, &stillMap).ok());
   CHECK(stillMap.body.firstFrame == 0u);
+}
+
+TEST_CASE("a BVH clip without toes stands on soles 0.039 of the height under its ankles, with the height and feet of the clip with toes") {
+  // s_no_toes (the CMU walk without toe joints) stood on its ankles: the feet trackers 4 cm low and
+  // the performer measured 3 % short, so the whole walk scaled 3 % up (session 20 probe).
+  test::BvhConvention withToes = test::bvhConventions()[0];
+  // The toes straight under the ankles, 0.039 of the ~169 cm height: the sole wherever the foot turns.
+  withToes.toesCm = {0, -6.6, 0};
+  withToes.toesEndCm = {0, 0, 0};
+  test::BvhConvention bare = withToes;
+  bare.toes = false;
+  BvhMapping toesMap, bareMap;
+  auto ref = traceOf(test::writeConventionClip(withToes), {}, &toesMap);
+  auto got = traceOf(test::writeConventionClip(bare), {}, &bareMap);
+  if (!ref) FAIL(ref.error());
+  REQUIRE(got.ok());
+  CHECK(toesMap.body.soleBelowFoot[0] == 0.0);  // toes: their lowest point is the sole, as before
+  CHECK(bareMap.body.soleBelowFoot[0] == Approx(0.039 * bareMap.heightUnits).epsilon(1e-6));
+  CHECK(bareMap.body.soleBelowFoot[1] == bareMap.body.soleBelowFoot[0]);
+  CHECK(bareMap.heightUnits == Approx(toesMap.heightUnits).epsilon(0.005));
+  bool noted = false;
+  for (const auto& n : bareMap.notes) noted = noted || n.find("no toes or End Site below the feet") != std::string::npos;
+  CHECK(noted);
+  REQUIRE(got->samples.size() == ref->samples.size());
+  float worstFoot = 0.0f, worstHips = 0.0f;
+  for (size_t f = 0; f < ref->samples.size(); ++f) {
+    for (auto id : {TrackerId::LeftFoot, TrackerId::RightFoot})
+      worstFoot = std::max(worstFoot, std::abs(got->samples[f][id].position.y - ref->samples[f][id].position.y));
+    worstHips = std::max(worstHips, std::abs(got->samples[f][TrackerId::Hips].position.y - ref->samples[f][TrackerId::Hips].position.y));
+  }
+  CHECK(worstFoot < 0.01f);
+  CHECK(worstHips < 0.01f);
+  // The clip as an avatar stands on the same soles: its ankles where the clip's stand, no lift needed.
+  auto avatarClip = avatar::parseBvh(test::writeConventionClip(bare), "clip.bvh");
+  REQUIRE(avatarClip.ok());
+  auto asAvatar = buildBvhAvatar(std::move(*avatarClip), {});
+  REQUIRE(asAvatar.ok());
+  CHECK(std::abs(asAvatar->restLift) < 0.01);
+}
+
+TEST_CASE("a mirrored BVH clip or one with Left and Right swapped is refused naming --bvh-mirror, which reads the mirrored one right") {
+  // Both read as "facing -Z, walks backwards" and played the performer walking backwards with his
+  // toes behind him at exit 0 (eval 4.2 cm where the clean clip gives 0.84; session 20 probe).
+  const test::BvhConvention& canonical = test::bvhConventions()[0];
+  const std::string text = test::writeConventionClip(canonical);
+  BvhMapping refMap;
+  auto ref = traceOf(text, {}, &refMap);
+  REQUIRE(ref.ok());
+  CHECK(refMap.body.walking == "walks forward");
+  SECTION("a left-handed file: refused, and --bvh-mirror reads it as the original") {
+    auto clip = avatar::parseBvh(text, "clip.bvh");
+    REQUIRE(clip.ok());
+    avatar::mirrorBvhClip(*clip);
+    auto refused = bvhToTrace(*clip, {});
+    REQUIRE_FALSE(refused.ok());
+    CHECK_THAT(refused.error(), Catch::Contains("left and right are mirrored: the toes point behind"));
+    CHECK_THAT(refused.error(), Catch::Contains("--bvh-mirror"));
+    CHECK_THAT(refused.error(), Catch::Contains("--bvh-bone-map"));
+    BvhTrackerOptions o;
+    o.body.mirror = true;
+    auto got = bvhToTrace(*clip, o);
+    REQUIRE(got.ok());
+    float worst = 0.0f;
+    for (size_t f = 0; f < ref->samples.size(); ++f)
+      for (auto id : kAllTrackers) worst = std::max(worst, glm::length(got->samples[f][id].position - ref->samples[f][id].position));
+    CHECK(worst < 1e-3f);
+    // The clip as an avatar is mirrored with it.
+    auto asAvatar = buildBvhAvatar(*clip, o);
+    REQUIRE(asAvatar.ok());
+    CHECK(asAvatar->mapping.body.walking == "walks forward");
+    // A right-handed file given --bvh-mirror is the one mirrored, and refused.
+    auto original = avatar::parseBvh(text, "clip.bvh");
+    CHECK_FALSE(bvhToTrace(*original, o).ok());
+  }
+  SECTION("Left and Right names exchanged: refused with the same line") {
+    test::BvhConvention swapped = canonical;
+    for (int k = 0; k < 4; ++k) {
+      std::swap(swapped.names[static_cast<size_t>(test::kLShoulder + k)], swapped.names[static_cast<size_t>(test::kRShoulder + k)]);
+      std::swap(swapped.names[static_cast<size_t>(test::kLUpperLeg + k)], swapped.names[static_cast<size_t>(test::kRUpperLeg + k)]);
+    }
+    auto refused = traceOf(test::writeConventionClip(swapped));
+    REQUIRE_FALSE(refused.ok());
+    CHECK_THAT(refused.error(), Catch::Contains("left and right are mirrored"));
+  }
+  SECTION("feet without toes or End Sites cannot be checked: a mirrored clip without them still reads") {
+    test::BvhConvention bare = canonical;
+    bare.toes = false;
+    auto clip = avatar::parseBvh(test::writeConventionClip(bare), "clip.bvh");
+    REQUIRE(clip.ok());
+    avatar::mirrorBvhClip(*clip);
+    CHECK(bvhToTrace(*clip, {}).ok());
+  }
 }

@@ -89,6 +89,7 @@ std::vector<OutJoint> layout(const BvhConvention& c) {
   std::array<int, kRoleCount> at{};                // where each role's children hang
   std::array<glm::dvec3, kRoleCount> inChainOffset{};  // of the in-chain helper they hang below
   for (int r = 0; r < kRoleCount; ++r) {
+    if (!c.toes && (r == kLToes || r == kRToes)) continue;
     OutJoint j;
     j.name = c.names[r];
     j.role = r;
@@ -96,6 +97,10 @@ std::vector<OutJoint> layout(const BvhConvention& c) {
     j.parent = parentRole < 0 ? -1 : at[parentRole];
     j.offset = roles()[r].offset - (parentRole < 0 ? glm::dvec3(0.0) : inChainOffset[parentRole]);
     j.end = roles()[r].end;
+    if (r == kLToes || r == kRToes) {
+      j.offset = c.toesCm;
+      j.end = c.toesEndCm;
+    }
     at[r] = static_cast<int>(js.size());
     js.push_back(j);
     for (const auto& h : c.helpers)
@@ -166,7 +171,8 @@ void writeHierarchy(const BvhConvention& c, const std::vector<OutJoint>& js, int
       writeHierarchy(c, js, static_cast<int>(k), depth + 1, out);
       children = true;
     }
-  if (!children) {
+  const bool bareFoot = !c.toes && (jt.role == kLFoot || jt.role == kRFoot);
+  if (!children && !bareFoot) {
     const glm::dvec3 end = glm::inverse(jt.orient) * (c.world * jt.end) * c.unitsPerCm;
     out += pad + "  End Site\n" + pad + "  {\n" + pad + "    OFFSET " + vec(end) + "\n" + pad + "  }\n";
   }

@@ -42,6 +42,8 @@ struct BvhConvention {
   std::string positionOrder = "XYZ";
   double frameTime = 1.0 / 120.0;
   bool tposeFirst = false;
+  bool toes = true;      // false: the feet end at their joints (no toe joints, no End Site)
+  glm::dvec3 toesCm{0, -4, 12}, toesEndCm{0, 0, 6};  // the toe joints from the ankles, their End Sites
 };
 
 // The canonical clip's frames (no T-pose) and its conventions.
