@@ -296,6 +296,67 @@ TEST_CASE("embody eval --bvh-up/--bvh-forward/--bvh-bone-map reach the clip's im
   CHECK(r.output.find("--bvh-bone-map") != std::string::npos);
 }
 
+namespace {
+
+// The clip mirrored across its X axis in the text, as a left-handed tool would write it: every
+// OFFSET's and Xposition's x negated, every Yrotation and Zrotation negated (a turn about X stays).
+std::string mirroredAcrossX(const std::string& bvh) {
+  std::istringstream in(bvh);
+  std::ostringstream out;
+  std::vector<bool> negate;  // per motion column
+  std::string line;
+  bool motion = false;
+  auto number = [](const std::string& t, bool flip) {
+    if (!flip) return t;
+    return t[0] == '-' ? t.substr(1) : "-" + t;
+  };
+  while (std::getline(in, line)) {
+    std::istringstream words(line);
+    std::vector<std::string> w;
+    for (std::string t; words >> t;) w.push_back(t);
+    if (!motion && !w.empty() && w[0] == "OFFSET" && w.size() == 4) {
+      out << line.substr(0, line.find("OFFSET")) << "OFFSET " << number(w[1], true) << ' ' << w[2] << ' ' << w[3] << '\n';
+      continue;
+    }
+    if (!motion && !w.empty() && w[0] == "CHANNELS")
+      for (size_t k = 2; k < w.size(); ++k) negate.push_back(w[k] == "Xposition" || w[k] == "Yrotation" || w[k] == "Zrotation");
+    if (!w.empty() && w[0] == "MOTION") motion = true;
+    if (motion && w.size() == negate.size()) {
+      for (size_t k = 0; k < w.size(); ++k) out << (k ? " " : "") << number(w[k], negate[k]);
+      out << '\n';
+      continue;
+    }
+    out << line << '\n';
+  }
+  return out.str();
+}
+
+}  // namespace
+
+TEST_CASE("embody eval: a mirrored clip is refused naming --bvh-mirror, which scores it as the clip", "[cli][eval]") {
+  // A left-handed file (the clip mirrored across X, names kept) walks with its toes behind the way
+  // its hips face: refused in one line, and read mirrored back with --bvh-mirror it is the clip.
+  const fs::path dir = outDir("eval_bvh_mirror");
+  const std::string clip = longMixamoClip(dir);
+  std::ifstream f(clip);
+  const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  const fs::path mirrored = dir / "mirrored.bvh";
+  std::ofstream(mirrored) << mirroredAcrossX(text);
+  const std::string common = " --trackers 3 --fps 30 --ik-iterations 4 --no-plots --no-sheet --out ";
+  auto r = runEmbody("eval --motion " + mirrored.string() + common + (dir / "refused").string(), true);
+  INFO(r.output);
+  CHECK(r.exitCode == 1);
+  CHECK(r.output.find("mirrored") != std::string::npos);
+  CHECK(r.output.find("--bvh-mirror") != std::string::npos);
+  auto score = [&](const std::string& motion, const std::string& extra, const std::string& name) {
+    auto s = runEmbody("eval --motion " + motion + extra + common + (dir / name).string(), true);
+    INFO(s.output);
+    REQUIRE(s.exitCode == 0);
+    return readJson(dir / name / "metrics.json")["methods"]["coupled"]["mpjpe_cm"]["all"]["mean"].get<double>();
+  };
+  CHECK(score(mirrored.string(), " --bvh-mirror", "mirrored_back") == Approx(score(clip, "", "plain")).margin(1e-6));
+}
+
 TEST_CASE("embody eval: bad input gives one clear line and exit 2 or 1", "[cli][eval]") {
   const fs::path out = outDir("eval_bad");
   fs::create_directories(out);
