@@ -8,6 +8,7 @@
 #include "avatar/procedural/default_avatar.h"
 #include "gltf_test_files.h"
 #include "humanoid_test_files.h"
+#include "tests/support/cpu_skinning.h"
 #include "test_paths.h"
 
 using namespace embody;
@@ -594,22 +595,10 @@ std::vector<glm::vec3> skinnedAt(const BodyModel& body, const AvatarAsset& a, co
   ik::kinematics(body.model, data, false);
   SkeletonPose pose;
   retarget(body, a, data, pose);
-  std::vector<glm::mat4> globals, palette;
-  computeGlobals(a.skeleton, pose, globals);
-  computeSkinningPalette(a, globals, palette);
-  std::vector<glm::vec3> x, n;
-  skinOnCpu(a.mesh, palette, x, n);
-  return x;
+  return test::skinnedPositions(a, pose);
 }
 
-std::vector<glm::vec3> skinnedAtRest(const AvatarAsset& a) {
-  std::vector<glm::mat4> globals, palette;
-  computeGlobals(a.skeleton, SkeletonPose::rest(a.skeleton), globals);
-  computeSkinningPalette(a, globals, palette);
-  std::vector<glm::vec3> x, n;
-  skinOnCpu(a.mesh, palette, x, n);
-  return x;
-}
+std::vector<glm::vec3> skinnedAtRest(const AvatarAsset& a) { return test::skinnedPositions(a, SkeletonPose::rest(a.skeleton)); }
 
 float farthest(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
   REQUIRE(a.size() == b.size());

@@ -24,6 +24,7 @@ TEST_CASE("CesiumMan loads with its skin, texture and 19 skin joints", "[gltf]")
 #include <glm/gtc/epsilon.hpp>
 
 #include "gltf_test_files.h"
+#include "tests/support/cpu_skinning.h"
 
 using embody::test::TriangleFile;
 
@@ -50,11 +51,7 @@ TEST_CASE("a rigid triangle becomes weight 1 on its node with computed normals",
     CHECK(glm::all(glm::epsilonEqual(v.normal, glm::vec3(0, 0, 1), 1e-6f)));
   }
   // Skinned at rest, the vertex lands where the node puts it.
-  std::vector<glm::mat4> globals, palette;
-  computeGlobals(a->skeleton, SkeletonPose::rest(a->skeleton), globals);
-  computeSkinningPalette(a.value(), globals, palette);
-  std::vector<glm::vec3> p, n;
-  skinOnCpu(a->mesh, palette, p, n);
+  const std::vector<glm::vec3> p = test::skinnedPositions(a.value(), SkeletonPose::rest(a->skeleton));
   CHECK(glm::all(glm::epsilonEqual(p[1], glm::vec3(1, 1, 0), 1e-6f)));
 }
 
@@ -84,12 +81,7 @@ TEST_CASE("a mesh on a child of a non-uniformly scaled node turns rigidly with i
       for (int j : {0, 1})  // the arm 90 degrees about z, the forearm 60 degrees about x
         pose.local[j].rotation = pose.local[j].rotation * glm::angleAxis(glm::radians(j == 0 ? 90.0f : 60.0f),
                                                                          glm::vec3(j == 0 ? 0 : 1, 0, j == 0 ? 1 : 0));
-    std::vector<glm::mat4> globals, palette;
-    computeGlobals(a.skeleton, pose, globals);
-    computeSkinningPalette(a, globals, palette);
-    std::vector<glm::vec3> p, n;
-    skinOnCpu(a.mesh, palette, p, n);
-    return p;
+    return test::skinnedPositions(a, pose);
   };
   const AvatarAsset plain = file(false), scaled = file(true);
   for (bool turned : {false, true}) {
