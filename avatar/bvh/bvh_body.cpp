@@ -235,6 +235,24 @@ Status chooseForward(const BvhClip& clip, const BodyJoints& b, const BvhBodyOpti
   return {};
 }
 
+// The joint of a foot's subtree (toes, End Sites) farthest from the foot joint at rest, and how
+// far (-1 and 0 without a foot).
+struct FootTip {
+  int joint = -1;
+  double reach = 0.0;
+};
+
+FootTip footTip(const BvhClip& clip, int foot, const std::vector<BvhGlobal>& rest) {
+  FootTip t;
+  if (foot < 0) return t;
+  const std::vector<bool> part = subtree(clip, foot);
+  for (size_t j = 0; j < part.size(); ++j) {
+    const double d = part[j] ? glm::length(rest[j].position - rest[static_cast<size_t>(foot)].position) : 0.0;
+    if (d > t.reach) t = {static_cast<int>(j), d};
+  }
+  return t;
+}
+
 // Left and right against the toes: the facing from the names (left minus right limbs, across up)
 // and the way the feet point (ankle to the farthest toe or End Site, on the ground), frame by
 // frame over the take. A body whose toes point behind its hips and shoulders is no human pose:
@@ -251,17 +269,9 @@ Status checkSides(const BvhClip& clip, const BodyJoints& b, const BvhBody& body)
   std::array<int, 2> tip{-1, -1};  // the farthest joint of each foot's subtree at rest
   std::array<double, 2> reach{0.0, 0.0};
   for (size_t i = 0; i < 2; ++i) {
-    const int foot = b.feet[i];
-    if (foot < 0) continue;
-    const std::vector<bool> part = subtree(clip, foot);
-    for (size_t j = 0; j < part.size(); ++j) {
-      const double d = part[j] ? glm::length(rest[j].position - rest[static_cast<size_t>(foot)].position) : 0.0;
-      if (d > reach[i]) {
-        reach[i] = d;
-        tip[i] = static_cast<int>(j);
-      }
-    }
-    if (reach[i] < kBareFootShare * size) tip[i] = -1;
+    const FootTip t = footTip(clip, b.feet[i], rest);
+    reach[i] = t.reach;
+    tip[i] = t.reach < kBareFootShare * size ? -1 : t.joint;
   }
   if (tip[0] < 0 && tip[1] < 0) return {};
   size_t counted = 0, behind = 0;
@@ -311,12 +321,7 @@ void describeWalking(const BvhClip& clip, const BodyJoints& b, BvhBody& body) {
 // and s_minimal (no End Sites either) stood on their ankles: the feet trackers 4 cm low and the
 // performer measured 3 % short, so scaled 3 % up.
 bool bareFoot(const BvhClip& clip, int foot, const std::vector<BvhGlobal>& rest, double size) {
-  if (foot < 0) return false;
-  const std::vector<bool> part = subtree(clip, foot);
-  double reach = 0.0;
-  for (size_t j = 0; j < part.size(); ++j)
-    if (part[j]) reach = std::max(reach, glm::length(rest[j].position - rest[static_cast<size_t>(foot)].position));
-  return reach < kBareFootShare * size;
+  return foot >= 0 && footTip(clip, foot, rest).reach < kBareFootShare * size;
 }
 
 void measureHeight(const BvhClip& clip, const BodyJoints& b, BvhBody& body) {
