@@ -93,12 +93,45 @@ struct Shape {
 
 // Index where the limb proper starts: skips one leading offset bone (a clavicle, a hip-offset
 // bone) when it is clearly shorter than the next segment and the chain is long enough.
+// The next segment is measured past a twist: when chain[2] continues chain[1]'s line (within 10
+// degrees) into a segment of about its length (0.7-1.4), as a twist halfway along the upper arm
+// does (Daz's ShldrTwist), the segment runs on to chain[3].
 int limbStart(const Shape& s, const std::vector<int>& chain, float ratio) {
-  if (chain.size() >= 4 && s.dist(chain[0], chain[1]) < ratio * s.dist(chain[1], chain[2])) return 1;
-  return 0;
+  if (chain.size() < 4) return 0;
+  float next = s.dist(chain[1], chain[2]);
+  const glm::vec3 a = s.pos[chain[2]] - s.pos[chain[1]], b = s.pos[chain[3]] - s.pos[chain[2]];
+  const float la = glm::length(a), lb = glm::length(b);
+  if (la > 0.0f && lb > 0.0f && glm::dot(a, b) > std::cos(glm::radians(10.0f)) * la * lb && lb > 0.7f * la && lb < 1.4f * la &&
+      s.children[static_cast<size_t>(chain[2])].size() == 1)
+    next = la + lb;
+  return s.dist(chain[0], chain[1]) < ratio * next ? 1 : 0;
 }
 
 void setBone(HumanoidMap& map, HumanBone b, int j) { map.bones[static_cast<int>(b)] = j; }
+
+// Twist bones inside a limb (Daz's ShldrTwist and ForearmTwist, ThighTwist): a chain with more
+// joints between the limb's root and its end than the two segments a limb has. In a straight rest
+// pose nothing tells the middle joint from a twist but where it sits, so the middle joint is the
+// one nearest `middleShare` of the way along the chain to the end (the elbow at 0.55, the knee at
+// 0.5; a twist sits halfway along its segment, at about 0.27 and 0.78 of the arm). `end` is the
+// index of the limb's end joint in `chain`, `start` of its root.
+constexpr float kTwistSegment = 0.4f;  // a twist's segment against the limb's first segment
+
+int middleJoint(const Shape& s, const std::vector<int>& chain, size_t start, size_t end, float middleShare) {
+  std::vector<float> along{0.0f};
+  for (size_t i = start + 1; i <= end; ++i) along.push_back(along.back() + s.dist(chain[i - 1], chain[i]));
+  size_t best = start + 1;
+  for (size_t i = start + 1; i < end; ++i)
+    if (std::abs(along[i - start] - middleShare * along.back()) < std::abs(along[best - start] - middleShare * along.back()))
+      best = i;
+  return chain[best];
+}
+
+bool weightedJoint(const std::vector<bool>& jointHasWeights, int j) {
+  return jointHasWeights.empty() || (static_cast<size_t>(j) < jointHasWeights.size() && jointHasWeights[j]);
+}
+
+
 
 // Hips: the first joint (closest to the root) with two branches going down and one going up.
 // A single down branch that itself splits into two legs (a pelvis bone) also counts.
@@ -134,6 +167,19 @@ HipsBranch findHips(const Shape& s) {
   return r;
 }
 
+// The ankle's index in a leg chain from its root `a`: the first joint from a + 2 on (at most two
+// twists further, each segment at least kTwistSegment of the first) whose next segment runs
+// forward more than down (the foot), else a + 2. A thigh or shin twist pushes it on.
+size_t ankleIndex(const Shape& s, const std::vector<int>& leg, size_t a) {
+  const float first = s.dist(leg[a], leg[a + 1]);
+  for (size_t i = a + 2; i + 1 < leg.size() && i <= a + 4; ++i) {
+    if (s.dist(leg[i - 1], leg[i]) < kTwistSegment * first) break;
+    const glm::vec3 d = s.pos[leg[i + 1]] - s.pos[leg[i]];
+    if (std::hypot(d.x, d.z) > std::abs(d.y)) return i;
+  }
+  return a + 2;
+}
+
 // Legs and the facing they imply: lateral axis between the hip joints, forward from the toes
 // (ankle -> toe), else the glTF convention +Z. Returns the avatar's left direction.
 glm::vec3 mapLegs(const Shape& s, const HipsBranch& h, HumanoidMap& map) {
@@ -146,7 +192,8 @@ glm::vec3 mapLegs(const Shape& s, const HipsBranch& h, HumanoidMap& map) {
     glm::vec3 f = glm::normalize(glm::cross(glm::normalize(lateral), map.up));
     float cue = f.z;  // without toes: the side nearer +Z
     const auto& leg = legs[0];
-    const size_t foot = static_cast<size_t>(legStart[0]) + 2;
+    const size_t foot = leg.size() >= static_cast<size_t>(legStart[0]) + 3 ? ankleIndex(s, leg, static_cast<size_t>(legStart[0]))
+                                                                          : static_cast<size_t>(legStart[0]) + 2;
     if (foot + 1 < leg.size()) {
       glm::vec3 toe = s.pos[leg[foot + 1]] - s.pos[leg[foot]];
       toe.y = 0.0f;
@@ -159,11 +206,12 @@ glm::vec3 mapLegs(const Shape& s, const HipsBranch& h, HumanoidMap& map) {
     const auto& leg = legs[k];
     const size_t a = static_cast<size_t>(legStart[k]);
     if (leg.size() < a + 3) continue;
+    const size_t foot = ankleIndex(s, leg, a);
     const bool l = glm::dot(s.pos[leg[a]] - s.pos[h.hips], left) > 0.0f;
     setBone(map, l ? HumanBone::leftUpperLeg : HumanBone::rightUpperLeg, leg[a]);
-    setBone(map, l ? HumanBone::leftLowerLeg : HumanBone::rightLowerLeg, leg[a + 1]);
-    setBone(map, l ? HumanBone::leftFoot : HumanBone::rightFoot, leg[a + 2]);
-    if (leg.size() > a + 3) setBone(map, l ? HumanBone::leftToes : HumanBone::rightToes, leg[a + 3]);
+    setBone(map, l ? HumanBone::leftLowerLeg : HumanBone::rightLowerLeg, foot == a + 2 ? leg[a + 1] : middleJoint(s, leg, a, foot, 0.5f));
+    setBone(map, l ? HumanBone::leftFoot : HumanBone::rightFoot, leg[foot]);
+    if (leg.size() > foot + 1) setBone(map, l ? HumanBone::leftToes : HumanBone::rightToes, leg[foot + 1]);
   }
   return left;
 }
@@ -220,7 +268,22 @@ void mapSpineAndHead(const Shape& s, const ShoulderJunction& t, const std::vecto
   if (neck.size() >= 2) setBone(map, HumanBone::neck, neck.front());
 }
 
-void mapArms(const Shape& s, const ShoulderJunction& t, int hips, const glm::vec3& left, HumanoidMap& map) {
+// The hand's index in an arm chain from its upper arm `k`: k + 2, or up to two joints further
+// along when the joints between are twists (weighted, each segment at least kTwistSegment of the
+// first: finger and end joints are shorter or unweighted), stopping where the fingers branch.
+size_t handIndex(const Shape& s, const std::vector<int>& chain, size_t k, const std::vector<bool>& jointHasWeights) {
+  size_t hand = k + 2;
+  const float first = s.dist(chain[k], chain[k + 1]);
+  for (size_t i = k + 3; i < chain.size() && i <= k + 4; ++i) {
+    if (s.children[static_cast<size_t>(chain[i - 1])].size() >= 2) break;
+    if (!weightedJoint(jointHasWeights, chain[i]) || s.dist(chain[i - 1], chain[i]) < kTwistSegment * first) break;
+    hand = i;
+  }
+  return hand;
+}
+
+void mapArms(const Shape& s, const ShoulderJunction& t, int hips, const glm::vec3& left,
+             const std::vector<bool>& jointHasWeights, HumanoidMap& map) {
   for (int a : t.arms) {
     const auto chain = s.followOut(a, s.pos[t.junction]);
     // A first joint at the junction's own pivot is a clavicle whatever its length (CMU's
@@ -228,11 +291,12 @@ void mapArms(const Shape& s, const ShoulderJunction& t, int hips, const glm::vec
     const bool atJunction = chain.size() >= 4 && s.dist(chain[0], t.junction) < 0.01f * s.height;
     const size_t k = atJunction ? 1 : static_cast<size_t>(limbStart(s, chain, 0.75f));
     if (chain.size() < k + 3) continue;
-    const bool l = glm::dot(s.pos[chain[k + 2]] - s.pos[hips], left) > 0.0f;
+    const size_t hand = handIndex(s, chain, k, jointHasWeights);
+    const bool l = glm::dot(s.pos[chain[hand]] - s.pos[hips], left) > 0.0f;
     if (k == 1) setBone(map, l ? HumanBone::leftShoulder : HumanBone::rightShoulder, chain[0]);
     setBone(map, l ? HumanBone::leftUpperArm : HumanBone::rightUpperArm, chain[k]);
-    setBone(map, l ? HumanBone::leftLowerArm : HumanBone::rightLowerArm, chain[k + 1]);
-    setBone(map, l ? HumanBone::leftHand : HumanBone::rightHand, chain[k + 2]);
+    setBone(map, l ? HumanBone::leftLowerArm : HumanBone::rightLowerArm, hand == k + 2 ? chain[k + 1] : middleJoint(s, chain, k, hand, 0.55f));
+    setBone(map, l ? HumanBone::leftHand : HumanBone::rightHand, chain[hand]);
   }
 }
 
@@ -257,7 +321,7 @@ HumanoidMap mapByTopology(const Skeleton& skeleton, const std::vector<bool>& joi
   const ShoulderJunction shoulders = findShoulders(s, hips.spineRoot);
   if (shoulders.junction < 0) return give("topology: the spine never branches into two arms and a neck");
   mapSpineAndHead(s, shoulders, jointHasWeights, map);
-  mapArms(s, shoulders, hips.hips, left, map);
+  mapArms(s, shoulders, hips.hips, left, jointHasWeights, map);
   finishHumanoidMap(skeleton, map);
   return map;
 }

@@ -3,6 +3,8 @@
 // rotations, a skinned "body" mesh made of one box per bone (boxes at the neck blend neck and
 // head), a "hair" mesh on the head and an "eyes-inside" mesh. The caller chooses the node names
 // (VRM-style meaningless names, Mixamo names ...) and may add VRM extensions to `doc`.
+#include <algorithm>
+#include <array>
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
@@ -98,13 +100,35 @@ struct HumanoidFile {
   int bodyNode = -1, hairNode = -1, innerNode = -1;
   int bodyMesh = -1, hairMesh = -1, innerMesh = -1;
 
+  // The twist joints `twists` adds: {twist, the bone it follows, the bone it precedes}.
+  static const std::vector<std::array<const char*, 3>>& twistJoints() {
+    static const std::vector<std::array<const char*, 3>> t = {
+        {"leftUpperArmTwist", "leftUpperArm", "leftLowerArm"},    {"leftLowerArmTwist", "leftLowerArm", "leftHand"},
+        {"leftUpperLegTwist", "leftUpperLeg", "leftLowerLeg"},    {"rightUpperArmTwist", "rightUpperArm", "rightLowerArm"},
+        {"rightLowerArmTwist", "rightLowerArm", "rightHand"},     {"rightUpperLegTwist", "rightUpperLeg", "rightLowerLeg"}};
+    return t;
+  }
+  static void insertTwists(std::vector<HumanoidJointSpec>& specs) {
+    auto find = [&](const char* bone) -> HumanoidJointSpec& {
+      return *std::find_if(specs.begin(), specs.end(), [&](const HumanoidJointSpec& j) { return std::string(j.bone) == bone; });
+    };
+    for (const auto& [twist, from, to] : twistJoints()) {
+      HumanoidJointSpec& next = find(to);
+      const glm::vec3 mid = 0.5f * (find(from).pos + next.pos);
+      next.parent = twist;
+      specs.push_back({twist, from, mid});
+    }
+  }
+
   // names: VRM bone name -> node name (bones not listed keep their VRM name).
   // facesMinusZ turns the whole rest pose 180 degrees about +Y (VRM 0.x convention).
-  // fingers appends humanoidFingerSpecs().
+  // fingers appends humanoidFingerSpecs(); twists puts a twist joint halfway along each upper
+  // arm, forearm and thigh, inside the chain (Daz style: "leftUpperArmTwist", ...).
   explicit HumanoidFile(const std::map<std::string, std::string>& names = {}, bool facesMinusZ = false,
-                        bool fingers = false) {
+                        bool fingers = false, bool twists = false) {
     std::vector<HumanoidJointSpec> specs = humanoidJointSpecs();
     if (fingers) specs.insert(specs.end(), humanoidFingerSpecs().begin(), humanoidFingerSpecs().end());
+    if (twists) insertTwists(specs);
     if (facesMinusZ)
       for (auto& j : specs) j.pos = glm::vec3(-j.pos.x, j.pos.y, -j.pos.z);
     doc = {{"asset", {{"version", "2.0"}}},        {"scene", 0},

@@ -185,6 +185,21 @@ TEST_CASE("meaningless names without VRM data map by topology", "[humanoid]") {
   }
 }
 
+TEST_CASE("twist joints inside the limbs (Daz style) under meaningless names map by topology to the limbs' joints",
+          "[humanoid]") {
+  // A twist halfway along each upper arm, forearm and thigh, in the chain: arms and legs were one
+  // joint off (the left hand on the right upper arm's twist, the clavicle as the upper arm) and
+  // the body faced away, at exit 0 (robustness probe, session 20).
+  std::map<std::string, std::string> names = meaninglessNames();
+  int i = 0;
+  for (const auto& t : HumanoidFile::twistJoints()) names[t[0]] = "J" + std::to_string(200 + i++);
+  HumanoidFile f(names, false, false, true);
+  auto a = loadPrepared(f);
+  REQUIRE(a.ok());
+  CHECK(a->humanoid.method == MappingMethod::Topology);
+  checkAllBonesMapped(*a, f);
+}
+
 TEST_CASE("a user bone map wins, and a bad one is a clear error", "[humanoid]") {
   HumanoidFile f(meaninglessNames());
   // Swap the hands on purpose: the user's word is final.
