@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <glm/gtc/constants.hpp>
 
 #include "core/enum_names.h"
@@ -183,11 +184,12 @@ JointTrack naiveTrack(const tracking::BvhAvatar& avatar, double fps, int frames)
   avatar::computeGlobals(*b.sk, avatar::SkeletonPose::rest(*b.sk), g);
   double lowest = 1e300;
   for (const auto& m : g) lowest = std::min(lowest, double(m[3].y));
-  for (size_t i = 0; i < 2; ++i)  // the sole under a bare ankle (avatar::BvhBody::soleBelowFoot)
-    if (const int foot = avatar.asset.humanoid.joint(i == 0 ? HumanBone::leftFoot : HumanBone::rightFoot);
-        foot >= 0 && foot == avatar.mapping.body.joint(i == 0 ? HumanBone::leftFoot : HumanBone::rightFoot) &&
-        avatar.mapping.body.soleBelowFoot[i] > 0.0)
-      lowest = std::min(lowest, double(g[size_t(foot)][3].y) - avatar.mapping.body.soleBelowFoot[i] * avatar.mapping.scale);
+  // The sole under a bare ankle, where the avatar's foot is the clip's.
+  lowest = avatar.mapping.body.lowestWithBareSoles(lowest, avatar.mapping.scale, [&](size_t side, int foot) {
+    return foot == avatar.asset.humanoid.joint(side == 0 ? HumanBone::leftFoot : HumanBone::rightFoot)
+               ? double(g[size_t(foot)][3].y)
+               : std::numeric_limits<double>::infinity();
+  });
   for (const auto& m : g) b.rest.push_back(glm::dvec3(m[3]) - glm::dvec3(0, lowest, 0));
   const avatar::HumanoidMap& map = avatar.asset.humanoid;
   b.head = map.joint(HumanBone::head);

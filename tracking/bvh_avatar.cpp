@@ -68,7 +68,8 @@ glm::dmat3 snapToAxes(const glm::dmat3& r, bool& snapped) {
     a[c][k] = r[c][k] > 0.0 ? 1.0 : -1.0;
   }
   if (std::abs(glm::determinant(a) - 1.0) > 1e-9) return r;
-  const double cosAngle = 0.5 * ((glm::transpose(a) * r)[0][0] + (glm::transpose(a) * r)[1][1] + (glm::transpose(a) * r)[2][2] - 1.0);
+  const glm::dmat3 between = glm::transpose(a) * r;  // the turn left over after the snap
+  const double cosAngle = 0.5 * (between[0][0] + between[1][1] + between[2][2] - 1.0);
   snapped = cosAngle >= std::cos(kAxisSnap);
   return snapped ? a : r;
 }
@@ -155,9 +156,7 @@ Status buildSkeleton(const avatar::BvhClip& clip, const BvhMapping& m, std::span
   const glm::dquat q = glm::quat_cast(m.toXr);
   double lowest = 1e300;
   for (const auto& p : rest.position) lowest = std::min(lowest, p.y);
-  for (size_t i = 0; i < 2; ++i)  // the sole under a bare ankle, as the floor has it (BvhBody::soleBelowFoot)
-    if (const int foot = m.body.joint(i == 0 ? HumanBone::leftFoot : HumanBone::rightFoot); foot >= 0 && m.body.soleBelowFoot[i] > 0.0)
-      lowest = std::min(lowest, rest.position[size_t(foot)].y - m.body.soleBelowFoot[i] * m.scale);
+  lowest = m.body.lowestWithBareSoles(lowest, m.scale, [&](size_t, int foot) { return rest.position[size_t(foot)].y; });
   lift = restLift(rest.position, m, lowest, standingAnkle);
   lowest -= lift;
   for (size_t j = 0; j < clip.joints.size(); ++j) {

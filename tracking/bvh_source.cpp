@@ -19,7 +19,6 @@ using avatar::HumanBone;
 
 constexpr HumanBone kTrackerBone[kTrackerCount] = {HumanBone::head,     HumanBone::leftHand, HumanBone::rightHand,
                                                    HumanBone::hips,     HumanBone::leftFoot, HumanBone::rightFoot};
-constexpr HumanBone kFeet[2] = {HumanBone::leftFoot, HumanBone::rightFoot};  // BvhBody::soleBelowFoot's order
 
 // The user's height, in the range every CLI option takes (avatar/body/calibration.h).
 Status checkUserHeight(float userHeight) {
@@ -150,9 +149,9 @@ Trace sampleFrames(const BvhClip& clip, const BvhMapping& m, const References& r
     avatar::bvhGlobals(clip, clip.frame(f), g);
     double low = 1e300;
     for (const auto& x : g) low = std::min(low, (m.body.toXr * x.position).y * m.scale);
-    for (size_t i = 0; i < 2; ++i)  // the sole under a bare ankle (BvhBody::soleBelowFoot)
-      if (const int foot = m.body.joint(kFeet[i]); foot >= 0 && m.body.soleBelowFoot[i] > 0.0)
-        low = std::min(low, ((m.body.toXr * g[static_cast<size_t>(foot)].position).y - m.body.soleBelowFoot[i]) * m.scale);
+    low = m.body.lowestWithBareSoles(low, m.scale, [&](size_t, int foot) {
+      return (m.body.toXr * g[static_cast<size_t>(foot)].position).y * m.scale;
+    });
     lowest.push_back(low);
     PoseSample& s = trace.samples[f - m.body.firstFrame];
     s.time = static_cast<double>(f) * clip.frameTime;

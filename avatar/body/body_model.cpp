@@ -139,7 +139,8 @@ class BodyModelBuilder {
         sk_(avatar.skeleton),
         options_(options),
         n_(sk_.joints.size()),
-        names_(uniqueJointNames(sk_)) {}
+        names_(uniqueJointNames(sk_)),
+        restGlobals_(restGlobalsOf(sk_)) {}
 
   Result<BodyModel> build() {
     if (auto s = checkMapping(); !s) return Error{s.error()};
@@ -177,6 +178,13 @@ class BodyModelBuilder {
   const BodyModelOptions& options_;
   const size_t n_;
   const std::vector<std::string> names_;  // per avatar joint, unique (duplicate glTF node names)
+  const std::vector<glm::mat4> restGlobals_;  // per avatar joint, the rest pose's model-space matrix
+
+  static std::vector<glm::mat4> restGlobalsOf(const Skeleton& sk) {
+    std::vector<glm::mat4> globals;
+    computeGlobals(sk, SkeletonPose::rest(sk), globals);
+    return globals;
+  }
   BodyModel body_;
   std::vector<Eigen::Vector3d> pivot_;  // per avatar joint at the neutral pose, model space at the user's scale
   NeutralPose neutral_;
@@ -207,8 +215,7 @@ class BodyModelBuilder {
   // retargeting could give it: a file with scale -1 on its root rested right and folded over in
   // motion, reported upright (the robustness probe, session 20). Refused by name.
   Status checkNoMirroring() const {
-    std::vector<glm::mat4> globals;
-    computeGlobals(sk_, SkeletonPose::rest(sk_), globals);
+    const std::vector<glm::mat4>& globals = restGlobals_;
     for (int bone : map_.bones)
       for (int j = bone; j >= 0; j = sk_.joints[at(j)].parent)
         if (glm::determinant(glm::mat3(globals[at(j)])) < 0.0f) {
@@ -225,8 +232,7 @@ class BodyModelBuilder {
 
   // Rest global rotations and scales (for retargeting), up, forward.
   void restFrames() {
-    std::vector<glm::mat4> globals;
-    computeGlobals(sk_, SkeletonPose::rest(sk_), globals);
+    const std::vector<glm::mat4>& globals = restGlobals_;
     body_.avatarRestGlobalRotation.resize(n_);
     body_.avatarRestGlobalScale.resize(n_);
     for (size_t j = 0; j < n_; ++j) {

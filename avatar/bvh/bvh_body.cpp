@@ -160,15 +160,20 @@ UpEstimate measureUp(const BvhClip& clip, const BodyJoints& b, size_t first) {
   return e;
 }
 
+// The body's left in one frame: left minus right limbs, across `up` (not normalised).
+glm::dvec3 leftAcross(const std::vector<BvhGlobal>& g, const BodyJoints& b, const glm::dvec3& up) {
+  glm::dvec3 left(0.0);
+  for (auto [l, r] : b.lateralPairs) left += g[static_cast<size_t>(l)].position - g[static_cast<size_t>(r)].position;
+  return left - up * glm::dot(left, up);
+}
+
 // The left direction (left minus right limbs) across `up`, summed over frames [from, to).
 glm::dvec3 lateralSum(const BvhClip& clip, const BodyJoints& b, const glm::dvec3& up, size_t from, size_t to,
                       double* resultant) {
   glm::dvec3 sum(0.0);
   size_t n = 0;
   forFrames(clip, from, to, [&](size_t, const std::vector<BvhGlobal>& g) {
-    glm::dvec3 left(0.0);
-    for (auto [l, r] : b.lateralPairs) left += g[static_cast<size_t>(l)].position - g[static_cast<size_t>(r)].position;
-    left -= up * glm::dot(left, up);
+    const glm::dvec3 left = leftAcross(g, b, up);
     if (glm::length(left) < 1e-12) return;
     sum += glm::normalize(left);
     ++n;
@@ -276,9 +281,8 @@ Status checkSides(const BvhClip& clip, const BodyJoints& b, const BvhBody& body)
   if (tip[0] < 0 && tip[1] < 0) return {};
   size_t counted = 0, behind = 0;
   forFrames(clip, body.firstFrame, clip.frameCount, [&](size_t, const std::vector<BvhGlobal>& g) {
-    glm::dvec3 left(0.0), toes(0.0);
-    for (auto [l, r] : b.lateralPairs) left += g[static_cast<size_t>(l)].position - g[static_cast<size_t>(r)].position;
-    left -= body.up * glm::dot(left, body.up);
+    const glm::dvec3 left = leftAcross(g, b, body.up);
+    glm::dvec3 toes(0.0);
     for (size_t i = 0; i < 2; ++i) {
       if (tip[i] < 0) continue;
       glm::dvec3 t = g[static_cast<size_t>(tip[i])].position - g[static_cast<size_t>(b.feet[i])].position;

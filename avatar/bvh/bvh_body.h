@@ -27,6 +27,7 @@
 //   names swapped, and is an Error naming --bvh-mirror and --bvh-bone-map.
 // Axes that stay ambiguous (the head is not above the feet in most frames along any direction,
 // no left/right limbs) are an Error naming --bvh-up / --bvh-forward.
+#include <algorithm>
 #include <array>
 #include <glm/glm.hpp>
 #include <string>
@@ -77,6 +78,17 @@ struct BvhBody {
   std::vector<std::string> notes;
 
   int joint(HumanBone b) const { return humanoid.joint(b); }
+
+  // The lowest of `lowest` and the soles under bare ankles (soleBelowFoot times `scale`):
+  // `footHeight(side, joint)` is that foot joint's height in the caller's space and units
+  // (+infinity leaves the foot out). What stands the clip on a floor calls this.
+  template <class FootHeight>
+  double lowestWithBareSoles(double lowest, double scale, FootHeight footHeight) const {
+    for (size_t side = 0; side < 2; ++side)
+      if (const int foot = joint(side == 0 ? HumanBone::leftFoot : HumanBone::rightFoot); foot >= 0 && soleBelowFoot[side] > 0.0)
+        lowest = std::min(lowest, footHeight(side, foot) - soleBelowFoot[side] * scale);
+    return lowest;
+  }
 };
 
 // Parses "+X", "-y", "Z" (a sign is optional) into a unit axis.

@@ -260,10 +260,7 @@ void mapSpineAndHead(const Shape& s, const ShoulderJunction& t, const std::vecto
     setBone(map, HumanBone::upperChest, t.torso.back());
   }
   std::vector<int> neck = s.followUp(t.neckRoot);
-  auto weighted = [&](int j) {
-    return jointHasWeights.empty() || (static_cast<size_t>(j) < jointHasWeights.size() && jointHasWeights[j]);
-  };
-  while (neck.size() > 1 && !weighted(neck.back())) neck.pop_back();
+  while (neck.size() > 1 && !weightedJoint(jointHasWeights, neck.back())) neck.pop_back();
   setBone(map, HumanBone::head, neck.back());
   if (neck.size() >= 2) setBone(map, HumanBone::neck, neck.front());
 }
