@@ -27,8 +27,9 @@
 // The foot that stepped last waits for the other unless the other is already where it should be:
 // feet alternate.
 // Walking with the head dipping once a step (gait_clock.h), the steps keep the walker's rhythm
-// instead: each lands on a dip, the foot the head sways towards, the swing as long as the walk's
-// stride needs, while that stride fits the avatar's legs (stepRhythm).
+// instead, while the body travels: each lands on a dip, the foot the head sways towards, the swing
+// as long as the walk's stride needs, while that stride fits the avatar's legs (stepRhythm). A
+// planted foot that reaches its leg's limit then swings until its own dip, not as a quick step.
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
@@ -61,8 +62,9 @@ struct FootPlannerConfig {
   double quickAheadShare = 0.15;
   double reachRadius = 0.45;         // a planted foot this far from its spot lifts at once
   // Walking with the head dipping once a step (gait_clock.h), steps land on the dips, the foot
-  // the sway names, the swing at least swingShare of the step, while the walk's stride fits:
-  // the body passes over a planted foot for at most strideReach of twice reachRadius. The
+  // the sway names, while a step's travel fits twice reachRadius; the swing is at least
+  // swingShare of the step, and long enough (up to the step less doubleSupportSeconds) that the
+  // body passes over a planted foot for at most strideReach of twice reachRadius. The
   // landing spot then leads the body by aheadShare of the step (in cmu_12_01_walk a foot comes
   // flat 0.25-0.29 m ahead of the hips, at 1.0-1.13 m/s and 0.64 s steps: 0.35-0.4).
   bool followHeadDips = true;

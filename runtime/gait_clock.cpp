@@ -16,6 +16,7 @@ void GaitClock::reset() {
   lastDip_ = -1e9;
   period_ = 0.0;
   regular_ = 0;
+  firstPeriod_ = false;
   sway_ = 0.0;
   lastFoot_ = -1;
   alternating_ = false;
@@ -46,11 +47,13 @@ void GaitClock::update(double time, double height, double sway) {
       const double interval = extremeTime_ - lastDip_;
       if (interval >= config_.minPeriod && interval <= config_.maxPeriod) {
         const bool agrees = period_ > 0.0 && std::abs(interval - period_) <= config_.regularity * period_;
+        firstPeriod_ = period_ <= 0.0;
         regular_ = agrees ? regular_ + 1 : 0;
         period_ = period_ > 0.0 && agrees ? 0.5 * (period_ + interval) : interval;
       } else {
         regular_ = 0;
         period_ = 0.0;
+        firstPeriod_ = false;
       }
       lastDip_ = extremeTime_;
       ++dips_;
@@ -75,7 +78,7 @@ void GaitClock::update(double time, double height, double sway) {
 }
 
 bool GaitClock::locked(double time) const {
-  return regular_ >= 1 && period_ > 0.0 && time - lastDip_ <= 1.5 * period_;
+  return (regular_ >= 1 || firstPeriod_) && period_ > 0.0 && time - lastDip_ <= 1.5 * period_;
 }
 
 namespace {

@@ -15,7 +15,9 @@
 // Dips are found by hysteresis: a minimum counts once the head has risen `dip` above it, and the
 // next one only after the head has fallen `dip` below a maximum since; the minimum's own time is
 // kept (it is seen 0.05-0.13 s later in that walk, but the prediction needs its time, not when
-// it was seen). The clock is locked while the last three dips came a regular step apart.
+// it was seen). The clock locks on the first two dips a step apart, with nothing yet to disagree
+// with, and stays locked while each step agrees with the one before (within `regularity`); a
+// step that does not unlocks it until the next one agrees.
 namespace embody::runtime {
 
 struct GaitClockConfig {
@@ -33,8 +35,8 @@ class GaitClock {
   void reset();
   // `sway`: the head's sideways velocity against its mean, positive towards the left foot.
   void update(double time, double height, double sway);
-  // Whether the dips came regularly: the last two periods within `regularity`, the last dip no
-  // longer than 1.5 periods ago.
+  // Whether the dips came regularly: the last two periods within `regularity` (or the first
+  // period since a start or a pause), the last dip no longer than 1.5 periods ago.
   bool locked(double time) const;
   double period() const { return period_; }
   // The first dip expected after `time` (locked only): the last one plus whole periods.
@@ -53,6 +55,7 @@ class GaitClock {
   double lastDip_ = -1e9, period_ = 0.0;
   double sway_ = 0.0, extremeSway_ = 0.0;  // smoothed; its value at the extreme's time
   int regular_ = 0, dips_ = 0, lastFoot_ = -1;
+  bool firstPeriod_ = false;  // the period is the first since a start: nothing yet to disagree with
   bool alternating_ = false;
 };
 

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "runtime/body_heading.h"
 #include "runtime/foot_planner.h"
@@ -222,59 +224,102 @@ TEST_CASE("foot planner: a planted foot behind the body rises on its toes, the b
   CHECK(liftJump < 0.01);
 }
 
-TEST_CASE("foot planner: walking with the head dipping once a step, the feet land on the dips, the foot the sway names",
-          "[runtime]") {
-  // 0.8 m/s for 6 s, 90 Hz. The head dips 2 cm every 0.6 s, lowest at t = 0.3 + 0.6 k (a foot
-  // landing), and sways sideways towards the landing foot: left at k even, right at k odd, or
-  // the other way round (swaySign -1).
-  constexpr double kStep = 0.6, kFirstDip = 0.3;
-  const double swaySign = GENERATE(1.0, -1.0);
-  auto centre = [&](double t, bool dips) {
-    const double phase = 2.0 * M_PI * (t - kFirstDip) / kStep;
+namespace {
+
+// A walk at `speed` m/s along +Z for 6 s, 90 Hz, steps every 0.6 s. The head dips 2 cm, lowest
+// at t = 0.3 + 0.6 k (a foot landing; `dips` false: carried level), and sways sideways towards
+// the landing foot: left at k even, right at k odd, or the other way round (swaySign -1).
+// Returns whether the clock is locked at the end; `landings` gets (time, foot) of each landing.
+constexpr double kWalkStep = 0.6, kFirstDip = 0.3;
+bool walkWithDips(double speed, bool dips, double swaySign, std::vector<std::pair<double, int>>& landings) {
+  auto centre = [&](double t) {
+    const double phase = 2.0 * std::numbers::pi * (t - kFirstDip) / kWalkStep;
     const double bob = dips ? -0.01 * std::cos(phase) : 0.0;
-    const double sway = 0.15 * kStep / M_PI * std::sin(0.5 * phase);  // its velocity 0.15 cos(phase / 2)
-    return Eigen::Vector3d(swaySign * sway, 0.9 + bob, 0.8 * t);
+    const double sway = 0.15 * kWalkStep / std::numbers::pi * std::sin(0.5 * phase);  // its velocity 0.15 cos(phase / 2)
+    return Eigen::Vector3d(swaySign * sway, 0.9 + bob, speed * t);
   };
-  auto walk = [&](bool dips, std::vector<std::pair<double, int>>& landings) {
-    FootPlanner p = planner();
-    std::array<bool, 2> planted{true, true};
-    for (int i = 0; i <= 6 * 90; ++i) {
-      const double t = i / 90.0;
-      const Eigen::Vector3d c = centre(t, dips);
-      const auto& feet = p.update(t, c, 0.0, c);
-      for (size_t f = 0; f < 2; ++f) {
-        if (feet[f].planted && !planted[f]) landings.emplace_back(t, int(f));
-        planted[f] = feet[f].planted;
-      }
+  FootPlanner p = planner();
+  std::array<bool, 2> planted{true, true};
+  for (int i = 0; i <= 6 * 90; ++i) {
+    const double t = i / 90.0;
+    const Eigen::Vector3d c = centre(t);
+    const auto& feet = p.update(t, c, 0.0, c);
+    for (size_t f = 0; f < 2; ++f) {
+      if (feet[f].planted && !planted[f]) landings.emplace_back(t, int(f));
+      planted[f] = feet[f].planted;
     }
-    return p.gait().locked(6.0);
-  };
-  std::vector<std::pair<double, int>> onDips, level;
-  REQUIRE(walk(true, onDips));
-  CHECK_FALSE(walk(false, level));
-  // Once the clock has seen three dips (1.5 s) and the feet have come into step (a foot named
-  // that has just stepped makes the other take a quick step first: with the sway reversed,
-  // landings R 2.43 and R 3.53 between the dips), every landing is on a dip, by the foot that dip
-  // belongs to.
-  std::ostringstream seq;
-  for (const auto& [t, foot] : onDips) seq << t << (foot == 0 ? "L " : "R ");
-  INFO("landings " << seq.str());
+  }
+  return p.gait().locked(6.0);
+}
+
+// Of the landings after `from`: how many, how far the worst is off its dip (seconds), and how
+// many by the other foot than the dip's.
+struct OnDips {
   int checked = 0, wrongFoot = 0;
   double worstOffset = 0.0;
-  for (const auto& [t, foot] : onDips) {
-    if (t < 3.6) continue;
-    const double k = std::round((t - kFirstDip) / kStep);
-    worstOffset = std::max(worstOffset, std::abs(t - (kFirstDip + k * kStep)));
-    if (foot != ((static_cast<long long>(k) % 2 == 0) == (swaySign > 0) ? 0 : 1)) ++wrongFoot;
-    ++checked;
+};
+OnDips landingsOnDips(const std::vector<std::pair<double, int>>& landings, double from, double swaySign) {
+  OnDips r;
+  for (const auto& [t, foot] : landings) {
+    if (t < from) continue;
+    const double k = std::round((t - kFirstDip) / kWalkStep);
+    r.worstOffset = std::max(r.worstOffset, std::abs(t - (kFirstDip + k * kWalkStep)));
+    if (foot != ((static_cast<long long>(k) % 2 == 0) == (swaySign > 0) ? 0 : 1)) ++r.wrongFoot;
+    ++r.checked;
   }
-  INFO("sway sign " << swaySign << ": " << checked << " landings after 3.6 s, up to " << worstOffset << " s off a dip, " << wrongFoot << " by the wrong foot; "
-               << level.size() << " landings with the head level against " << onDips.size());
-  CHECK(checked >= 4);
-  CHECK(worstOffset <= 1.5 / 90.0);
-  CHECK(wrongFoot == 0);
+  return r;
+}
+
+std::string describe(const std::vector<std::pair<double, int>>& landings) {
+  std::ostringstream seq;
+  for (const auto& [t, foot] : landings) seq << t << (foot == 0 ? "L " : "R ");
+  return seq.str();
+}
+
+}  // namespace
+
+TEST_CASE("foot planner: walking with the head dipping once a step, the feet land on the dips, the foot the sway names",
+          "[runtime]") {
+  const double swaySign = GENERATE(1.0, -1.0);
+  std::vector<std::pair<double, int>> onDips, level;
+  REQUIRE(walkWithDips(0.8, true, swaySign, onDips));
+  CHECK_FALSE(walkWithDips(0.8, false, swaySign, level));
+  // The clock locks on the second dip (0.9 s, seen about 0.13 s later). Once the feet have come
+  // into step (a foot named that has just stepped makes the other take a quick step first: with
+  // the sway reversed, a right landing between the dips), every landing is on a dip, by the foot
+  // that dip belongs to.
+  INFO("landings " << describe(onDips));
+  const OnDips r = landingsOnDips(onDips, 2.4, swaySign);
+  INFO("sway sign " << swaySign << ": " << r.checked << " landings after 2.4 s, up to " << r.worstOffset << " s off a dip, "
+                    << r.wrongFoot << " by the wrong foot; " << level.size() << " landings with the head level against "
+                    << onDips.size());
+  CHECK(r.checked >= 6);
+  CHECK(r.worstOffset <= 1.5 / 90.0);
+  CHECK(r.wrongFoot == 0);
   // A level head keeps the quick steps: more of them.
   CHECK(level.size() > onDips.size());
+}
+
+TEST_CASE("foot planner: a walk's stride a little past strideReach keeps to the dips, a run's past twice reachRadius does not",
+          "[runtime]") {
+  // 0.6 s steps at 1.3 m/s: 0.78 m a step, over the 0.72 m the legs let a planted foot travel
+  // under the body (2 x strideReach x reachRadius) but within twice reachRadius (0.9 m). Such a
+  // walk (cmu_12_01_walk's strides are 0.69-0.81 m) used to fall back to the quick steps whenever
+  // its stride passed 0.72 m. At 1.6 m/s (0.96 m a step) the stride does not fit the legs.
+  std::vector<std::pair<double, int>> walk, run;
+  REQUIRE(walkWithDips(1.3, true, 1.0, walk));
+  walkWithDips(1.6, true, 1.0, run);
+  INFO("1.3 m/s: " << describe(walk));
+  INFO("1.6 m/s: " << describe(run));
+  // A planted foot that reaches its leg's limit lifts before its beat and swings a step long, so
+  // such a stride may land a few frames early.
+  const OnDips r = landingsOnDips(walk, 2.4, 1.0);
+  CHECK(r.checked >= 6);
+  CHECK(r.worstOffset <= 0.05);
+  CHECK(r.wrongFoot == 0);
+  const OnDips quick = landingsOnDips(run, 2.4, 1.0);
+  CHECK(quick.worstOffset > 0.1);
+  CHECK(run.size() > walk.size());
 }
 
 TEST_CASE("foot planner: re-planting the feet (a re-seed) keeps the count of steps taken", "[runtime]") {

@@ -1,7 +1,9 @@
 // The walk's rhythm from the head's height and sway (runtime/gait_clock.h).
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "runtime/gait_clock.h"
 
@@ -99,4 +101,27 @@ TEST_CASE("GaitClock: a dip whose lowest point is the first frame below the fall
   // was before the fall (zero), no dip named a foot (-1).
   CHECK(clock.nextDip(4.0) == Approx(4.2).margin(1.5 * kFrame));
   CHECK(clock.nextFoot(4.0) == 0);
+}
+
+TEST_CASE("GaitClock: locks on the first two dips a step apart, unlocks on a step that disagrees until the next agrees",
+          "[runtime]") {
+  // Dips at 0.3 and 0.9 (each seen as the head has risen 8 mm, 0.1 s later), then one 0.9 s
+  // late (1.8: a step that does not agree with 0.6), then 0.6 s apart again (2.4, 3.0).
+  const std::vector<double> lows{0.3, 0.9, 1.8, 2.4, 3.0};
+  auto height = [&](double t) {
+    double nearest = 1e9;
+    for (double low : lows) nearest = std::min(nearest, std::abs(t - low));
+    return 1.6 - 0.02 * std::max(0.0, 1.0 - nearest / 0.25);  // a 2 cm dip 0.5 s wide at each
+  };
+  auto sway = [](double) { return 0.0; };
+  CHECK_FALSE(drive(height, sway, 0.8).locked(0.8));       // one dip: no period yet
+  const GaitClock second = drive(height, sway, 1.2);       // two: the first period, locked
+  REQUIRE(second.locked(1.2));
+  CHECK(second.period() == Approx(0.6).margin(kFrame));
+  CHECK(second.nextDip(1.2) == Approx(1.5).margin(1.5 * kFrame));
+  CHECK_FALSE(drive(height, sway, 2.1).locked(2.1));       // 0.9 s against 0.6: unlocked
+  CHECK_FALSE(drive(height, sway, 2.7).locked(2.7));       // 0.6 s against 0.9: still unlocked
+  const GaitClock agreed = drive(height, sway, 3.3);       // 0.6 s against 0.6: locked again
+  REQUIRE(agreed.locked(3.3));
+  CHECK(agreed.nextDip(3.3) == Approx(3.6).margin(1.5 * kFrame));
 }
