@@ -186,7 +186,8 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
   // average says (a leap starts faster than the average follows), and so does one turned half a
   // step's turn from its feet: turning on the spot, the centre circles and averages out too.
   const double feetTurn = std::max(std::abs(wrapAngle(yaw - feet_[0].yaw)), std::abs(wrapAngle(yaw - feet_[1].yaw)));
-  const bool travelling = travelled > config_.travelSpeed * scale_ ||
+  const bool travels = travelled > config_.travelSpeed * scale_;
+  const bool travelling = travels ||
                           (centre - centreOverFeet()).norm() > config_.standThreshold * scale_ || feetTurn > 0.5 * config_.turnRadians;
   const bool moving = groundSpeed > config_.movingSpeed * scale_ && std::abs(verticalSpeed_) < config_.maxClimb * groundSpeed && travelling;
   // The lead eases in and out: switched, it moved a swinging foot's landing spot by up to half a
@@ -223,7 +224,9 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
     foot.planted = false;
   }
 
-  const Rhythm rhythm = stepRhythm(time, moving, std::max(groundSpeed, travelled));
+  // A walk travels: a body swaying or turning on the spot (moving, not travelling) keeps its quick
+  // steps whatever its head does.
+  const Rhythm rhythm = stepRhythm(time, moving && travels, std::max(groundSpeed, travelled));
   const double swingTime = rhythm.swing, ahead = rhythm.ahead;
 
   // A planted foot left beyond its leg's reach (a leap, a spin) lifts at once, even while the
@@ -239,8 +242,8 @@ const std::array<FootTarget, 2>& FootPlanner::update(double time, const Eigen::V
     // landed between the beats and stepped again on its beat.
     double swing = step;
     if (rhythm.foot >= 0) {
-      const double beat = gait_.nextDip(time) + (rhythm.foot == f ? 0.0 : gait_.period());
-      swing = std::clamp(beat - time, step, gait_.period());
+      const double beat = rhythm.beat + (rhythm.foot == f ? 0.0 : rhythm.period);
+      swing = std::clamp(beat - time, step, rhythm.period);
     }
     startSwing(f, time, swing, ahead, landing(f, swing, ahead), yaw);
     swinging = true;
@@ -322,14 +325,13 @@ void FootPlanner::startSwing(int f, double time, double duration, double ahead, 
 // (stepSeconds) as soon as doubleSupportSeconds allow, landing quickAheadShare of a step ahead of
 // a moving body. Walking with one (gait_clock.h), steps land on the dips, the foot the sway names.
 //
-// `speed` is the body's ground speed, the larger of the low-passed velocity and the travel (its
-// mean since a walk started: the velocity trails a walk's start).
-FootPlanner::Rhythm FootPlanner::stepRhythm(double time, bool moving, double speed) const {
+// `walking`: the body moves and travels. `speed` is the body's ground speed, the larger of the
+// low-passed velocity and the travel (its mean since a walk started: the velocity trails a
+// walk's start).
+FootPlanner::Rhythm FootPlanner::stepRhythm(double time, bool walking, double speed) const {
   const double step = config_.stepSeconds;
-  Rhythm r{step, config_.quickAheadShare * step, true, -1};
-  // A walk travels: a body swaying or turning on the spot keeps its quick steps whatever its head
-  // does.
-  if (!moving || !config_.followHeadDips || !gait_.locked(time) || travel_.norm() <= config_.travelSpeed * scale_) return r;
+  Rhythm r{step, config_.quickAheadShare * step, true, -1, time, 0.0};
+  if (!walking || !config_.followHeadDips || !gait_.locked(time)) return r;
   const int foot = gait_.nextFoot(time);
   const double period = gait_.period();
   // A planted foot stays down for two steps less a swing while the body passes over it, and our
@@ -347,7 +349,9 @@ FootPlanner::Rhythm FootPlanner::stepRhythm(double time, bool moving, double spe
   r.ahead = config_.aheadShare * period;
   // Start when the next dip is a swing away (or nearer, but not nearer than the quickest step),
   // the swing as long as what is left.
-  const double toDip = gait_.nextDip(time) - time;
+  r.beat = gait_.nextDip(time);
+  r.period = period;
+  const double toDip = r.beat - time;
   r.due = toDip <= swing && toDip >= step;
   r.swing = std::clamp(toDip, step, swing);
   r.foot = foot;

@@ -146,8 +146,9 @@ class FootPlanner {
     double ahead;          // seconds the landing spot leads a moving body by
     bool due;              // whether a step may start now
     int foot;              // the foot that must step (-1: the planner's choice)
+    double beat, period;   // with a foot named: the next beat (seconds) and the step between beats
   };
-  Rhythm stepRhythm(double time, bool moving, double speed) const;
+  Rhythm stepRhythm(double time, bool walking, double speed) const;
   Eigen::Vector3d centreOverFeet() const;  // where the planted feet's body centre would stand
 
   FootPlannerConfig config_;
