@@ -388,7 +388,7 @@ TEST_CASE("TaskTargetsJob, three-point: the pelvis row stands under the head, le
   // Deeper (20 cm, a quarter of this rig's trunk), still held: the trunk leans as a squatter's does
   // to keep the mass over the feet, 1.4 rad per trunk length of crouch (the clips' performers
   // lean 19-34 degrees at 0.2-0.45 trunk lengths): the pelvis 0.30 trunk lengths behind the head
-  // (0.8 rad per trunk length, before: 0.16).
+  // (0.8 rad per trunk length, before: 0.17).
   const Row deeper = rowFor(1.42f, 0.0f);
   INFO("shallow " << shallow.offset.dot(forward) / trunk << ", deeper " << deeper.offset.dot(forward) / trunk << " trunk lengths");
   CHECK(deeper.enabled);
