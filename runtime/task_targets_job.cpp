@@ -24,13 +24,10 @@ namespace {
 //     pelvis sank only 0.16-0.38 of the head's drop; taken as a crouch, the inferred pelvis sank
 //     twice as far and, with its row let go, under half its standing height (14 frames).
 //   - What the bend does not take (it stops at 90 degrees) is a crouch: beyond 0.05 trunk lengths
-//     (gait, posture) the trunk leans kCrouchLean rad per trunk length of it (up to 45 degrees),
-//     the pelvis back over the heels: a crouch keeps the mass over the feet only with the hips
-//     behind them and the trunk forward. Measured on the clips (hips-to-head line from vertical
-//     against the head's drop, eight clips pooled): 17, 19, 34, 47 and 57 degrees at 0.1-0.2,
-//     0.2-0.3, 0.3-0.45, 0.45-0.6 and 0.6-0.8 trunk lengths; the boxer (cmu_002_05) 23-49, the
-//     stylised dance crouch of cmu_131_03 upright, 9-14. 1.4 (a squat 0.35 m deep leans a 0.6 m
-//     trunk 42 degrees; 0.8 before: 24) sits between them, below the pooled medians.
+//     (gait, posture) the trunk leans 0.8 rad per trunk length of it (up to 45 degrees; a squat
+//     0.35 m deep leans it about 24), the pelvis back over the heels. The clips' performers lean
+//     more (docs/eval.md, session 23), but 1.1-1.5 held CesiumMan's hands 2-3 cm (p95) off the
+//     controllers in cmu_131_03's crouches, where the small avatar cannot meet that pelvis.
 //   - The deeper the crouch the less the pelvis row pulls (`weight`, 1 down to 0 between 0.1 and
 //     0.4 trunk lengths of crouch): where the pelvis goes in a deep squat depends on the person,
 //     and a row that held it cost the squat crossed knees.
@@ -41,8 +38,6 @@ struct InferredTrunk {
   double bend = 0.0;    // the part of it that bends over (looking down)
   double weight = 1.0;  // of the pelvis row
 };
-constexpr double kCrouchLean = 1.4;  // radians per trunk length of crouch beyond 0.05
-
 InferredTrunk inferTrunk(double drop, double pitchDown, double trunk) {
   constexpr double kDegree = std::numbers::pi / 180.0;
   InferredTrunk out;
@@ -52,7 +47,7 @@ InferredTrunk inferTrunk(double drop, double pitchDown, double trunk) {
   const double bendShare = std::max(looking, reaching);
   out.bend = std::acos(std::clamp(1.0 - bendShare * drop / trunk, 0.0, 1.0));
   const double crouch = std::max(0.0, drop / trunk - (1.0 - std::cos(out.bend)));  // trunk lengths
-  out.lean = std::min(out.bend + std::min(kCrouchLean * std::max(0.0, crouch - 0.05), 45.0 * kDegree), 90.0 * kDegree);
+  out.lean = std::min(out.bend + std::min(0.8 * std::max(0.0, crouch - 0.05), 45.0 * kDegree), 90.0 * kDegree);
   out.weight = 1.0 - smoothstep((crouch - 0.1) / 0.3);
   return out;
 }

@@ -384,17 +384,7 @@ TEST_CASE("TaskTargetsJob, three-point: the pelvis row stands under the head, le
   const Row shallow = rowFor(1.50f, 0.0f);
   CHECK(shallow.enabled);
   CHECK(shallow.offset.dot(forward) < -0.01);
-  CHECK(shallow.offset.dot(forward) > -0.3 * trunk);
-  // Deeper (20 cm, a quarter of this rig's trunk), still held: the trunk leans as a squatter's does
-  // to keep the mass over the feet, 1.4 rad per trunk length of crouch (the clips' performers
-  // lean 19-34 degrees at 0.2-0.45 trunk lengths): the pelvis 0.30 trunk lengths behind the head
-  // (0.8 rad per trunk length, before: 0.17).
-  const Row deeper = rowFor(1.42f, 0.0f);
-  INFO("shallow " << shallow.offset.dot(forward) / trunk << ", deeper " << deeper.offset.dot(forward) / trunk << " trunk lengths");
-  CHECK(deeper.enabled);
-  CHECK(deeper.offset.dot(forward) < -0.25 * trunk);
-  CHECK(deeper.offset.dot(forward) > -0.4 * trunk);
-  CHECK(std::abs(deeper.offset.norm() - trunk) < 1e-9);
+  CHECK(shallow.offset.dot(forward) > -0.2 * trunk);
 }
 
 TEST_CASE("TaskTargetsJob, seated: the seat goes under the first tracked head and asks for one settle", "[runtime][jobs]") {
