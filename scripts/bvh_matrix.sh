@@ -9,6 +9,10 @@
 # stands the right way up (eyes above pelvis above ankles: stats.json's body.upright_frames).
 # Contact sheets are in OUT/CLIP/AVATAR/.
 #
+# BVH_MATRIX_THREE_POINT=1 drives the head and hands only (--three-point: the pelvis and the feet
+# inferred, the feet stepping); BVH_MATRIX_AVATAR=FILE adds one more avatar (e.g. a small one:
+# session 23 found a change that only a short avatar's hands showed, docs/eval.md).
+#
 #   scripts/bvh_matrix.sh [BUILD] [OUT] CLIP.bvh...      (default: build out/bvh_matrix ../shared clips)
 set -euo pipefail
 build=${1:-build}
@@ -22,6 +26,9 @@ fi
 embody=${EMBODY:-$build/app/embody}  # EMBODY=PATH: a copy, so rebuilding does not change a long run
 fps=${BVH_MATRIX_FPS:-60}
 iterations=${BVH_MATRIX_ITERATIONS:-10}
+mode=()
+[[ ${BVH_MATRIX_THREE_POINT:-0} == 1 ]] && mode=(--three-point)
+extra=${BVH_MATRIX_AVATAR:-}
 mkdir -p "$out"
 mixamo="$out/mixamo_avatar.glb"
 "$embody" render --avatar tests/tracking/fixtures/mixamo.bvh --motion tests/tracking/fixtures/mixamo.bvh \
@@ -33,21 +40,23 @@ field() { grep -o "\"$1\": *[-0-9.e+a-z]*" "$2" | head -1 | awk -F': *' '{ print
 # The pelvis tracker's turn error in degrees (stats.json trackers.hips), blank without one.
 pelvisTurn() { sed -n '/"hips": {/,/}/p' "$1" | grep -o '"turn_error_p95_deg": *[0-9.e+-]*' | awk -F': *' '{ printf "%.1f", $2 }'; }
 
-echo "| clip | avatar | frames | head p95 mm | hand p95 mm | pelvis turn p95 deg | upright frames |"
-echo "|---|---|---|---|---|---|---|"
+echo "| clip | avatar | frames | head p95 mm | hand p95 mm | pelvis turn p95 deg | upright frames | steps | re-seeds |"
+echo "|---|---|---|---|---|---|---|---|---|"
 for clip in "${clips[@]}"; do
   name=$(basename "$clip" .bvh)
-  for avatar in default "$mixamo" "$clip"; do
-    case $avatar in default) label=default ;; "$mixamo") label=mixamo ;; *) label=own ;; esac
+  avatars=(default "$mixamo" "$clip")
+  [[ -n $extra ]] && avatars+=("$extra")
+  for avatar in "${avatars[@]}"; do
+    case $avatar in default) label=default ;; "$mixamo") label=mixamo ;; "$clip") label=own ;; *) label=$(basename "${avatar%.*}") ;; esac
     dir="$out/$name/$label"
     mkdir -p "$out/$name"
     if ! "$embody" render --avatar "$avatar" --motion "$clip" --fps "$fps" --ik-iterations "$iterations" \
-        --size 160x160 --out "$dir" >"$dir.log" 2>&1; then
-      echo "| $name | $label | $(grep -m1 error: "$dir.log" || tail -1 "$dir.log") | | | | |"
+        "${mode[@]}" --size 160x160 --out "$dir" >"$dir.log" 2>&1; then
+      echo "| $name | $label | $(grep -m1 error: "$dir.log" || tail -1 "$dir.log") | | | | | | |"
       continue
     fi
     s="$dir/stats.json"
     echo "| $name | $label | $(field frames "$s") | $(mm head_error_p95_m "$s") | $(mm hand_error_p95_m "$s") |" \
-         "$(pelvisTurn "$s") | $(field upright_frames "$s") |"
+         "$(pelvisTurn "$s") | $(field upright_frames "$s") | $(field steps "$s") | $(field recoveries "$s") |"
   done
 done
