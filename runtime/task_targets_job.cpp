@@ -26,8 +26,8 @@ namespace {
 //   - What the bend does not take (it stops at 90 degrees) is a crouch: beyond 0.05 trunk lengths
 //     (gait, posture) the trunk leans 0.8 rad per trunk length of it (up to 45 degrees; a squat
 //     0.35 m deep leans it about 24), the pelvis back over the heels. The clips' performers lean
-//     more (docs/eval.md, session 23), but 1.1-1.5 held CesiumMan's hands 2-3 cm (p95) off the
-//     controllers in cmu_131_03's crouches, where the small avatar cannot meet that pelvis.
+//     more (docs/eval.md, session 23), but at 1.1-1.5 CesiumMan's hands missed the controllers
+//     by 2-3 cm (p95) in cmu_131_03's crouches (8 mm where within the arm's reach, 1.5 at 0.8).
 //   - The deeper the crouch the less the pelvis row pulls (`weight`, 1 down to 0 between 0.1 and
 //     0.4 trunk lengths of crouch): where the pelvis goes in a deep squat depends on the person,
 //     and a row that held it cost the squat crossed knees.
