@@ -15,8 +15,7 @@ void GaitClock::reset() {
   started_ = false;
   lastDip_ = -1e9;
   period_ = 0.0;
-  regular_ = 0;
-  firstPeriod_ = false;
+  steady_ = false;
   sway_ = 0.0;
   lastFoot_ = -1;
   alternating_ = false;
@@ -47,13 +46,11 @@ void GaitClock::update(double time, double height, double sway) {
       const double interval = extremeTime_ - lastDip_;
       if (interval >= config_.minPeriod && interval <= config_.maxPeriod) {
         const bool agrees = period_ > 0.0 && std::abs(interval - period_) <= config_.regularity * period_;
-        firstPeriod_ = period_ <= 0.0;
-        regular_ = agrees ? regular_ + 1 : 0;
+        steady_ = period_ <= 0.0 || agrees;  // the first period since a start has nothing to disagree with
         period_ = period_ > 0.0 && agrees ? 0.5 * (period_ + interval) : interval;
       } else {
-        regular_ = 0;
+        steady_ = false;
         period_ = 0.0;
-        firstPeriod_ = false;
       }
       lastDip_ = extremeTime_;
       ++dips_;
@@ -78,7 +75,7 @@ void GaitClock::update(double time, double height, double sway) {
 }
 
 bool GaitClock::locked(double time) const {
-  return (regular_ >= 1 || firstPeriod_) && period_ > 0.0 && time - lastDip_ <= 1.5 * period_;
+  return steady_ && period_ > 0.0 && time - lastDip_ <= 1.5 * period_;
 }
 
 namespace {

@@ -54,8 +54,10 @@ class GaitClock {
   double lastTime_ = 0.0;
   double lastDip_ = -1e9, period_ = 0.0;
   double sway_ = 0.0, extremeSway_ = 0.0;  // smoothed; its value at the extreme's time
-  int regular_ = 0, dips_ = 0, lastFoot_ = -1;
-  bool firstPeriod_ = false;  // the period is the first since a start: nothing yet to disagree with
+  int dips_ = 0, lastFoot_ = -1;
+  // The last step agreed with the one before (within `regularity`), or is the first since a start
+  // or a pause, with nothing yet to disagree with.
+  bool steady_ = false;
   bool alternating_ = false;
 };
 
